@@ -1,0 +1,1 @@
+"""RoboWrangler host package: protocol codec, transports, client API, CLI, recorder."""

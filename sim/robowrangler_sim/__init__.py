@@ -1,0 +1,1 @@
+"""RoboWrangler simulator: plants, SIL bridge, chain model, diagnosis."""
