@@ -1,0 +1,30 @@
+"""Session fixtures shared by every suite: the native firmware build (core library, SIL executable)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+BUILD_DIR = Path(os.environ.get("ROBOWRANGLER_BUILD_DIR", REPO_ROOT / "build" / "native"))
+
+
+def build_native() -> Path:
+    """Configure and build firmware/ natively with CMake (incremental); returns the build directory."""
+    BUILD_DIR.mkdir(parents=True, exist_ok=True)
+    if not (BUILD_DIR / "CMakeCache.txt").exists():
+        subprocess.run(["cmake", "-S", str(REPO_ROOT / "firmware"), "-B", str(BUILD_DIR)],
+                       check=True, capture_output=True, text=True)
+    result = subprocess.run(["cmake", "--build", str(BUILD_DIR), "-j2"], capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"native firmware build failed:\n{result.stdout}\n{result.stderr}")
+    return BUILD_DIR
+
+
+@pytest.fixture(scope="session")
+def native_build_dir() -> Path:
+    """The native build directory, built once per test session."""
+    return build_native()
