@@ -1,0 +1,77 @@
+/*
+ * rw_mt_speed_estimator.h - M/T (count plus period) wheel and rope speed estimator.
+ *
+ * Inputs per step, all from the encoder capture hardware and wrap-safe (uint32_t, modulo 2^32):
+ *   count    cumulative number of encoder edges (one direction, wraps),
+ *   edge_us  capture timestamp of the most recent of those edges, microseconds (wraps),
+ *   now_us   time of this step on the same microsecond clock (wraps).
+ * count and edge_us must be latched together (the same edge). Intervals must stay below 2^31 us
+ * (about 35 minutes); the estimator is reset or stepped far more often than that.
+ * Outputs: wheel rev/s, rpm and rope surface speed in m/s (2 pi r rev/s), optionally low-pass
+ * filtered, and a "stale" flag.
+ * Portable core module: no Arduino header, no heap, reads no clock (times come in).
+ */
+#ifndef RW_MT_SPEED_ESTIMATOR_H
+#define RW_MT_SPEED_ESTIMATOR_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "rw_lowpass.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Public configuration. */
+typedef struct rw_mt_speed_estimator_config {
+    uint32_t counts_per_rev; /**< encoder edges per wheel revolution (> 0) */
+    uint32_t timeout_us;     /**< silent this long (no edge) -> speed 0 and stale, microseconds (> 0) */
+    float wheel_radius_m;    /**< drive wheel radius, metres (> 0) */
+    float filter_tau_s;      /**< low-pass time constant on rev/s, seconds; 0 = unfiltered */
+} rw_mt_speed_estimator_config;
+
+typedef struct rw_mt_speed_estimator {
+    rw_mt_speed_estimator_config cfg; /**< public, may be changed between steps */
+    struct {
+        uint32_t last_count;   /**< edge count at the last measured edge */
+        uint32_t last_edge_us; /**< timestamp of that edge, microseconds */
+        float raw_rev_per_s;   /**< unfiltered estimate, rev/s (>= 0) */
+        rw_lowpass filter;     /**< low-pass on raw_rev_per_s, tau = filter_tau_s */
+        bool primed;           /**< a reference edge has been latched since reset */
+        bool stale;            /**< no measured edge interval since reset, or silent > timeout_us */
+    } state;                   /**< private history */
+} rw_mt_speed_estimator;
+
+/** Copies cfg and resets. */
+void rw_mt_speed_estimator_init(rw_mt_speed_estimator *e, const rw_mt_speed_estimator_config *cfg);
+/** Fills cfg with the defaults of rw_defaults.h (64 counts/rev, 15 mm wheel, ...). */
+void rw_mt_speed_estimator_config_defaults(rw_mt_speed_estimator_config *cfg);
+/** Speed 0, stale, no reference: the next step only latches count and edge time. */
+void rw_mt_speed_estimator_reset(rw_mt_speed_estimator *e);
+/**
+ * One estimator step (see the law in the .c file). dt_s, the time since the previous step in
+ * seconds, only drives the low-pass. Returns the (filtered) rope surface speed in m/s, >= 0.
+ */
+float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint32_t edge_us,
+                                 uint32_t now_us, float dt_s);
+/** Filtered wheel speed, revolutions per second (>= 0). */
+float rw_mt_speed_estimator_rev_per_s(const rw_mt_speed_estimator *e);
+/** Filtered wheel speed, revolutions per minute (>= 0). */
+float rw_mt_speed_estimator_rpm(const rw_mt_speed_estimator *e);
+/** Filtered rope surface speed, m/s (>= 0): 2 pi wheel_radius_m rev/s. */
+float rw_mt_speed_estimator_rope_mps(const rw_mt_speed_estimator *e);
+/** Unfiltered wheel speed, rev/s (>= 0). */
+float rw_mt_speed_estimator_raw_rev_per_s(const rw_mt_speed_estimator *e);
+/** true while no edge interval has been measured since reset or the encoder was silent for
+ *  longer than timeout_us (the speed then reads 0). */
+bool rw_mt_speed_estimator_is_stale(const rw_mt_speed_estimator *e);
+/** true when counts_per_rev > 0, timeout_us > 0, wheel_radius_m finite and > 0, filter_tau_s
+ *  finite and >= 0. */
+bool rw_mt_speed_estimator_config_is_valid(const rw_mt_speed_estimator_config *cfg);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RW_MT_SPEED_ESTIMATOR_H */

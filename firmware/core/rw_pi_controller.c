@@ -1,0 +1,105 @@
+/*
+ * rw_pi_controller.c - PI controller with feed-forward and anti-windup.
+ */
+#include "rw_pi_controller.h"
+
+#include "rw_defaults.h"
+
+#include <math.h>
+
+void rw_pi_controller_init(rw_pi_controller *c, const rw_pi_controller_config *cfg)
+{
+    c->cfg = *cfg;
+    rw_pi_controller_reset(c);
+}
+
+void rw_pi_controller_config_defaults(rw_pi_controller_config *cfg)
+{
+    cfg->kp = RW_DEFAULT_SPEED_KP;
+    cfg->ki_per_s = RW_DEFAULT_SPEED_KI_PER_S;
+    cfg->out_min = RW_DEFAULT_SPEED_OUT_MIN;
+    cfg->out_max = RW_DEFAULT_SPEED_OUT_MAX;
+}
+
+void rw_pi_controller_reset(rw_pi_controller *c)
+{
+    c->state.integral = 0.0f;
+    c->state.output = 0.0f;
+    c->state.saturation = 0;
+    /* Keep the held output inside the limits when 0 is not (e.g. out_min = 0.1). */
+    if (c->state.output < c->cfg.out_min) {
+        c->state.output = c->cfg.out_min;
+    }
+    if (c->state.output > c->cfg.out_max) {
+        c->state.output = c->cfg.out_max;
+    }
+}
+
+float rw_pi_controller_output(const rw_pi_controller *c)
+{
+    return c->state.output;
+}
+
+bool rw_pi_controller_config_is_valid(const rw_pi_controller_config *cfg)
+{
+    return isfinite(cfg->kp) && cfg->kp >= 0.0f && isfinite(cfg->ki_per_s) && cfg->ki_per_s >= 0.0f &&
+           isfinite(cfg->out_min) && isfinite(cfg->out_max) && cfg->out_min <= cfg->out_max;
+}
+
+static float clampf(float x, float lo, float hi)
+{
+    return x < lo ? lo : (x > hi ? hi : x);
+}
+
+/*
+ * Continuous law:   u(t) = ff(t) + kp * e(t) + ki * integral(e dt),   e = setpoint - measurement
+ * Discrete law (forward-Euler integral, step k, dt = dt_s):
+ *     e[k]  = setpoint[k] - measurement[k]
+ *     p[k]  = kp * e[k]
+ *     I'    = I[k-1] + ki_per_s * dt * e[k]                       (candidate integral)
+ *     v     = ff[k] + p[k] + I'                                    (unsaturated output)
+ * Anti-windup, two parts:
+ *  1. conditional integration: if v > out_max and e[k] > 0, or v < out_min and e[k] < 0, the
+ *     integral is frozen (I' = I[k-1]): it never grows deeper into a saturation it cannot act on,
+ *     and it moves again at once when the error reverses;
+ *  2. clamp: I[k] = clamp(I', out_min - ff[k], out_max - ff[k]): the integral term alone never
+ *     drives the output past a limit, so a reversed error leaves saturation within one step even
+ *     after a long saturation or a feed-forward jump.
+ *     u[k] = clamp(ff[k] + p[k] + I[k], out_min, out_max)
+ * Bad input: dt_s <= 0 or not finite, or any input not finite -> u[k] = u[k-1] and nothing is
+ * integrated. No NaN or infinity ever leaves the step. With out_min > out_max (invalid config,
+ * see rw_pi_controller_config_is_valid) the output is held.
+ */
+float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measurement,
+                            float feed_forward, float dt_s)
+{
+    const rw_pi_controller_config *cfg = &c->cfg;
+    if (!isfinite(setpoint) || !isfinite(measurement) || !isfinite(feed_forward) || !isfinite(dt_s) ||
+        dt_s <= 0.0f || !rw_pi_controller_config_is_valid(cfg)) {
+        return c->state.output;
+    }
+    const float error = setpoint - measurement;
+    const float p = cfg->kp * error;
+    float integral = c->state.integral + cfg->ki_per_s * dt_s * error;
+    const float unsaturated = feed_forward + p + integral;
+    if ((unsaturated > cfg->out_max && error > 0.0f) || (unsaturated < cfg->out_min && error < 0.0f)) {
+        integral = c->state.integral; /* conditional integration: freeze */
+    }
+    integral = clampf(integral, cfg->out_min - feed_forward, cfg->out_max - feed_forward);
+    const float u = feed_forward + p + integral;
+    if (!isfinite(integral) || !isfinite(u)) { /* overflow of huge (but finite) inputs */
+        return c->state.output;
+    }
+    c->state.integral = integral;
+    if (u > cfg->out_max) {
+        c->state.output = cfg->out_max;
+        c->state.saturation = 1;
+    } else if (u < cfg->out_min) {
+        c->state.output = cfg->out_min;
+        c->state.saturation = -1;
+    } else {
+        c->state.output = u;
+        c->state.saturation = 0;
+    }
+    return c->state.output;
+}

@@ -1,0 +1,117 @@
+/*
+ * rw_throttle_map.c - feed-forward throttle map and ESC pulse conversion.
+ */
+#include "rw_throttle_map.h"
+
+#include "rw_defaults.h"
+
+#include <math.h>
+
+#define RW_TWO_PI_F 6.28318530718f
+#define RW_S_PER_MIN_F 60.0f
+
+void rw_throttle_map_init(rw_throttle_map *m, const rw_throttle_map_config *cfg)
+{
+    m->cfg = *cfg;
+}
+
+void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg)
+{
+    cfg->kv_rpm_per_v = RW_DEFAULT_MOTOR_KV_RPM_PER_V;
+    cfg->wheel_radius_m = RW_DEFAULT_WHEEL_RADIUS_M;
+    cfg->pulse_min_us = (uint16_t)RW_DEFAULT_ESC_PULSE_MIN_US;
+    cfg->pulse_max_us = (uint16_t)RW_DEFAULT_ESC_PULSE_MAX_US;
+}
+
+bool rw_throttle_map_config_is_valid(const rw_throttle_map_config *cfg)
+{
+    return isfinite(cfg->kv_rpm_per_v) && cfg->kv_rpm_per_v > 0.0f && isfinite(cfg->wheel_radius_m) &&
+           cfg->wheel_radius_m > 0.0f && cfg->pulse_min_us >= RW_ESC_PULSE_LIMIT_LOW_US &&
+           cfg->pulse_min_us < cfg->pulse_max_us && cfg->pulse_max_us <= RW_ESC_PULSE_LIMIT_HIGH_US;
+}
+
+/* Rope speed (m/s) per unit throttle at battery_v, or 0 when it cannot be computed. */
+static float rope_mps_at_full_throttle(const rw_throttle_map *m, float battery_v)
+{
+    const float kv = m->cfg.kv_rpm_per_v;
+    const float r_m = m->cfg.wheel_radius_m;
+    if (!isfinite(battery_v) || !(battery_v > 0.0f) || !isfinite(kv) || !(kv > 0.0f) || !isfinite(r_m) ||
+        !(r_m > 0.0f)) {
+        return 0.0f;
+    }
+    const float full_mps = RW_TWO_PI_F * r_m * kv * battery_v / RW_S_PER_MIN_F;
+    return isfinite(full_mps) ? full_mps : 0.0f;
+}
+
+float rw_throttle_map_feed_forward(const rw_throttle_map *m, float rope_mps, float battery_v)
+{
+    const float full_mps = rope_mps_at_full_throttle(m, battery_v);
+    if (!(full_mps > 0.0f) || !isfinite(rope_mps) || !(rope_mps > 0.0f)) {
+        return 0.0f;
+    }
+    const float throttle = rope_mps / full_mps;
+    return throttle > 1.0f ? 1.0f : throttle;
+}
+
+float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v)
+{
+    if (!isfinite(throttle) || !(throttle > 0.0f)) {
+        return 0.0f;
+    }
+    return (throttle > 1.0f ? 1.0f : throttle) * rope_mps_at_full_throttle(m, battery_v);
+}
+
+/* The pulse range actually used: the configured one narrowed into the hard 1000..2000 us limits. */
+static void effective_range_us(const rw_throttle_map *m, uint16_t *lo_us, uint16_t *hi_us)
+{
+    uint16_t lo = m->cfg.pulse_min_us;
+    uint16_t hi = m->cfg.pulse_max_us;
+    if (lo < RW_ESC_PULSE_LIMIT_LOW_US) {
+        lo = (uint16_t)RW_ESC_PULSE_LIMIT_LOW_US;
+    }
+    if (lo > RW_ESC_PULSE_LIMIT_HIGH_US) {
+        lo = (uint16_t)RW_ESC_PULSE_LIMIT_HIGH_US;
+    }
+    if (hi > RW_ESC_PULSE_LIMIT_HIGH_US) {
+        hi = (uint16_t)RW_ESC_PULSE_LIMIT_HIGH_US;
+    }
+    if (hi < lo) {
+        hi = lo;
+    }
+    *lo_us = lo;
+    *hi_us = hi;
+}
+
+uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, float throttle)
+{
+    uint16_t lo_us;
+    uint16_t hi_us;
+    effective_range_us(m, &lo_us, &hi_us);
+    if (!isfinite(throttle) || !(throttle > 0.0f)) { /* NaN, -inf, negative, zero */
+        return lo_us;
+    }
+    if (throttle >= 1.0f) {
+        return hi_us;
+    }
+    const float span_us = (float)(hi_us - lo_us);
+    const uint32_t offset_us = (uint32_t)(throttle * span_us + 0.5f); /* 0 <= . <= span: no overflow */
+    uint32_t pulse_us = (uint32_t)lo_us + offset_us;
+    if (pulse_us > hi_us) {
+        pulse_us = hi_us;
+    }
+    return (uint16_t)pulse_us;
+}
+
+float rw_throttle_map_throttle_from_pulse(const rw_throttle_map *m, uint16_t pulse_us)
+{
+    uint16_t lo_us;
+    uint16_t hi_us;
+    effective_range_us(m, &lo_us, &hi_us);
+    if (pulse_us <= lo_us || hi_us == lo_us) {
+        return 0.0f;
+    }
+    if (pulse_us >= hi_us) {
+        return 1.0f;
+    }
+    return (float)(pulse_us - lo_us) / (float)(hi_us - lo_us);
+}

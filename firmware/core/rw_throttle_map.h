@@ -1,0 +1,60 @@
+/*
+ * rw_throttle_map.h - feed-forward throttle from rope speed (motor Kv, battery voltage, wheel
+ * radius), and throttle fraction <-> ESC pulse width with the ESC minimum as a hard floor.
+ *
+ * Throttle fraction: 0 = ESC minimum pulse (motor stopped), 1 = full throttle (pulse_max_us).
+ * Portable core module: no Arduino header, no heap, reads no clock; stateless.
+ */
+#ifndef RW_THROTTLE_MAP_H
+#define RW_THROTTLE_MAP_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Public configuration. */
+typedef struct rw_throttle_map_config {
+    float kv_rpm_per_v;    /**< motor velocity constant, rpm per volt (> 0) */
+    float wheel_radius_m;  /**< drive wheel radius, metres (> 0); the wheel sits on the motor shaft */
+    uint16_t pulse_min_us; /**< ESC minimum = zero throttle, microseconds; never output below it */
+    uint16_t pulse_max_us; /**< full throttle, microseconds (<= 2000) */
+} rw_throttle_map_config;
+
+typedef struct rw_throttle_map {
+    rw_throttle_map_config cfg; /**< public, may be changed between calls; no private state */
+} rw_throttle_map;
+
+/** Copies cfg. */
+void rw_throttle_map_init(rw_throttle_map *m, const rw_throttle_map_config *cfg);
+/** Fills cfg with the defaults of rw_defaults.h. */
+void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg);
+/**
+ * Feed-forward throttle fraction in [0, 1] that spins the unloaded motor so the rope moves at
+ * rope_mps (m/s) on a battery of battery_v volts:
+ *     throttle = 60 rope_mps / (2 pi wheel_radius_m kv_rpm_per_v battery_v), clamped to [0, 1].
+ * Returns 0 for non-finite or non-positive rope_mps or battery_v, or an invalid kv/radius.
+ */
+float rw_throttle_map_feed_forward(const rw_throttle_map *m, float rope_mps, float battery_v);
+/** Inverse of the feed-forward: unloaded rope speed (m/s, >= 0) at a throttle fraction (clamped
+ *  to [0, 1]) and battery voltage; 0 for non-finite input or invalid config. */
+float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v);
+/**
+ * ESC pulse for a throttle fraction: pulse_min_us + throttle (pulse_max_us - pulse_min_us), rounded
+ * to the nearest microsecond. Negative or NaN throttle -> pulse_min_us, above 1 -> pulse_max_us.
+ * The result is never below pulse_min_us and never above 2000 us, whatever the input; with a
+ * configured range outside 1000..2000 us the range is first narrowed into it.
+ */
+uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, float throttle);
+/** Throttle fraction in [0, 1] of a pulse (inverse of rw_throttle_map_pulse_us). */
+float rw_throttle_map_throttle_from_pulse(const rw_throttle_map *m, uint16_t pulse_us);
+/** true when kv and radius are finite and > 0 and 1000 <= pulse_min_us < pulse_max_us <= 2000. */
+bool rw_throttle_map_config_is_valid(const rw_throttle_map_config *cfg);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RW_THROTTLE_MAP_H */

@@ -1,0 +1,80 @@
+/*
+ * rw_tov_guard.c - takeoff velocity guard: airborne setpoint check and collapse detector.
+ */
+#include "rw_tov_guard.h"
+
+#include "rw_defaults.h"
+
+#include <math.h>
+
+void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg)
+{
+    g->cfg = *cfg;
+    rw_tov_guard_reset(g);
+}
+
+void rw_tov_guard_config_defaults(rw_tov_guard_config *cfg)
+{
+    cfg->tov_mps = RW_DEFAULT_TOV_MPS;
+    cfg->margin = RW_DEFAULT_TOV_MARGIN;
+    cfg->collapse_time_s = RW_DEFAULT_COLLAPSE_TIME_S;
+}
+
+void rw_tov_guard_reset(rw_tov_guard *g)
+{
+    g->state.below_s = 0.0f;
+    g->state.collapsed = false;
+}
+
+bool rw_tov_guard_config_is_valid(const rw_tov_guard_config *cfg)
+{
+    return isfinite(cfg->tov_mps) && cfg->tov_mps > 0.0f && isfinite(cfg->margin) && cfg->margin >= 1.0f &&
+           isfinite(cfg->collapse_time_s) && cfg->collapse_time_s >= 0.0f;
+}
+
+float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g)
+{
+    return g->cfg.tov_mps * g->cfg.margin;
+}
+
+bool rw_tov_guard_setpoint_allowed(const rw_tov_guard *g, float setpoint_mps)
+{
+    if (!rw_tov_guard_config_is_valid(&g->cfg) || !isfinite(setpoint_mps)) {
+        return false;
+    }
+    return setpoint_mps >= rw_tov_guard_min_airborne_mps(g);
+}
+
+bool rw_tov_guard_is_collapsed(const rw_tov_guard *g)
+{
+    return g->state.collapsed;
+}
+
+/*
+ * Discrete law (step k, dt = dt_s):
+ *   v[k] >= tov_mps:  below := 0, collapsed := false              (recovered: detector re-armed)
+ *   v[k] <  tov_mps:  below := below + dt
+ *                     if not collapsed and below >= collapse_time_s: collapsed := true, report once
+ * The timer counts continuous time under ToV: any sample at or above ToV restarts it.
+ * dt_s <= 0 or not finite: the timer does not advance (a recovery still re-arms).
+ * v[k] not finite: ignored (no advance, no re-arm). Invalid config: never reports.
+ */
+bool rw_tov_guard_step(rw_tov_guard *g, float measured_mps, float dt_s)
+{
+    if (!isfinite(measured_mps) || !rw_tov_guard_config_is_valid(&g->cfg)) {
+        return false;
+    }
+    if (measured_mps >= g->cfg.tov_mps) {
+        g->state.below_s = 0.0f;
+        g->state.collapsed = false;
+        return false;
+    }
+    if (isfinite(dt_s) && dt_s > 0.0f && g->state.below_s < g->cfg.collapse_time_s) {
+        g->state.below_s += dt_s; /* stops counting once past the threshold: no float growth */
+    }
+    if (!g->state.collapsed && g->state.below_s >= g->cfg.collapse_time_s) {
+        g->state.collapsed = true;
+        return true;
+    }
+    return false;
+}
