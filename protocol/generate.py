@@ -1,0 +1,935 @@
+#!/usr/bin/env python3
+"""Generate the C codec, the Python module and the message document from protocol/spec/robowrangler.toml.
+
+Usage:
+    uv run python protocol/generate.py            # write every output
+    uv run python protocol/generate.py --check    # exit 1 and list the stale outputs (CI)
+
+The spec is validated first; a bad spec fails with SpecError naming the message/field and the rule
+broken. Only the standard library is used, so the generator runs anywhere Python 3.11 does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import binascii
+import json
+import re
+import sys
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC_PATH = ROOT / "protocol" / "spec" / "robowrangler.toml"
+VECTORS_PATH = ROOT / "protocol" / "vectors" / "vectors.json"
+OUT_C_HEADER = ROOT / "firmware" / "core" / "generated" / "rw_protocol.h"
+OUT_C_SOURCE = ROOT / "firmware" / "core" / "generated" / "rw_protocol.c"
+OUT_C_VECTORS = ROOT / "firmware" / "core" / "generated" / "rw_protocol_vectors.h"
+OUT_PYTHON = ROOT / "host" / "robowrangler" / "protocol" / "generated.py"
+OUT_DOC = ROOT / "protocol" / "docs" / "messages.md"
+
+HEADER_LEN = 7
+CHECKSUM_LEN = 2
+
+# type name -> (C type, struct format char, size in bytes, min, max)
+TYPES = {
+    "uint8": ("uint8_t", "B", 1, 0, 0xFF),
+    "int8": ("int8_t", "b", 1, -0x80, 0x7F),
+    "uint16": ("uint16_t", "H", 2, 0, 0xFFFF),
+    "int16": ("int16_t", "h", 2, -0x8000, 0x7FFF),
+    "uint32": ("uint32_t", "I", 4, 0, 0xFFFFFFFF),
+    "int32": ("int32_t", "i", 4, -0x80000000, 0x7FFFFFFF),
+    "uint64": ("uint64_t", "Q", 8, 0, 0xFFFFFFFFFFFFFFFF),
+    "float": ("float", "f", 4, None, None),
+}
+KINDS = ("command", "heartbeat", "reply", "telemetry", "event", "sil")
+NAME_RE = re.compile(r"^[A-Z][A-Z0-9_]*$")
+FIELD_RE = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+class SpecError(ValueError):
+    """The spec breaks a rule; the message names where and which."""
+
+
+def crc16(data: bytes, crc: int = 0xFFFF) -> int:
+    """CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection): the frame checksum."""
+    return binascii.crc_hqx(data, crc)
+
+
+@dataclass
+class Field:
+    name: str
+    type: str
+    units: str
+    enum: str
+    description: str
+
+    @property
+    def c_type(self) -> str:
+        return TYPES[self.type][0]
+
+    @property
+    def size(self) -> int:
+        return TYPES[self.type][2]
+
+
+@dataclass
+class Message:
+    id: int
+    name: str
+    kind: str
+    description: str
+    fields: list[Field] = field(default_factory=list)
+
+    @property
+    def payload_len(self) -> int:
+        return sum(f.size for f in self.fields)
+
+    @property
+    def crc_extra(self) -> int:
+        """Checksum seed from the message name and its fields' types and names (MAVLink's CRC_EXTRA idea)."""
+        text = self.name + " " + "".join(f"{f.type} {f.name} " for f in self.fields)
+        return crc16(text.encode("ascii"))
+
+    @property
+    def c_name(self) -> str:
+        return self.name.lower()
+
+    @property
+    def py_name(self) -> str:
+        return "".join(part.capitalize() for part in self.name.split("_"))
+
+
+@dataclass
+class EnumValue:
+    name: str
+    value: int
+    description: str
+
+
+@dataclass
+class Enum:
+    name: str
+    description: str
+    bitmask: bool
+    values: list[EnumValue]
+
+    @property
+    def py_name(self) -> str:
+        return "".join(part.capitalize() for part in self.name.split("_"))
+
+
+@dataclass
+class Param:
+    id: int
+    name: str
+    units: str
+    min: float
+    max: float
+    default: float
+    locked: bool
+    integer: bool
+    description: str
+
+
+@dataclass
+class Spec:
+    version: int
+    magic: int
+    max_payload_len: int
+    description: str
+    enums: list[Enum]
+    messages: list[Message]
+    params: list[Param]
+
+    @property
+    def schema_hash(self) -> int:
+        """CRC over every message's CRC_EXTRA: one number that changes with any wire-visible edit."""
+        data = b"".join(m.id.to_bytes(1, "little") + m.crc_extra.to_bytes(2, "little") for m in self.messages)
+        return crc16(data)
+
+
+def _require(cond: bool, where: str, rule: str) -> None:
+    if not cond:
+        raise SpecError(f"{SPEC_PATH.name}: {where}: {rule}")
+
+
+def load_spec(path: Path = SPEC_PATH) -> Spec:
+    raw = tomllib.loads(path.read_text())
+    proto = raw.get("protocol", {})
+    for key in ("version", "magic", "max_payload_len"):
+        _require(key in proto, "[protocol]", f"missing {key}")
+    _require(0 < proto["max_payload_len"] <= 255, "[protocol]", "max_payload_len must be 1..255")
+
+    enums = []
+    enum_names = set()
+    for e in raw.get("enum", []):
+        where = f"enum {e.get('name')!r}"
+        _require(FIELD_RE.match(e.get("name", "")) is not None, where, "name must be lower_snake_case")
+        _require(e["name"] not in enum_names, where, "duplicate enum name")
+        enum_names.add(e["name"])
+        values = [EnumValue(v["name"], int(v["value"]), v.get("description", "")) for v in e["values"]]
+        _require(len({v.value for v in values}) == len(values), where, "duplicate value")
+        _require(len({v.name for v in values}) == len(values), where, "duplicate value name")
+        for v in values:
+            _require(NAME_RE.match(v.name) is not None, where, f"value name {v.name!r} must be UPPER_SNAKE")
+            _require(0 <= v.value <= 0xFFFF, where, f"value {v.name} out of 0..65535")
+        enums.append(Enum(e["name"], e.get("description", ""), bool(e.get("bitmask", False)), values))
+
+    messages = []
+    ids, names = set(), set()
+    for m in raw.get("message", []):
+        where = f"message {m.get('name')!r}"
+        _require(NAME_RE.match(m.get("name", "")) is not None, where, "name must be UPPER_SNAKE")
+        _require(isinstance(m.get("id"), int) and 0 <= m["id"] <= 254, where, "id must be 0..254 (255 means unreadable)")
+        _require(m["id"] not in ids, where, f"id {m['id']} reused (ids are never reused)")
+        _require(m["name"] not in names, where, "duplicate name")
+        _require(m.get("kind") in KINDS, where, f"kind must be one of {KINDS}")
+        ids.add(m["id"])
+        names.add(m["name"])
+        fields = []
+        for f in m.get("fields", []):
+            fwhere = f"{where} field {f.get('name')!r}"
+            _require(FIELD_RE.match(f.get("name", "")) is not None, fwhere, "name must be lower_snake_case")
+            _require(f.get("type") in TYPES, fwhere, f"type must be one of {sorted(TYPES)}")
+            _require(f.get("enum", "") in enum_names | {""}, fwhere, f"unknown enum {f.get('enum')!r}")
+            fields.append(Field(f["name"], f["type"], f.get("units", ""), f.get("enum", ""), f.get("description", "")))
+        _require(len({f.name for f in fields}) == len(fields), where, "duplicate field name")
+        msg = Message(m["id"], m["name"], m["kind"], m.get("description", ""), fields)
+        _require(msg.payload_len <= proto["max_payload_len"], where,
+                 f"payload {msg.payload_len} bytes exceeds max_payload_len {proto['max_payload_len']}")
+        messages.append(msg)
+
+    params = []
+    pids, pnames = set(), set()
+    for p in raw.get("param", []):
+        where = f"param {p.get('name')!r}"
+        _require(FIELD_RE.match(p.get("name", "")) is not None, where, "name must be lower_snake_case")
+        _require(isinstance(p.get("id"), int) and 0 <= p["id"] <= 254, where, "id must be 0..254")
+        _require(p["id"] not in pids and p["name"] not in pnames, where, "duplicate id or name")
+        pids.add(p["id"])
+        pnames.add(p["name"])
+        _require(p["min"] <= p["default"] <= p["max"], where, "default must lie in [min, max]")
+        params.append(Param(p["id"], p["name"], p.get("units", ""), float(p["min"]), float(p["max"]),
+                            float(p["default"]), bool(p.get("locked", False)), bool(p.get("integer", False)),
+                            p.get("description", "")))
+    _require(sorted(pids) == list(range(len(pids))), "[[param]]", "parameter ids must be 0..N-1 with no gap")
+    params.sort(key=lambda p: p.id)
+    messages.sort(key=lambda m: m.id)
+    return Spec(proto["version"], proto["magic"], proto["max_payload_len"], proto.get("description", "").strip(),
+                enums, messages, params)
+
+
+BANNER = "GENERATED by protocol/generate.py from protocol/spec/robowrangler.toml. DO NOT EDIT."
+
+
+def _c_float(x: float) -> str:
+    text = repr(float(x))
+    return f"{text}f" if ("." in text or "e" in text) else f"{text}.0f"
+
+
+def _c_comment(text: str) -> str:
+    return " ".join(text.split()).replace("*/", "* /")
+
+
+# ----------------------------------------------------------------------------------------------------
+# C
+def gen_c_header(spec: Spec) -> str:
+    o: list[str] = []
+    w = o.append
+    w(f"/* {BANNER} */")
+    w("#ifndef RW_PROTOCOL_H")
+    w("#define RW_PROTOCOL_H")
+    w("")
+    w("#include <stddef.h>")
+    w("#include <stdint.h>")
+    w("")
+    w("#ifdef __cplusplus")
+    w('extern "C" {')
+    w("#endif")
+    w("")
+    w(f"#define RW_PROTOCOL_VERSION {spec.version}u")
+    w(f"#define RW_PROTOCOL_MAGIC 0x{spec.magic:02X}u")
+    w(f"#define RW_PROTOCOL_SCHEMA_HASH 0x{spec.schema_hash:04X}u")
+    w(f"#define RW_FRAME_HEADER_LEN {HEADER_LEN}u")
+    w(f"#define RW_FRAME_CHECKSUM_LEN {CHECKSUM_LEN}u")
+    w(f"#define RW_MAX_PAYLOAD_LEN {spec.max_payload_len}u")
+    w(f"#define RW_MAX_FRAME_LEN {HEADER_LEN + spec.max_payload_len + CHECKSUM_LEN}u")
+    w("#define RW_MSG_ID_UNREADABLE 255u")
+    w("")
+    for e in spec.enums:
+        w(f"/* {_c_comment(e.description)} */")
+        w("typedef enum {")
+        for v in e.values:
+            w(f"    RW_{e.name.upper()}_{v.name} = {v.value}, /* {_c_comment(v.description)} */")
+        w(f"}} rw_{e.name};")
+        if not e.bitmask:
+            w(f"#define RW_{e.name.upper()}_COUNT {max(v.value for v in e.values) + 1}u")
+        w("")
+    w("/* Result of rw_frame_decode: RW_DECODE_OK or an rw_nack_reason. */")
+    w("#define RW_DECODE_OK 0")
+    w("")
+    w("typedef enum {")
+    for m in spec.messages:
+        w(f"    RW_MSG_ID_{m.name} = {m.id},")
+    w("} rw_msg_id;")
+    w("")
+    w("typedef enum {")
+    for i, k in enumerate(KINDS):
+        w(f"    RW_MSG_KIND_{k.upper()} = {i},")
+    w("} rw_msg_kind;")
+    w("")
+    for m in spec.messages:
+        w(f"/* {m.name} (id {m.id}, {m.kind}): {_c_comment(m.description)} */")
+        w(f"#define RW_MSG_{m.name}_LEN {m.payload_len}u")
+        w(f"#define RW_MSG_{m.name}_CRC_EXTRA 0x{m.crc_extra:04X}u")
+        w("typedef struct {")
+        if not m.fields:
+            w("    uint8_t unused_; /* no fields */")
+        for f in m.fields:
+            unit = f" [{f.units}]" if f.units else ""
+            enum = f" (rw_{f.enum})" if f.enum else ""
+            w(f"    {f.c_type} {f.name}; /*{unit}{enum} {_c_comment(f.description)} */")
+        w(f"}} rw_msg_{m.c_name};")
+        w(f"void rw_msg_{m.c_name}_pack(const rw_msg_{m.c_name} *msg, uint8_t *payload);")
+        w(f"void rw_msg_{m.c_name}_unpack(rw_msg_{m.c_name} *msg, const uint8_t *payload);")
+        w(f"size_t rw_msg_{m.c_name}_encode(const rw_msg_{m.c_name} *msg, uint16_t seq, uint8_t *out, size_t out_cap);")
+        w("")
+    w("typedef struct {")
+    w("    uint8_t msg_id;")
+    w("    uint8_t kind;        /* rw_msg_kind */")
+    w("    uint8_t payload_len;")
+    w("    uint16_t crc_extra;")
+    w("    const char *name;")
+    w("} rw_msg_info;")
+    w("")
+    w("/* A decoded frame. msg_id and seq are valid once the header was read (else 255 and 0);")
+    w("   payload points into the caller's buffer. */")
+    w("typedef struct {")
+    w("    uint8_t flags;")
+    w("    uint8_t msg_id;")
+    w("    uint16_t seq;")
+    w("    uint8_t payload_len;")
+    w("    const uint8_t *payload;")
+    w("} rw_frame;")
+    w("")
+    w("/* CRC-16/CCITT-FALSE step: poly 0x1021, init 0xFFFF, no reflection. */")
+    w("uint16_t rw_crc16_ccitt(uint16_t crc, const uint8_t *data, size_t len);")
+    w("/* The message's info, or NULL for an id not in this schema. */")
+    w("const rw_msg_info *rw_msg_info_find(uint8_t msg_id);")
+    w("/* Check and split a received frame; returns RW_DECODE_OK or an rw_nack_reason. Never reads past len. */")
+    w("int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out);")
+    w("/* Frame a payload; returns the frame length, or 0 if msg_id is unknown, payload_len is not the")
+    w("   message's size or out_cap is too small. */")
+    w("size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uint8_t payload_len,")
+    w("                       uint8_t *out, size_t out_cap);")
+    w("")
+    w("/* Parameters (SI units, float32 on the wire). */")
+    w(f"#define RW_PARAM_COUNT {len(spec.params)}u")
+    w("#define RW_PARAM_FLAG_LOCKED 0x01u  /* settable only while DISARMED */")
+    w("#define RW_PARAM_FLAG_INTEGER 0x02u /* value must be a whole number */")
+    w("typedef enum {")
+    for p in spec.params:
+        w(f"    RW_PARAM_{p.name.upper()} = {p.id}, /* [{p.units}] {_c_comment(p.description)} */")
+    w("} rw_param_id;")
+    w("typedef struct {")
+    w("    const char *name;")
+    w("    float min_value;")
+    w("    float max_value;")
+    w("    float default_value;")
+    w("    uint8_t flags;")
+    w("} rw_param_info;")
+    w("extern const rw_param_info rw_param_table[RW_PARAM_COUNT];")
+    w("")
+    w("#ifdef __cplusplus")
+    w("}")
+    w("#endif")
+    w("")
+    w("#endif /* RW_PROTOCOL_H */")
+    return "\n".join(o) + "\n"
+
+
+def _c_put(f: Field, off: int) -> list[str]:
+    if f.type == "float":
+        return [f"    {{ uint32_t bits_; memcpy(&bits_, &msg->{f.name}, 4); put_u32(payload + {off}, bits_); }}"]
+    if f.size == 1:
+        return [f"    payload[{off}] = (uint8_t)msg->{f.name};"]
+    return [f"    put_u{f.size * 8}(payload + {off}, (uint{f.size * 8}_t)msg->{f.name});"]
+
+
+def _c_get(f: Field, off: int) -> list[str]:
+    if f.type == "float":
+        return [f"    {{ uint32_t bits_ = get_u32(payload + {off}); memcpy(&msg->{f.name}, &bits_, 4); }}"]
+    if f.size == 1:
+        return [f"    msg->{f.name} = ({f.c_type})payload[{off}];"]
+    return [f"    msg->{f.name} = ({f.c_type})get_u{f.size * 8}(payload + {off});"]
+
+
+def gen_c_source(spec: Spec) -> str:
+    o: list[str] = []
+    w = o.append
+    w(f"/* {BANNER} */")
+    w('#include "rw_protocol.h"')
+    w("")
+    w("#include <string.h>")
+    w("")
+    w("static void put_u16(uint8_t *p, uint16_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }")
+    w("static void put_u32(uint8_t *p, uint32_t v) { put_u16(p, (uint16_t)v); put_u16(p + 2, (uint16_t)(v >> 16)); }")
+    w("static void put_u64(uint8_t *p, uint64_t v) { put_u32(p, (uint32_t)v); put_u32(p + 4, (uint32_t)(v >> 32)); }")
+    w("static uint16_t get_u16(const uint8_t *p) { return (uint16_t)(p[0] | (p[1] << 8)); }")
+    w("static uint32_t get_u32(const uint8_t *p) { return (uint32_t)get_u16(p) | ((uint32_t)get_u16(p + 2) << 16); }")
+    w("static uint64_t get_u64(const uint8_t *p) { return (uint64_t)get_u32(p) | ((uint64_t)get_u32(p + 4) << 32); }")
+    w("")
+    w("uint16_t rw_crc16_ccitt(uint16_t crc, const uint8_t *data, size_t len)")
+    w("{")
+    w("    for (size_t i = 0; i < len; ++i) {")
+    w("        crc ^= (uint16_t)((uint16_t)data[i] << 8);")
+    w("        for (int bit = 0; bit < 8; ++bit) {")
+    w("            crc = (crc & 0x8000u) ? (uint16_t)((crc << 1) ^ 0x1021u) : (uint16_t)(crc << 1);")
+    w("        }")
+    w("    }")
+    w("    return crc;")
+    w("}")
+    w("")
+    w("static const rw_msg_info msg_infos[] = {")
+    for m in spec.messages:
+        w(f'    {{ {m.id}u, RW_MSG_KIND_{m.kind.upper()}, {m.payload_len}u, 0x{m.crc_extra:04X}u, "{m.name}" }},')
+    w("};")
+    w("")
+    w("const rw_msg_info *rw_msg_info_find(uint8_t msg_id)")
+    w("{")
+    w("    for (size_t i = 0; i < sizeof msg_infos / sizeof msg_infos[0]; ++i) {")
+    w("        if (msg_infos[i].msg_id == msg_id) {")
+    w("            return &msg_infos[i];")
+    w("        }")
+    w("    }")
+    w("    return NULL;")
+    w("}")
+    w("")
+    w("static uint16_t frame_checksum(const uint8_t *frame, size_t body_len, uint16_t crc_extra)")
+    w("{")
+    w("    uint8_t extra[2];")
+    w("    put_u16(extra, crc_extra);")
+    w("    uint16_t crc = rw_crc16_ccitt(0xFFFFu, frame + 1, body_len - 1u);")
+    w("    return rw_crc16_ccitt(crc, extra, 2u);")
+    w("}")
+    w("")
+    w("int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out)")
+    w("{")
+    w("    out->flags = 0u;")
+    w("    out->msg_id = (uint8_t)RW_MSG_ID_UNREADABLE;")
+    w("    out->seq = 0u;")
+    w("    out->payload_len = 0u;")
+    w("    out->payload = NULL;")
+    w("    if (buf == NULL || len < RW_FRAME_HEADER_LEN) {")
+    w("        return RW_NACK_REASON_TRUNCATED;")
+    w("    }")
+    w("    if (buf[0] != RW_PROTOCOL_MAGIC) {")
+    w("        return RW_NACK_REASON_BAD_MAGIC;")
+    w("    }")
+    w("    out->flags = buf[2];")
+    w("    out->msg_id = buf[3];")
+    w("    out->seq = get_u16(buf + 4);")
+    w("    out->payload_len = buf[6];")
+    w("    if (buf[1] != RW_PROTOCOL_VERSION) {")
+    w("        return RW_NACK_REASON_BAD_VERSION;")
+    w("    }")
+    w("    if (out->flags != 0u) {")
+    w("        return RW_NACK_REASON_UNSUPPORTED_FLAGS;")
+    w("    }")
+    w("    if (out->payload_len > RW_MAX_PAYLOAD_LEN) {")
+    w("        return RW_NACK_REASON_OVERSIZE;")
+    w("    }")
+    w("    size_t frame_len = RW_FRAME_HEADER_LEN + (size_t)out->payload_len + RW_FRAME_CHECKSUM_LEN;")
+    w("    if (len < frame_len) {")
+    w("        return RW_NACK_REASON_TRUNCATED;")
+    w("    }")
+    w("    if (len > frame_len) {")
+    w("        return RW_NACK_REASON_BAD_LENGTH;")
+    w("    }")
+    w("    const rw_msg_info *info = rw_msg_info_find(out->msg_id);")
+    w("    if (info == NULL) {")
+    w("        return RW_NACK_REASON_UNKNOWN_MESSAGE;")
+    w("    }")
+    w("    size_t body_len = RW_FRAME_HEADER_LEN + (size_t)out->payload_len;")
+    w("    if (frame_checksum(buf, body_len, info->crc_extra) != get_u16(buf + body_len)) {")
+    w("        return RW_NACK_REASON_BAD_CHECKSUM;")
+    w("    }")
+    w("    if (out->payload_len != info->payload_len) {")
+    w("        return RW_NACK_REASON_BAD_LENGTH;")
+    w("    }")
+    w("    out->payload = buf + RW_FRAME_HEADER_LEN;")
+    w("    return RW_DECODE_OK;")
+    w("}")
+    w("")
+    w("size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uint8_t payload_len,")
+    w("                       uint8_t *out, size_t out_cap)")
+    w("{")
+    w("    const rw_msg_info *info = rw_msg_info_find(msg_id);")
+    w("    size_t frame_len = RW_FRAME_HEADER_LEN + (size_t)payload_len + RW_FRAME_CHECKSUM_LEN;")
+    w("    if (info == NULL || payload_len != info->payload_len || out == NULL || out_cap < frame_len) {")
+    w("        return 0u;")
+    w("    }")
+    w("    out[0] = RW_PROTOCOL_MAGIC;")
+    w("    out[1] = RW_PROTOCOL_VERSION;")
+    w("    out[2] = 0u;")
+    w("    out[3] = msg_id;")
+    w("    put_u16(out + 4, seq);")
+    w("    out[6] = payload_len;")
+    w("    if (payload_len > 0u) {")
+    w("        memcpy(out + RW_FRAME_HEADER_LEN, payload, payload_len);")
+    w("    }")
+    w("    size_t body_len = RW_FRAME_HEADER_LEN + (size_t)payload_len;")
+    w("    put_u16(out + body_len, frame_checksum(out, body_len, info->crc_extra));")
+    w("    return frame_len;")
+    w("}")
+    w("")
+    used_sizes: set[int] = set()
+    for m in spec.messages:
+        w(f"void rw_msg_{m.c_name}_pack(const rw_msg_{m.c_name} *msg, uint8_t *payload)")
+        w("{")
+        if not m.fields:
+            w("    (void)msg;")
+            w("    (void)payload;")
+        off = 0
+        for f in m.fields:
+            o.extend(_c_put(f, off))
+            used_sizes.add(f.size)
+            off += f.size
+        w("}")
+        w("")
+        w(f"void rw_msg_{m.c_name}_unpack(rw_msg_{m.c_name} *msg, const uint8_t *payload)")
+        w("{")
+        if not m.fields:
+            w("    msg->unused_ = 0u;")
+            w("    (void)payload;")
+        off = 0
+        for f in m.fields:
+            o.extend(_c_get(f, off))
+            off += f.size
+        w("}")
+        w("")
+        w(f"size_t rw_msg_{m.c_name}_encode(const rw_msg_{m.c_name} *msg, uint16_t seq, uint8_t *out, size_t out_cap)")
+        w("{")
+        w(f"    uint8_t payload[RW_MSG_{m.name}_LEN + 1u] = {{ 0u }};")
+        w(f"    rw_msg_{m.c_name}_pack(msg, payload);")
+        w(f"    return rw_frame_encode(RW_MSG_ID_{m.name}, seq, payload, RW_MSG_{m.name}_LEN, out, out_cap);")
+        w("}")
+        w("")
+    if 8 not in used_sizes:
+        # keep the helpers used so that -Wunused-function stays quiet when no 64-bit field exists
+        w("/* no 64-bit fields in this schema */")
+        w("void rw_protocol_unused_u64_(uint8_t *p);")
+        w("void rw_protocol_unused_u64_(uint8_t *p) { put_u64(p, get_u64(p)); }")
+        w("")
+    w("const rw_param_info rw_param_table[RW_PARAM_COUNT] = {")
+    for p in spec.params:
+        flags = " | ".join(n for n, on in (("RW_PARAM_FLAG_LOCKED", p.locked), ("RW_PARAM_FLAG_INTEGER", p.integer)) if on) or "0u"
+        w(f'    {{ "{p.name}", {_c_float(p.min)}, {_c_float(p.max)}, {_c_float(p.default)}, {flags} }},')
+    w("};")
+    return "\n".join(o) + "\n"
+
+
+def gen_c_vectors(spec: Spec, vectors: list[dict]) -> str:
+    """The golden vectors as C data, with per-vector field checks, for the C test and the Unity test."""
+    by_name = {m.name: m for m in spec.messages}
+    o: list[str] = []
+    w = o.append
+    w(f"/* {BANNER} Source: protocol/vectors/vectors.json. */")
+    w("#ifndef RW_PROTOCOL_VECTORS_H")
+    w("#define RW_PROTOCOL_VECTORS_H")
+    w("")
+    w('#include "rw_protocol.h"')
+    w("")
+    w("typedef struct {")
+    w("    const char *name;")
+    w("    const uint8_t *bytes;")
+    w("    size_t len;")
+    w("    int expect_result;   /* RW_DECODE_OK or an rw_nack_reason */")
+    w("    uint8_t expect_msg_id;")
+    w("    uint16_t expect_seq;")
+    w("} rw_protocol_vector;")
+    w("")
+    for i, v in enumerate(vectors):
+        data = bytes.fromhex(v["hex"])
+        body = ", ".join(f"0x{b:02X}" for b in data) or "0x00"
+        w(f"static const uint8_t rw_vector_{i}_bytes[] = {{ {body} }};")
+    w("")
+    w("static const rw_protocol_vector rw_protocol_vectors[] = {")
+    for i, v in enumerate(vectors):
+        data = bytes.fromhex(v["hex"])
+        result = "RW_DECODE_OK" if v["expect"] == "ok" else f"RW_NACK_REASON_{v['expect']}"
+        msg_id = by_name[v["message"]].id if "message" in v else v.get("msg_id", 255)
+        seq = v.get("seq", 0)
+        w(f'    {{ "{v["name"]}", rw_vector_{i}_bytes, {len(data)}u, {result}, {msg_id}u, {seq}u }},')
+    w("};")
+    w(f"#define RW_PROTOCOL_VECTOR_COUNT {len(vectors)}u")
+    w("")
+    w("/* Unpacks the payload of valid vector `index` and compares every field with the golden value;")
+    w("   returns the number of mismatching fields (0 = all equal), -1 for a vector that is not valid. */")
+    w("static inline int rw_protocol_vector_check_fields(size_t index, const uint8_t *payload)")
+    w("{")
+    w("    int bad = 0;")
+    w("    (void)payload;")
+    w("    switch (index) {")
+    for i, v in enumerate(vectors):
+        if v["expect"] != "ok":
+            continue
+        m = by_name[v["message"]]
+        w(f"    case {i}u: {{")
+        w(f"        rw_msg_{m.c_name} msg;")
+        w(f"        rw_msg_{m.c_name}_unpack(&msg, payload);")
+        for f in m.fields:
+            value = v["fields"][f.name]
+            if f.type == "float":
+                lit = _c_float(value)
+            elif f.type.startswith("u"):
+                lit = f"{int(value)}u"
+            else:
+                lit = f"({int(value)})" if int(value) != -0x80000000 else "(-2147483647 - 1)"
+            w(f"        bad += (msg.{f.name} != {lit});")
+        w("        return bad;")
+        w("    }")
+    w("    default:")
+    w("        return -1;")
+    w("    }")
+    w("}")
+    w("")
+    w("#endif /* RW_PROTOCOL_VECTORS_H */")
+    return "\n".join(o) + "\n"
+
+
+# ----------------------------------------------------------------------------------------------------
+# Python
+def gen_python(spec: Spec) -> str:
+    o: list[str] = []
+    w = o.append
+    w(f'"""{BANNER}')
+    w("")
+    w("Wire protocol v%d: constants, enums, message classes, the frame codec and the parameter table." % spec.version)
+    w("Integer wire units as in the spec; robowrangler.units converts to SI.")
+    w('"""')
+    w("")
+    w("from __future__ import annotations")
+    w("")
+    w("import binascii")
+    w("import struct")
+    w("from dataclasses import dataclass")
+    w("from enum import IntEnum, IntFlag")
+    w("from typing import ClassVar")
+    w("")
+    w(f"PROTOCOL_VERSION = {spec.version}")
+    w(f"MAGIC = 0x{spec.magic:02X}")
+    w(f"SCHEMA_HASH = 0x{spec.schema_hash:04X}")
+    w(f"HEADER_LEN = {HEADER_LEN}")
+    w(f"CHECKSUM_LEN = {CHECKSUM_LEN}")
+    w(f"MAX_PAYLOAD_LEN = {spec.max_payload_len}")
+    w(f"MAX_FRAME_LEN = {HEADER_LEN + spec.max_payload_len + CHECKSUM_LEN}")
+    w("MSG_ID_UNREADABLE = 255")
+    w("")
+    w("")
+    for e in spec.enums:
+        base = "IntFlag" if e.bitmask else "IntEnum"
+        w(f"class {e.py_name}({base}):")
+        w(f'    """{e.description}"""')
+        w("")
+        for v in e.values:
+            w(f"    {v.name} = {v.value}")
+            w(f'    """{v.description}"""')
+        w("")
+        w("")
+    w("class MsgKind(IntEnum):")
+    for i, k in enumerate(KINDS):
+        w(f"    {k.upper()} = {i}")
+    w("")
+    w("")
+    w("class MsgId(IntEnum):")
+    for m in spec.messages:
+        w(f"    {m.name} = {m.id}")
+    w("")
+    w("")
+    w("@dataclass(frozen=True)")
+    w("class FieldSpec:")
+    w("    name: str")
+    w("    type: str")
+    w("    units: str")
+    w("    enum: str")
+    w("    description: str")
+    w("")
+    w("")
+    w("class FieldRangeError(ValueError):")
+    w('    """A field value does not fit its wire type; names the message, field, range and value."""')
+    w("")
+    w("")
+    w("class Message:")
+    w('    """Base of every message class: fixed little-endian layout, fields in spec order."""')
+    w("")
+    w("    MSG_ID: ClassVar[int]")
+    w("    NAME: ClassVar[str]")
+    w("    KIND: ClassVar[MsgKind]")
+    w("    CRC_EXTRA: ClassVar[int]")
+    w("    PAYLOAD_LEN: ClassVar[int]")
+    w("    FIELDS: ClassVar[tuple[FieldSpec, ...]]")
+    w("    _STRUCT: ClassVar[struct.Struct]")
+    w("    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]]")
+    w("")
+    w("    def pack(self) -> bytes:")
+    w('        """The payload bytes; FieldRangeError if a value does not fit its type."""')
+    w("        values = tuple(getattr(self, f.name) for f in self.FIELDS)")
+    w("        for spec, rng, value in zip(self.FIELDS, self._RANGES, values):")
+    w("            if rng is None:")
+    w("                if not isinstance(value, (int, float)):")
+    w('                    raise FieldRangeError(f"{self.NAME}.{spec.name}: expected a number, got {value!r}")')
+    w("            elif isinstance(value, bool) or not isinstance(value, int) or not rng[0] <= value <= rng[1]:")
+    w("                raise FieldRangeError(")
+    w('                    f"{self.NAME}.{spec.name}: expected an integer in [{rng[0]}, {rng[1]}] ({spec.type}), got {value!r}"')
+    w("                )")
+    w("        return self._STRUCT.pack(*values)")
+    w("")
+    w("    @classmethod")
+    w("    def unpack(cls, payload: bytes) -> Message:")
+    w("        if len(payload) != cls.PAYLOAD_LEN:")
+    w("            raise FrameError(NackReason.BAD_LENGTH, cls.MSG_ID, None,")
+    w('                             f"{cls.NAME}: expected {cls.PAYLOAD_LEN} payload bytes, got {len(payload)}")')
+    w("        return cls(*cls._STRUCT.unpack(payload))")
+    w("")
+    w("")
+    for m in spec.messages:
+        fmt = "<" + "".join(TYPES[f.type][1] for f in m.fields)
+        w("@dataclass(frozen=True)")
+        w(f"class {m.py_name}(Message):")
+        w(f'    """{m.name} (id {m.id}, {m.kind}): {m.description}')
+        if m.fields:
+            w("")
+            w("    Fields:")
+            for f in m.fields:
+                unit = f" [{f.units}]" if f.units else ""
+                enum = f" ({f.enum})" if f.enum else ""
+                w(f"        {f.name}: {f.type}{unit}{enum} {f.description}")
+        w('    """')
+        w("")
+        w(f"    MSG_ID: ClassVar[int] = {m.id}")
+        w(f'    NAME: ClassVar[str] = "{m.name}"')
+        w(f"    KIND: ClassVar[MsgKind] = MsgKind.{m.kind.upper()}")
+        w(f"    CRC_EXTRA: ClassVar[int] = 0x{m.crc_extra:04X}")
+        w(f"    PAYLOAD_LEN: ClassVar[int] = {m.payload_len}")
+        w(f'    _STRUCT: ClassVar[struct.Struct] = struct.Struct("{fmt}")')
+        ranges = ", ".join("None" if f.type == "float" else f"({TYPES[f.type][3]}, {TYPES[f.type][4]})" for f in m.fields)
+        w(f"    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ({ranges}{',' if len(m.fields) == 1 else ''})")
+        specs = "".join(
+            f"\n        FieldSpec({f.name!r}, {f.type!r}, {f.units!r}, {f.enum!r}, {f.description!r}),"
+            for f in m.fields
+        )
+        w(f"    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ({specs}\n    )" if m.fields else "    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()")
+        if m.fields:
+            w("")
+            for f in m.fields:
+                py_t = "float" if f.type == "float" else "int"
+                w(f"    {f.name}: {py_t}")
+        w("")
+        w("")
+    w("MESSAGES: dict[int, type[Message]] = {")
+    for m in spec.messages:
+        w(f"    {m.id}: {m.py_name},")
+    w("}")
+    w("")
+    w("")
+    w("class FrameError(ValueError):")
+    w('    """A frame was refused. reason maps to the NACK reason the device would send."""')
+    w("")
+    w("    def __init__(self, reason: NackReason, msg_id: int | None, seq: int | None, detail: str) -> None:")
+    w('        super().__init__(f"{reason.name}: {detail}")')
+    w("        self.reason = reason")
+    w("        self.msg_id = msg_id")
+    w("        self.seq = seq")
+    w("")
+    w("")
+    w("@dataclass(frozen=True)")
+    w("class Frame:")
+    w("    msg_id: int")
+    w("    seq: int")
+    w("    flags: int")
+    w("    payload: bytes")
+    w("")
+    w("")
+    w("def checksum(body_without_magic: bytes, crc_extra: int) -> int:")
+    w('    """CRC-16/CCITT-FALSE over the frame body (version..payload) then CRC_EXTRA (little-endian)."""')
+    w('    return binascii.crc_hqx(crc_extra.to_bytes(2, "little"), binascii.crc_hqx(body_without_magic, 0xFFFF))')
+    w("")
+    w("")
+    w("def encode_frame(message: Message, seq: int) -> bytes:")
+    w('    """Frame a message with sequence number seq (0..65535)."""')
+    w("    if not isinstance(seq, int) or not 0 <= seq <= 0xFFFF:")
+    w('        raise FieldRangeError(f"seq: expected an integer in [0, 65535], got {seq!r}")')
+    w("    payload = message.pack()")
+    w('    body = struct.pack("<BBBBHB", MAGIC, PROTOCOL_VERSION, 0, message.MSG_ID, seq, len(payload)) + payload')
+    w('    return body + checksum(body[1:], message.CRC_EXTRA).to_bytes(2, "little")')
+    w("")
+    w("")
+    w("def decode_frame(data: bytes) -> Frame:")
+    w('    """Check and split a frame. Raises FrameError with the same reason, in the same order, as the C decoder."""')
+    w("    data = bytes(data)")
+    w("    if len(data) < HEADER_LEN:")
+    w('        raise FrameError(NackReason.TRUNCATED, None, None, f"{len(data)} bytes, the header alone needs {HEADER_LEN}")')
+    w("    if data[0] != MAGIC:")
+    w('        raise FrameError(NackReason.BAD_MAGIC, None, None, f"first byte 0x{data[0]:02X}, expected 0x{MAGIC:02X}")')
+    w('    _, version, flags, msg_id, seq, payload_len = struct.unpack_from("<BBBBHB", data)')
+    w("    if version != PROTOCOL_VERSION:")
+    w('        raise FrameError(NackReason.BAD_VERSION, msg_id, seq, f"version {version}, this side speaks {PROTOCOL_VERSION}")')
+    w("    if flags != 0:")
+    w('        raise FrameError(NackReason.UNSUPPORTED_FLAGS, msg_id, seq, f"flags 0x{flags:02X} not supported by version {PROTOCOL_VERSION}")')
+    w("    if payload_len > MAX_PAYLOAD_LEN:")
+    w('        raise FrameError(NackReason.OVERSIZE, msg_id, seq, f"payload_len {payload_len} > {MAX_PAYLOAD_LEN}")')
+    w("    frame_len = HEADER_LEN + payload_len + CHECKSUM_LEN")
+    w("    if len(data) < frame_len:")
+    w('        raise FrameError(NackReason.TRUNCATED, msg_id, seq, f"{len(data)} bytes, the frame declares {frame_len}")')
+    w("    if len(data) > frame_len:")
+    w('        raise FrameError(NackReason.BAD_LENGTH, msg_id, seq, f"{len(data) - frame_len} bytes after the frame")')
+    w("    cls = MESSAGES.get(msg_id)")
+    w("    if cls is None:")
+    w('        raise FrameError(NackReason.UNKNOWN_MESSAGE, msg_id, seq, f"message id {msg_id} not in schema 0x{SCHEMA_HASH:04X}")')
+    w("    body_len = HEADER_LEN + payload_len")
+    w('    if checksum(data[1:body_len], cls.CRC_EXTRA) != int.from_bytes(data[body_len:frame_len], "little"):')
+    w('        raise FrameError(NackReason.BAD_CHECKSUM, msg_id, seq, f"checksum mismatch for {cls.NAME}")')
+    w("    if payload_len != cls.PAYLOAD_LEN:")
+    w('        raise FrameError(NackReason.BAD_LENGTH, msg_id, seq, f"{cls.NAME} has {cls.PAYLOAD_LEN} payload bytes, frame has {payload_len}")')
+    w("    return Frame(msg_id, seq, flags, data[HEADER_LEN:body_len])")
+    w("")
+    w("")
+    w("def decode_message(data: bytes) -> tuple[Frame, Message]:")
+    w('    """decode_frame, then the payload into its message class."""')
+    w("    frame = decode_frame(data)")
+    w("    return frame, MESSAGES[frame.msg_id].unpack(frame.payload)")
+    w("")
+    w("")
+    w("@dataclass(frozen=True)")
+    w("class ParamSpec:")
+    w("    id: int")
+    w("    name: str")
+    w("    units: str")
+    w("    min: float")
+    w("    max: float")
+    w("    default: float")
+    w("    locked: bool")
+    w("    integer: bool")
+    w("    description: str")
+    w("")
+    w("")
+    w("PARAMS: tuple[ParamSpec, ...] = (")
+    for p in spec.params:
+        w(f"    ParamSpec({p.id}, {p.name!r}, {p.units!r}, {p.min!r}, {p.max!r}, {p.default!r}, {p.locked}, {p.integer}, {p.description!r}),")
+    w(")")
+    w("PARAMS_BY_NAME: dict[str, ParamSpec] = {p.name: p for p in PARAMS}")
+    return "\n".join(o) + "\n"
+
+
+# ----------------------------------------------------------------------------------------------------
+# Markdown
+def gen_doc(spec: Spec) -> str:
+    o: list[str] = []
+    w = o.append
+    w(f"<!-- {BANNER} -->")
+    w(f"# RoboWrangler wire protocol, version {spec.version}")
+    w("")
+    w(f"Schema hash 0x{spec.schema_hash:04X}, magic 0x{spec.magic:02X}, max payload {spec.max_payload_len} bytes.")
+    w("")
+    w("## Frame")
+    w("")
+    w(spec.description)
+    w("")
+    w("| offset | size | field |")
+    w("|---|---|---|")
+    w("| 0 | 1 | magic |")
+    w("| 1 | 1 | version |")
+    w("| 2 | 1 | flags (0 in v1) |")
+    w("| 3 | 1 | msg_id |")
+    w("| 4 | 2 | seq (u16, per sender) |")
+    w("| 6 | 1 | payload_len |")
+    w("| 7 | payload_len | payload (fields in the order below, packed, little-endian) |")
+    w("| 7+payload_len | 2 | checksum |")
+    w("")
+    w("Decoding order (C and Python alike): length < 7 TRUNCATED; magic BAD_MAGIC; version BAD_VERSION; flags "
+      "UNSUPPORTED_FLAGS; payload_len > max OVERSIZE; too few bytes TRUNCATED; trailing bytes BAD_LENGTH; unknown id "
+      "UNKNOWN_MESSAGE; checksum BAD_CHECKSUM; payload_len != message size BAD_LENGTH.")
+    w("")
+    w("Commands are answered by ACK or NACK carrying the command's msg_id and seq. A retransmitted command (same seq "
+      "and checksum within the device's duplicate window) is answered again but never executed twice.")
+    w("")
+    w("## Messages")
+    w("")
+    for m in spec.messages:
+        w(f"### {m.name} (id {m.id}, {m.kind}, {m.payload_len} bytes, CRC_EXTRA 0x{m.crc_extra:04X})")
+        w("")
+        w(m.description)
+        w("")
+        if m.fields:
+            w("| field | type | units | description |")
+            w("|---|---|---|---|")
+            for f in m.fields:
+                desc = f.description + (f" Enum `{f.enum}`." if f.enum else "")
+                w(f"| {f.name} | {f.type} | {f.units or '-'} | {desc} |")
+            w("")
+    w("## Enums")
+    w("")
+    for e in spec.enums:
+        w(f"### {e.name}{' (bitmask)' if e.bitmask else ''}")
+        w("")
+        w(e.description)
+        w("")
+        w("| name | value | meaning |")
+        w("|---|---|---|")
+        for v in e.values:
+            w(f"| {v.name} | {hex(v.value) if e.bitmask else v.value} | {v.description} |")
+        w("")
+    w("## Parameters")
+    w("")
+    w("float32 on the wire (PARAM_GET / PARAM_SET / PARAM_VALUE), SI units. Locked: settable only while DISARMED.")
+    w("")
+    w("| id | name | units | min | max | default | locked | description |")
+    w("|---|---|---|---|---|---|---|---|")
+    for p in spec.params:
+        w(f"| {p.id} | {p.name} | {p.units} | {p.min:g} | {p.max:g} | {p.default:g} | {'yes' if p.locked else 'no'}"
+          f"{' (integer)' if p.integer else ''} | {p.description} |")
+    return "\n".join(o) + "\n"
+
+
+def outputs(spec: Spec) -> dict[Path, str]:
+    out = {
+        OUT_C_HEADER: gen_c_header(spec),
+        OUT_C_SOURCE: gen_c_source(spec),
+        OUT_PYTHON: gen_python(spec),
+        OUT_DOC: gen_doc(spec),
+    }
+    if VECTORS_PATH.exists():
+        out[OUT_C_VECTORS] = gen_c_vectors(spec, json.loads(VECTORS_PATH.read_text())["vectors"])
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="fail if any committed output differs")
+    args = parser.parse_args(argv)
+    try:
+        spec = load_spec()
+    except SpecError as exc:
+        print(f"generate: {exc}", file=sys.stderr)
+        return 2
+    stale = []
+    for path, text in outputs(spec).items():
+        if args.check:
+            if not path.exists() or path.read_text() != text:
+                stale.append(path.relative_to(ROOT))
+        else:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text)
+    if stale:
+        print("generate: stale generated files (run `uv run python protocol/generate.py`):", file=sys.stderr)
+        for p in stale:
+            print(f"  {p}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
