@@ -43,7 +43,8 @@ float rw_throttle_map_feed_forward(const rw_throttle_map *m, float rope_mps, flo
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v);
 /**
  * ESC pulse for a throttle fraction: pulse_min_us + throttle (pulse_max_us - pulse_min_us), rounded
- * to the nearest microsecond. Negative or NaN throttle -> pulse_min_us, above 1 -> pulse_max_us.
+ * to the nearest microsecond. Negative or non-finite (NaN, +-inf) throttle -> pulse_min_us (bad
+ * input stops the motor), above 1 -> pulse_max_us.
  * The result is never below pulse_min_us and never above 2000 us, whatever the input; with a
  * configured range outside 1000..2000 us the range is first narrowed into it.
  */
