@@ -1,0 +1,138 @@
+"""Every number of the rope-loop chain model, with units, defaults and where each comes from.
+
+Interpretation of the paper's IsaacGym model (details and reasons in docs/chain_model.md):
+in IsaacGym a DOF's "stiffness" and "damping" are the gains of its position drive,
+``tau = stiffness * (q_target - q) - damping * qdot``. The paper's in-plane joints of the upper
+branch have stiffness 1e4 N m/rad and damping 5e3 N m s/rad; "zero stiffness" joints (lower branch
+in-plane, every out-of-plane joint) have no drive at all. We implement the drives as MuJoCo
+``general`` actuators with the same gains (affine bias), integrated with ``implicitfast`` so that the
+large drive damping is implicit, as PhysX's drives are.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+from robowrangler_sim.chain.errors import ChainModelError
+
+N_LINKS_MIN = 10
+N_LINKS_MAX = 80
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChainParams:
+    """Parameters of the chain plant (SI units, suffix names the unit).
+
+    Geometry and rope:
+        n_links: links in the chain, 10..80 (paper: 20).
+        rope_length_m: total rope length (loop outside plus rope kept inside the device).
+        rope_inside_at_home_m: rope inside the device when the guide is at 0 mm.
+        guide_take_up_ratio: metres of rope drawn inside per metre of guide travel (2.0: the loop's two
+            ends pass over the moving guide like a pulley; an assumption to re-measure on hardware).
+        guide_stroke_mm: guide travel of the lead screw (hardware: 180 mm).
+        rope_linear_density_kg_per_m: 0.221 g/m wool rope; a 2 m / 20-link chain has 2.2e-5 kg links.
+        rope_radius_m: collision radius of the chain links (2 mm rope).
+    Drives (IsaacGym drive gains, see module doc):
+        kp_upper_nm_per_rad, kd_upper_nms_per_rad: in-plane drives of the upper branch (1e4, 5e3).
+        kp_lower_nm_per_rad, kd_lower_nms_per_rad: in-plane drives of the lower branch (0, 0).
+        kp_out_of_plane_nm_per_rad, kd_out_of_plane_nms_per_rad: out-of-plane drives (0, 0).
+        upper_branch_fraction: share of the in-plane joints, counted from the exit, in the upper branch.
+    Closure:
+        closure_stiffness_n_per_m, closure_damping_ns_per_m: the artificial spring (rest length 0)
+            from the end of the last link to the return point on the module.
+    Numerics (stability choices, docs/chain_model.md):
+        timestep_s: MuJoCo timestep.
+        passive_damping_nms_per_rad: passive damping on every hinge (implicit; stabilises free links).
+        armature_kgm2: rotor-like inertia added to every hinge (the links' own inertia is ~1e-8 kg m2).
+        drive_armature_factor: driven joints get an extra armature of factor * lift * kd * timestep_s,
+            the inertia their implicit drive damping has within one step, so that the contact solver
+            does not answer the huge drive torques with huge forces on the light links (0 = off).
+    Lift:
+        takeoff_speed_mps: ToV; at and above it the loop is airborne (paper rope: 2.6 m/s).
+        lift_ramp_s: time for the lift factor to go 1 -> 0 (falling) or 0 -> 1 (rising).
+    Contact:
+        rope_friction: sliding friction of the rope links (MuJoCo takes the larger of a pair's values).
+        floor_friction: sliding friction of the floor/table plane.
+    """
+
+    n_links: int = 20
+    rope_length_m: float = 2.2
+    rope_inside_at_home_m: float = 0.2
+    guide_take_up_ratio: float = 2.0
+    guide_stroke_mm: float = 180.0
+    rope_linear_density_kg_per_m: float = 2.21e-4
+    rope_radius_m: float = 1.0e-3
+    kp_upper_nm_per_rad: float = 1.0e4
+    kd_upper_nms_per_rad: float = 5.0e3
+    kp_lower_nm_per_rad: float = 0.0
+    kd_lower_nms_per_rad: float = 0.0
+    kp_out_of_plane_nm_per_rad: float = 0.0
+    kd_out_of_plane_nms_per_rad: float = 0.0
+    upper_branch_fraction: float = 0.5
+    closure_stiffness_n_per_m: float = 20.0
+    closure_damping_ns_per_m: float = 0.05
+    timestep_s: float = 0.005
+    passive_damping_nms_per_rad: float = 1.0e-4
+    armature_kgm2: float = 1.0e-5
+    drive_armature_factor: float = 1.0
+    takeoff_speed_mps: float = 2.6
+    lift_ramp_s: float = 0.2
+    rope_friction: float = 0.3
+    floor_friction: float = 0.6
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.n_links, int) or isinstance(self.n_links, bool):
+            raise ChainModelError(f"n_links: expected an int, got {type(self.n_links).__name__}")
+        if not N_LINKS_MIN <= self.n_links <= N_LINKS_MAX:
+            raise ChainModelError(
+                f"n_links: expected {N_LINKS_MIN}..{N_LINKS_MAX}, got {self.n_links}")
+        for f in fields(self):
+            if f.name == "n_links":
+                continue
+            value = getattr(self, f.name)
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+                raise ChainModelError(f"{f.name}: expected a finite number, got {value!r}")
+            if value < 0:
+                raise ChainModelError(f"{f.name}: expected >= 0, got {value}")
+        for name in ("rope_length_m", "rope_linear_density_kg_per_m", "rope_radius_m", "timestep_s",
+                     "takeoff_speed_mps", "guide_take_up_ratio"):
+            if getattr(self, name) <= 0:
+                raise ChainModelError(f"{name}: expected > 0, got {getattr(self, name)}")
+        if not 0.0 < self.upper_branch_fraction < 1.0:
+            raise ChainModelError(
+                f"upper_branch_fraction: expected in (0, 1), got {self.upper_branch_fraction}")
+        if self.timestep_s > 0.02:
+            raise ChainModelError(f"timestep_s: expected <= 0.02 s, got {self.timestep_s}")
+        if self.min_loop_length_m < 0.1:
+            raise ChainModelError(
+                "rope_length_m: expected a loop of at least 0.1 m at full guide stroke, got "
+                f"{self.min_loop_length_m:.3f} m")
+
+    # --- derived quantities ----------------------------------------------------------------
+    @property
+    def home_loop_length_m(self) -> float:
+        """Loop length outside the device with the guide at 0 mm, metres."""
+        return self.rope_length_m - self.rope_inside_at_home_m
+
+    @property
+    def min_loop_length_m(self) -> float:
+        """Loop length with the guide at the end of its stroke, metres."""
+        return self.home_loop_length_m - self.guide_take_up_ratio * self.guide_stroke_mm * 1e-3
+
+    @property
+    def n_upper(self) -> int:
+        """Number of in-plane joints (from the exit) driven as the upper branch."""
+        return max(1, min(self.n_links - 1, int(round(self.upper_branch_fraction * self.n_links))))
+
+    @property
+    def link_mass_kg(self) -> float:
+        """Mass of one link at the home loop length, kg."""
+        return self.rope_linear_density_kg_per_m * self.home_loop_length_m / self.n_links
+
+    def loop_length_m(self, guide_position_mm: float) -> float:
+        """Loop length outside the device for a guide position (0..guide_stroke_mm), metres."""
+        if not math.isfinite(guide_position_mm) or not 0.0 <= guide_position_mm <= self.guide_stroke_mm:
+            raise ChainModelError(
+                f"guide_position_mm: expected 0..{self.guide_stroke_mm}, got {guide_position_mm}")
+        return self.home_loop_length_m - self.guide_take_up_ratio * guide_position_mm * 1e-3

@@ -1,0 +1,395 @@
+"""ChainPlant: the paper's rope-loop chain in MuJoCo, driven by SI plant inputs, read by named outputs.
+
+A lockstep bridge drives it once per tick::
+
+    plant = ChainPlant(table=..., params=ChainParams(), objects=(...), floor_height_m=0.0)
+    plant.advance(PlantInputs(rope_speed_mps=5.0, guide_position_mm=0.0,
+                              base_pos_m=(0, 0, 1), base_quat_wxyz=(1, 0, 0, 0)), duration_s=0.001)
+    out = plant.outputs()          # PlantOutputs: tip, closure gap, contact forces, objects ...
+
+Each step: the lift factor follows the rope speed (lift.py); the inclination phi is read from the base
+pose; the in-plane drive targets come from the shape table at phi (targets.py); the link length
+follows the loop length the guide leaves outside; the module (mocap) takes the base pose; MuJoCo
+steps; divergence raises ChainDivergenceError.
+
+Time: the plant owns its clock, ``time_s = steps * timestep_s``. ``advance(duration_s)`` runs the
+whole number of steps that brings the clock nearest to the requested end time (the remainder is
+carried, so a 1 kHz bridge on a 2 ms plant steps every other tick, deterministically).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from robowrangler_sim.chain.builder import build_chain_model
+from robowrangler_sim.chain.errors import ChainDivergenceError, ChainModelError
+from robowrangler_sim.chain.lift import LiftState
+from robowrangler_sim.chain.objects import ObjectPlacement
+from robowrangler_sim.chain.params import ChainParams
+from robowrangler_sim.chain.targets import ShapeTargets
+from robowrangler_sim.shape_table import ShapeTable
+
+MAX_JOINT_SPEED_RAD_S = 1.0e4
+
+
+@dataclass(frozen=True, kw_only=True)
+class PlantInputs:
+    """Inputs of one tick (SI).
+
+    Attributes:
+        rope_speed_mps: rope speed from the drive plant, m/s.
+        guide_position_mm: spindle guide position, 0..guide_stroke_mm.
+        base_pos_m: shape (3,), module exit point in the world, metres.
+        base_quat_wxyz: shape (4,), module orientation (x = launch axis, z = up), unit quaternion.
+    """
+
+    rope_speed_mps: float
+    guide_position_mm: float = 0.0
+    base_pos_m: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    base_quat_wxyz: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.rope_speed_mps):
+            raise ChainModelError(f"rope_speed_mps: expected a finite speed, got {self.rope_speed_mps}")
+        pos = np.asarray(self.base_pos_m, dtype=float)
+        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
+            raise ChainModelError(f"base_pos_m: expected 3 finite numbers, got {self.base_pos_m}")
+        q = np.asarray(self.base_quat_wxyz, dtype=float)
+        if q.shape != (4,) or not np.all(np.isfinite(q)) or abs(np.linalg.norm(q) - 1.0) > 1e-6:
+            raise ChainModelError(f"base_quat_wxyz: expected a unit quaternion (w, x, y, z), got "
+                                  f"{self.base_quat_wxyz}")
+
+
+@dataclass(frozen=True)
+class PlantOutputs:
+    """Named outputs after a tick (SI, world frame).
+
+    Attributes:
+        time_s: plant clock.
+        loop_tip_pos_m: shape (3,), the chain point farthest from the exit.
+        closure_gap_m: distance between the last link's end and the return point.
+        loop_length_m: rope outside the device.
+        phi_rad: module inclination read from the base pose.
+        lift: lift factor in [0, 1] (1 = airborne).
+        chain_object_force_n: {object name: total normal contact force from the chain, N}.
+        module_object_force_n: {object name: total normal contact force from the module housing, N}.
+        chain_floor_force_n: total normal force between chain and floor, N.
+        object_pos_m: {object name: shape (3,) body origin}.
+        object_quat_wxyz: {object name: shape (4,)}.
+    """
+
+    time_s: float
+    loop_tip_pos_m: np.ndarray
+    closure_gap_m: float
+    loop_length_m: float
+    phi_rad: float
+    lift: float
+    chain_object_force_n: dict
+    module_object_force_n: dict
+    chain_floor_force_n: float
+    object_pos_m: dict
+    object_quat_wxyz: dict
+
+
+def base_inclination_rad(quat_wxyz: np.ndarray) -> float:
+    """Inclination of the module's launch axis (its x axis) above the horizontal, rad."""
+    mat = np.empty(9)
+    mujoco.mju_quat2Mat(mat, np.asarray(quat_wxyz, dtype=float))
+    x_axis = mat.reshape(3, 3)[:, 0]
+    return math.atan2(x_axis[2], math.hypot(x_axis[0], x_axis[1]))
+
+
+def pitch_quat_wxyz(phi_rad: float, *, yaw_rad: float = 0.0) -> tuple[float, float, float, float]:
+    """Module orientation with the launch axis pitched up by phi (and yawed), as a unit quaternion."""
+    qy = np.array([math.cos(yaw_rad / 2), 0.0, 0.0, math.sin(yaw_rad / 2)])
+    qp = np.array([math.cos(-phi_rad / 2), 0.0, math.sin(-phi_rad / 2), 0.0])  # about +y: x->-z, so -phi
+    out = np.empty(4)
+    mujoco.mju_mulQuat(out, qy, qp)
+    return tuple(float(v) for v in out)
+
+
+class ChainPlant:
+    """The rope-loop chain plant.
+
+    Args:
+        table: shape table (contours per phi); see default_table.py for the shipped default.
+        params: chain parameters.
+        objects: objects in the scene.
+        floor_height_m: z of a floor plane, or None.
+        initial: PlantInputs the plant starts from (base pose, speed, guide).
+        airborne: True: start airborne in the target shape (lift 1); False: start at rest, lift 0,
+            chain straight along the launch axis.
+        seed: seeds the optional initial joint noise (same seed -> same trajectory).
+        initial_noise_rad: standard deviation of noise added to the initial joint angles.
+    """
+
+    def __init__(self, *, table: ShapeTable, params: ChainParams | None = None,
+                 objects: tuple[ObjectPlacement, ...] = (), floor_height_m: float | None = None,
+                 initial: PlantInputs | None = None, airborne: bool = True, seed: int = 0,
+                 initial_noise_rad: float = 0.0) -> None:
+        if not isinstance(table, ShapeTable):
+            raise ChainModelError(f"table: expected a ShapeTable, got {type(table).__name__}")
+        self.params = params if params is not None else ChainParams()
+        self.table = table
+        self.objects = tuple(objects)
+        initial = initial if initial is not None else PlantInputs(rope_speed_mps=5.0)
+        p = self.params
+        n = p.n_links
+        self.model = build_chain_model(p, objects=self.objects, floor_height_m=floor_height_m,
+                                       module_pos_m=tuple(initial.base_pos_m))
+        self.data = mujoco.MjData(self.model)
+        self.targets = ShapeTargets(table, n_links=n)
+        self.lift_state = LiftState(takeoff_speed_mps=p.takeoff_speed_mps, lift_ramp_s=p.lift_ramp_s,
+                                    lift=1.0 if airborne else 0.0)
+        m = self.model
+        name = lambda kind, s: mujoco.mj_name2id(m, kind, s)  # noqa: E731
+        J, B, G, S, A = (mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_GEOM,
+                         mujoco.mjtObj.mjOBJ_SITE, mujoco.mjtObj.mjOBJ_ACTUATOR)
+        self._inplane_qpos = np.array([m.jnt_qposadr[name(J, f"inplane_{i}")] for i in range(n)])
+        self._outplane_qpos = np.array([m.jnt_qposadr[name(J, f"outplane_{i}")] for i in range(n)])
+        self._chain_dof = np.concatenate([[m.jnt_dofadr[name(J, f"inplane_{i}")],
+                                           m.jnt_dofadr[name(J, f"outplane_{i}")]] for i in range(n)])
+        self._link_body = np.array([name(B, f"link_{i}") for i in range(n)])
+        self._link_geom = np.array([name(G, f"link_{i}") for i in range(n)])
+        self._end_site = np.array([name(S, f"link_{i}_end") for i in range(n)])
+        self._exit_site = name(S, "exit")
+        self._return_site = name(S, "return")
+        act_joint = {}
+        for i in range(n):
+            a = name(A, f"drive_inplane_{i}")
+            if a >= 0:
+                act_joint[a] = i
+        self._drive_act = np.array(sorted(act_joint), dtype=int)
+        self._drive_joint = np.array([act_joint[a] for a in self._drive_act], dtype=int)
+        self._drive_kp = m.actuator_gainprm[self._drive_act, 0].copy()
+        self._drive_kd = -m.actuator_biasprm[self._drive_act, 2].copy()
+        self._drive_dof = np.array([m.jnt_dofadr[m.actuator_trnid[a, 0]] for a in self._drive_act], dtype=int)
+        self._base_armature = m.dof_armature[self._drive_dof].copy()
+        self._floor_geom = name(G, "floor")
+        self._module_geom = name(G, "module_housing")
+        self._object_body = {o.spec.name: name(B, o.spec.name) for o in self.objects}
+        self._geom_object = {}
+        for o in self.objects:
+            bid = self._object_body[o.spec.name]
+            for g in range(m.ngeom):
+                if m.geom_bodyid[g] == bid:
+                    self._geom_object[g] = o.spec.name
+        self._chain_geoms = set(self._link_geom.tolist())
+        self._link_len_m = -1.0
+        self._lift_applied = -1.0
+        self._steps = 0
+        self._warn_badqacc = 0
+        self._inputs = initial
+        self._force6 = np.zeros(6)
+
+        self._apply_inputs(initial)
+        if airborne:
+            q = self.targets.joint_targets(self._phi_rad, speed_index=self._speed_index(initial.rope_speed_mps))
+            self.data.qpos[self._inplane_qpos] = q
+            self._place_lower_branch_on_contour(q)
+        rng = np.random.default_rng(seed)
+        if initial_noise_rad > 0:
+            self.data.qpos[self._inplane_qpos] += rng.normal(0.0, initial_noise_rad, n)
+            self.data.qpos[self._outplane_qpos] += rng.normal(0.0, initial_noise_rad, n)
+        self._apply_drives()
+        mujoco.mj_forward(self.model, self.data)
+
+    # --- inputs ----------------------------------------------------------------------------
+    def _speed_index(self, rope_speed_mps: float) -> int:
+        return self.targets.speed_index(abs(rope_speed_mps))
+
+    def _apply_inputs(self, inputs: PlantInputs) -> None:
+        p = self.params
+        self._inputs = inputs
+        self.data.mocap_pos[0] = inputs.base_pos_m
+        self.data.mocap_quat[0] = inputs.base_quat_wxyz
+        self._phi_rad = base_inclination_rad(np.asarray(inputs.base_quat_wxyz))
+        self._loop_length_m = p.loop_length_m(inputs.guide_position_mm)
+        self._set_link_length(self._loop_length_m / p.n_links)
+        s = self._speed_index(inputs.rope_speed_mps)
+        ret = self._loop_length_m * self.targets.return_point_per_m(self._phi_rad, speed_index=s)
+        self.model.site_pos[self._return_site] = (ret[0], 0.0, ret[1])
+        self._ctrl_targets = self.targets.joint_targets(self._phi_rad, speed_index=s)
+
+    def _set_link_length(self, link_len_m: float) -> None:
+        if link_len_m == self._link_len_m:
+            return
+        m = self.model
+        r = self.params.rope_radius_m
+        m.body_pos[self._link_body[1:], 0] = link_len_m
+        m.geom_pos[self._link_geom, 0] = link_len_m / 2
+        m.geom_size[self._link_geom, 1] = link_len_m / 2
+        m.geom_rbound[self._link_geom] = r + link_len_m / 2
+        m.geom_aabb[self._link_geom, 5] = r + link_len_m / 2
+        m.site_pos[self._end_site, 0] = link_len_m
+        self._link_len_m = link_len_m
+
+    def _apply_drives(self) -> None:
+        a = self.lift_state.lift
+        if a != self._lift_applied and self._drive_act.size:
+            m = self.model
+            kp = a * self._drive_kp
+            m.actuator_gainprm[self._drive_act, 0] = kp
+            m.actuator_biasprm[self._drive_act, 1] = -kp
+            m.actuator_biasprm[self._drive_act, 2] = -a * self._drive_kd
+            # drive armature = kd h: the constraint solver sees the inertia the implicit drive damping
+            # gives the joint within one step (see docs/chain_model.md, "contact on the driven branch")
+            m.dof_armature[self._drive_dof] = (self._base_armature
+                                               + a * self._drive_kd * self.params.timestep_s
+                                               * self.params.drive_armature_factor)
+            self._lift_applied = a
+        if self._drive_act.size:
+            self.data.ctrl[self._drive_act] = self._ctrl_targets[self._drive_joint]
+
+    def _place_lower_branch_on_contour(self, q: np.ndarray) -> None:
+        """Initial lower-branch angles: the target contour too (the drives only hold the upper branch)."""
+        self.data.qpos[self._inplane_qpos] = q
+
+    # --- stepping --------------------------------------------------------------------------
+    @property
+    def time_s(self) -> float:
+        return self._steps * self.params.timestep_s
+
+    def step(self, inputs: PlantInputs | None = None) -> None:
+        """One MuJoCo step with ``inputs`` (or the last inputs)."""
+        if inputs is not None:
+            if not isinstance(inputs, PlantInputs):
+                raise ChainModelError(f"inputs: expected PlantInputs, got {type(inputs).__name__}")
+            self._apply_inputs(inputs)
+        self.lift_state.step(self._inputs.rope_speed_mps, self.params.timestep_s)
+        self._apply_drives()
+        mujoco.mj_step(self.model, self.data)
+        self._steps += 1
+        self._check_divergence()
+
+    def advance(self, inputs: PlantInputs | None = None, *, duration_s: float) -> int:
+        """Step until the clock is nearest to (start + duration_s); returns the number of steps."""
+        if not (duration_s >= 0 and math.isfinite(duration_s)):
+            raise ChainModelError(f"duration_s: expected a finite duration >= 0, got {duration_s}")
+        if inputs is not None:
+            if not isinstance(inputs, PlantInputs):
+                raise ChainModelError(f"inputs: expected PlantInputs, got {type(inputs).__name__}")
+            self._apply_inputs(inputs)
+        self._target_time_s = getattr(self, "_target_time_s", self.time_s) + duration_s
+        n = int(math.floor(self._target_time_s / self.params.timestep_s - self._steps + 0.5))
+        for _ in range(max(n, 0)):
+            self.step()
+        return max(n, 0)
+
+    def _check_divergence(self) -> None:
+        d = self.data
+        bad = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+        if bad != self._warn_badqacc:
+            self._warn_badqacc = bad
+            raise ChainDivergenceError(time_s=self.time_s, reason="badqacc",
+                                       detail="MuJoCo reset the state after a non-finite acceleration")
+        if not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel)):
+            raise ChainDivergenceError(time_s=self.time_s, reason="nonfinite", detail="qpos/qvel not finite")
+        vmax = float(np.max(np.abs(d.qvel[self._chain_dof])))
+        if vmax > MAX_JOINT_SPEED_RAD_S:
+            raise ChainDivergenceError(time_s=self.time_s, reason="velocity",
+                                       detail=f"chain joint speed {vmax:.3g} rad/s > {MAX_JOINT_SPEED_RAD_S:g}")
+
+    # --- named outputs ---------------------------------------------------------------------
+    @property
+    def phi_rad(self) -> float:
+        return self._phi_rad
+
+    @property
+    def lift(self) -> float:
+        return self.lift_state.lift
+
+    def loop_length_m(self) -> float:
+        return self._loop_length_m
+
+    def link_length_m(self) -> float:
+        return self._link_len_m
+
+    def chain_points_m(self) -> np.ndarray:
+        """Link joint points from the exit to the last link's end, shape (N + 1, 3), world frame."""
+        d = self.data
+        return np.vstack([d.xpos[self._link_body], d.site_xpos[self._end_site[-1]][None, :]])
+
+    def chain_points_loop_plane_m(self) -> np.ndarray:
+        """Chain points in the table frame: (x, z) from the exit, x horizontal along the launch
+        direction, z up; shape (N + 1, 2)."""
+        pts = self.chain_points_m() - self.data.site_xpos[self._exit_site]
+        mat = self.data.xmat[self.model.site_bodyid[self._exit_site]].reshape(3, 3)
+        fwd = mat[:, 0].copy()
+        fwd[2] = 0.0
+        fwd /= np.linalg.norm(fwd)
+        return np.column_stack([pts @ fwd, pts[:, 2]])
+
+    def exit_pos_m(self) -> np.ndarray:
+        return self.data.site_xpos[self._exit_site].copy()
+
+    def return_pos_m(self) -> np.ndarray:
+        return self.data.site_xpos[self._return_site].copy()
+
+    def loop_tip_pos_m(self) -> np.ndarray:
+        pts = self.chain_points_m()
+        k = int(np.argmax(np.linalg.norm(pts - self.exit_pos_m(), axis=1)))
+        return pts[k].copy()
+
+    def closure_gap_m(self) -> float:
+        d = self.data
+        return float(np.linalg.norm(d.site_xpos[self._end_site[-1]] - d.site_xpos[self._return_site]))
+
+    def joint_targets_rad(self) -> np.ndarray:
+        """Current in-plane targets, shape (N,) (only the driven upper branch is servoed)."""
+        return self._ctrl_targets.copy()
+
+    def inplane_angles_rad(self) -> np.ndarray:
+        return self.data.qpos[self._inplane_qpos].copy()
+
+    def outplane_angles_rad(self) -> np.ndarray:
+        return self.data.qpos[self._outplane_qpos].copy()
+
+    def object_pos_m(self, name: str) -> np.ndarray:
+        return self.data.xpos[self._body(name)].copy()
+
+    def object_quat_wxyz(self, name: str) -> np.ndarray:
+        return self.data.xquat[self._body(name)].copy()
+
+    def _body(self, name: str) -> int:
+        try:
+            return self._object_body[name]
+        except KeyError:
+            raise ChainModelError(f"name: expected one of the scene objects {sorted(self._object_body)}, "
+                                  f"got {name!r}") from None
+
+    def contact_forces_n(self) -> tuple[dict, dict, float]:
+        """Normal contact forces: (chain->object per object, module->object per object, chain<->floor)."""
+        d = self.data
+        chain_obj = {k: 0.0 for k in self._object_body}
+        module_obj = {k: 0.0 for k in self._object_body}
+        chain_floor = 0.0
+        for i in range(d.ncon):
+            c = d.contact[i]
+            g1, g2 = int(c.geom1), int(c.geom2)
+            in_chain = (g1 in self._chain_geoms, g2 in self._chain_geoms)
+            obj = self._geom_object.get(g1) or self._geom_object.get(g2)
+            if not (any(in_chain) or obj or self._module_geom in (g1, g2)):
+                continue
+            mujoco.mj_contactForce(self.model, d, i, self._force6)
+            fn = abs(float(self._force6[0]))
+            if any(in_chain) and obj:
+                chain_obj[obj] += fn
+            elif any(in_chain) and self._floor_geom in (g1, g2):
+                chain_floor += fn
+            elif obj and self._module_geom in (g1, g2):
+                module_obj[obj] += fn
+        return chain_obj, module_obj, chain_floor
+
+    def outputs(self) -> PlantOutputs:
+        chain_obj, module_obj, chain_floor = self.contact_forces_n()
+        return PlantOutputs(
+            time_s=self.time_s, loop_tip_pos_m=self.loop_tip_pos_m(), closure_gap_m=self.closure_gap_m(),
+            loop_length_m=self._loop_length_m, phi_rad=self._phi_rad, lift=self.lift,
+            chain_object_force_n=chain_obj, module_object_force_n=module_obj, chain_floor_force_n=chain_floor,
+            object_pos_m={k: self.object_pos_m(k) for k in self._object_body},
+            object_quat_wxyz={k: self.object_quat_wxyz(k) for k in self._object_body})
