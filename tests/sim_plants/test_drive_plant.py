@@ -113,6 +113,17 @@ def test_full_throttle_spin_up_is_current_limited_and_brakes_actively_on_throttl
     assert braking[-1]["rope_speed_mps"] < coasting[-1]["rope_speed_mps"] - 3.0
 
 
+def test_throttle_reapplied_to_a_coasting_motor_picks_it_up_without_braking():
+    plant = armed_plant()
+    run(plant, 1500.0, 1.0)
+    run(plant, MIN_US, 0.1)  # zero throttle: bridge off, the rope coasts
+    assert plant.esc_armed and plant.motor_current_a == 0.0
+    v_coast = plant.rope_speed_mps
+    states = run(plant, 1500.0, 0.05)
+    assert min(s["motor_current_a"] for s in states) >= 0.0
+    assert min(s["rope_speed_mps"] for s in states) >= v_coast - 0.05
+
+
 # --- ESC arming ------------------------------------------------------------------------------------------
 
 def test_no_movement_until_armed():

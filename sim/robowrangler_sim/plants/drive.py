@@ -233,7 +233,7 @@ class DrivePlant:
         frame_us = self.params.esc_frame_us
         while t < t_end:
             if t >= self._next_frame_us:
-                esc.on_frame(esc_pulse_us)
+                esc.on_frame(esc_pulse_us, self._kt * self._omega / self._battery.source_v())
                 self._next_frame_us += frame_us
             seg_end = self._next_frame_us if self._next_frame_us < t_end else t_end
             self._integrate(t, seg_end - t)

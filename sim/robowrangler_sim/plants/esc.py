@@ -11,7 +11,9 @@ What is modelled (numbers in DriveParams):
 * Armed: throttle = (pulse - min - deadband) / (max - min - deadband) clipped to [0, 1]; zero throttle turns
   the bridge off (the motor coasts, BLHeli "brake on stop" off).
 * The applied duty follows throttle x ``esc_max_duty`` through a first-order lag ``esc_lag_s``
-  (``advance``); with the bridge off the duty is zero.
+  (``advance``); with the bridge off the duty is zero. When the bridge switches on while the motor still
+  turns, the duty starts at the back-EMF's share of the supply (the ESC synchronises to the coasting motor;
+  assumption) so a re-applied throttle does not brake it from zero duty first.
 
 Active braking (damped light) and the current limit act on the motor current, in bldc_motor.py.
 """
@@ -48,8 +50,12 @@ class Esc:
         self.duty = 0.0
         self.arm_hold_us = 0
 
-    def on_frame(self, pulse_us: float) -> None:
-        """Latch one input frame's pulse width (us; 0 = no signal). Called once per ``esc_frame_us``."""
+    def on_frame(self, pulse_us: float, back_emf_duty: float = 0.0) -> None:
+        """Latch one input frame's pulse width (us; 0 = no signal). Called once per ``esc_frame_us``.
+
+        back_emf_duty: the motor's back-EMF over the supply voltage now; when the bridge switches on, the
+        duty starts there (the ESC synchronises to a coasting motor) rather than at zero.
+        """
         p = self._p
         if pulse_us < p.esc_invalid_below_us:
             self.armed = False
@@ -78,8 +84,10 @@ class Esc:
         if throttle == 0.0:
             self.bridge_on = False
             self.duty = 0.0
-        else:
+        elif not self.bridge_on:
             self.bridge_on = True
+            # pick up a still-turning motor at the duty that matches its back-EMF (no braking jolt)
+            self.duty = min(throttle * p.esc_max_duty, max(0.0, back_emf_duty))
 
     def advance(self, dt_s: float) -> float:
         """Advance the duty lag by dt_s seconds; returns the mean applied duty over the interval."""
