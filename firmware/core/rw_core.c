@@ -1,0 +1,284 @@
+#include "rw_core.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "rw_core_internal.h"
+
+/* A tick longer than this (a debugger pause, a stalled loop) is integrated as this long, so the PI and
+ * ramp never take one giant step; the uptime still advances by the real time. */
+#define RW_CORE_MAX_CONTROL_DT_S 0.05f
+
+static uint16_t sat_u16(float x)
+{
+    if (!(x > 0.0f)) {
+        return 0u;
+    }
+    return x >= 65535.0f ? 65535u : (uint16_t)(x + 0.5f);
+}
+
+/* Push the current parameter values into the controllers' public configs. */
+void rw_core_apply_params(rw_core *core)
+{
+    const rw_params *p = &core->params;
+    rw_mt_speed_estimator_config est = {
+        .counts_per_rev = (uint32_t)rw_params_get(p, RW_PARAM_ENCODER_COUNTS_PER_REV),
+        .timeout_us = (uint32_t)(rw_params_get(p, RW_PARAM_ENCODER_TIMEOUT_S) * 1.0e6f),
+        .wheel_radius_m = rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M),
+        .filter_tau_s = rw_params_get(p, RW_PARAM_SPEED_FILTER_TAU_S),
+    };
+    core->state.speed.cfg = est;
+    core->state.pi.cfg.kp = rw_params_get(p, RW_PARAM_SPEED_KP);
+    core->state.pi.cfg.ki_per_s = rw_params_get(p, RW_PARAM_SPEED_KI);
+    core->state.pi.cfg.out_min = 0.0f;
+    core->state.pi.cfg.out_max = 1.0f;
+    core->state.ramp.cfg.rate_up_per_s = rw_params_get(p, RW_PARAM_RAMP_UP_MPS2);
+    core->state.ramp.cfg.rate_down_per_s = rw_params_get(p, RW_PARAM_RAMP_DOWN_MPS2);
+    core->state.throttle.cfg.kv_rpm_per_v = rw_params_get(p, RW_PARAM_MOTOR_KV_RPM_PER_V);
+    core->state.throttle.cfg.wheel_radius_m = rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M);
+    core->state.throttle.cfg.pulse_min_us = (uint16_t)rw_params_get(p, RW_PARAM_ESC_MIN_US);
+    core->state.throttle.cfg.pulse_max_us = 2000u;
+    core->state.guard.cfg.tov_mps = rw_params_get(p, RW_PARAM_TOV_MPS);
+    core->state.guard.cfg.margin = rw_params_get(p, RW_PARAM_TOV_MARGIN);
+    core->state.guard.cfg.collapse_time_s = rw_params_get(p, RW_PARAM_COLLAPSE_TIME_S);
+}
+
+void rw_core_init(rw_core *core)
+{
+    memset(core, 0, sizeof *core);
+    rw_params_init_defaults(&core->params);
+    rw_mt_speed_estimator_config est;
+    rw_mt_speed_estimator_config_defaults(&est);
+    rw_mt_speed_estimator_init(&core->state.speed, &est);
+    rw_pi_controller_config pi;
+    rw_pi_controller_config_defaults(&pi);
+    rw_pi_controller_init(&core->state.pi, &pi);
+    rw_ramp_config ramp;
+    rw_ramp_config_defaults(&ramp);
+    rw_ramp_init(&core->state.ramp, &ramp);
+    rw_throttle_map_config thr;
+    rw_throttle_map_config_defaults(&thr);
+    rw_throttle_map_init(&core->state.throttle, &thr);
+    rw_tov_guard_config guard;
+    rw_tov_guard_config_defaults(&guard);
+    rw_tov_guard_init(&core->state.guard, &guard);
+    rw_duplicate_cache_reset(&core->state.duplicates);
+    rw_outbox_reset(&core->state.outbox);
+    rw_core_apply_params(core);
+    core->state.state = RW_STATE_DISARMED;
+    core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
+}
+
+int rw_core_set_param(rw_core *core, uint8_t param_id, float value)
+{
+    int result = rw_params_set(&core->params, param_id, value, core->state.state == RW_STATE_DISARMED);
+    if (result == RW_DECODE_OK) {
+        rw_core_apply_params(core);
+    }
+    return result;
+}
+
+void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, int32_t arg)
+{
+    rw_msg_event msg = {
+        .time_ms = core->state.uptime_ms,
+        .event_seq = ++core->state.counters.events,
+        .event = event,
+        .state_from = from,
+        .state_to = to,
+        .arg = arg,
+    };
+    uint8_t frame[RW_MAX_FRAME_LEN];
+    size_t len = rw_msg_event_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
+    rw_outbox_push(&core->state.outbox, RW_OUTBOX_EVENT, frame, len);
+}
+
+void rw_core_set_state(rw_core *core, uint8_t new_state, uint8_t cause)
+{
+    uint8_t old = core->state.state;
+    if (old == new_state) {
+        return;
+    }
+    core->state.state = new_state;
+    if (new_state == RW_STATE_SPINUP && (old == RW_STATE_ARMED)) {
+        rw_pi_controller_reset(&core->state.pi);
+        rw_ramp_reset_to(&core->state.ramp, core->state.measured_mps);
+    }
+    if (new_state == RW_STATE_SPINDOWN) {
+        core->state.spindown_cause = cause;
+    }
+    if (new_state == RW_STATE_AIRBORNE) {
+        rw_tov_guard_reset(&core->state.guard);
+    }
+    rw_core_emit_event(core, RW_EVENT_STATE_CHANGED, old, new_state, (int32_t)cause);
+}
+
+void rw_core_raise_fault(rw_core *core, uint16_t fault_bit)
+{
+    if ((core->state.fault_bits & fault_bit) == 0u) {
+        core->state.fault_bits |= fault_bit;
+        rw_core_emit_event(core, RW_EVENT_FAULT_RAISED, core->state.state, core->state.state, (int32_t)fault_bit);
+    }
+    if (core->state.state != RW_STATE_ESTOP) {
+        rw_core_set_state(core, RW_STATE_FAULT, RW_CAUSE_FAULT);
+    }
+}
+
+static bool rope_driven(uint8_t state)
+{
+    return state == RW_STATE_SPINUP || state == RW_STATE_AIRBORNE || state == RW_STATE_SPINDOWN;
+}
+
+static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encoder_counts_delta)
+{
+    const rw_params *p = &core->params;
+    uint8_t st = core->state.state;
+
+    if (!core->state.arming_hold_done &&
+        (float)core->state.uptime_ms >= rw_params_get(p, RW_PARAM_ARM_HOLD_S) * 1000.0f) {
+        core->state.arming_hold_done = true;
+        rw_core_emit_event(core, RW_EVENT_ARMING_HOLD_DONE, st, st, 0);
+    }
+
+    /* Heartbeat: the host must be heard from within heartbeat_timeout_s while the rope is driven. */
+    uint32_t silence_ms = core->state.uptime_ms - core->state.last_host_frame_ms;
+    if ((float)silence_ms > rw_params_get(p, RW_PARAM_HEARTBEAT_TIMEOUT_S) * 1000.0f) {
+        if (!core->state.heartbeat_lost && st != RW_STATE_DISARMED) {
+            core->state.heartbeat_lost = true;
+            rw_core_emit_event(core, RW_EVENT_HEARTBEAT_LOST, st, st, (int32_t)silence_ms);
+        }
+        if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
+            rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_HEARTBEAT_LOST);
+        }
+    }
+
+    /* Encoder silent while the throttle is up: the speed loop is blind, stop driving. */
+    uint16_t esc_min = (uint16_t)rw_params_get(p, RW_PARAM_ESC_MIN_US);
+    if (encoder_counts_delta == 0u && core->state.pulse_us > esc_min + RW_CORE_THROTTLE_ACTIVE_US) {
+        core->state.encoder_silent_ms += dt_ms;
+        if ((float)core->state.encoder_silent_ms > rw_params_get(p, RW_PARAM_ENCODER_TIMEOUT_S) * 1000.0f) {
+            rw_core_raise_fault(core, RW_FAULT_ENCODER_SILENT);
+        }
+    } else {
+        core->state.encoder_silent_ms = 0u;
+    }
+
+    st = core->state.state;
+    float guard_mps = rw_tov_guard_min_airborne_mps(&core->state.guard);
+    if (st == RW_STATE_AIRBORNE) {
+        if (rw_tov_guard_step(&core->state.guard, core->state.measured_mps, dt_s)) {
+            rw_core_emit_event(core, RW_EVENT_LOOP_COLLAPSED, st, st,
+                               (int32_t)sat_u16(core->state.measured_mps * 1000.0f));
+            rw_core_set_state(core, RW_STATE_SPINUP, RW_CAUSE_LOOP_COLLAPSED);
+        }
+    } else if (st == RW_STATE_SPINUP && core->state.target_mps >= guard_mps &&
+               core->state.measured_mps >= guard_mps) {
+        rw_core_set_state(core, RW_STATE_AIRBORNE, RW_CAUSE_SPEED_REACHED);
+    } else if (st == RW_STATE_SPINDOWN && rw_ramp_output(&core->state.ramp) <= 0.0f &&
+               core->state.measured_mps < RW_CORE_STOPPED_MPS) {
+        rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_SPEED_REACHED);
+    }
+}
+
+static void control(rw_core *core, float dt_s)
+{
+    uint8_t st = core->state.state;
+    uint16_t esc_min = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
+    if (!rope_driven(st)) {
+        rw_pi_controller_reset(&core->state.pi);
+        rw_ramp_reset_to(&core->state.ramp, 0.0f);
+        core->state.setpoint_mps = 0.0f;
+        core->state.pulse_us = esc_min;
+        return;
+    }
+    float target = st == RW_STATE_SPINDOWN ? 0.0f : core->state.target_mps;
+    float setpoint = rw_ramp_step(&core->state.ramp, target, dt_s);
+    core->state.setpoint_mps = setpoint;
+    if (st == RW_STATE_SPINDOWN && setpoint <= 0.0f) {
+        rw_pi_controller_reset(&core->state.pi);
+        core->state.pulse_us = esc_min;
+        return;
+    }
+    float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.battery_v);
+    float u = rw_pi_controller_step(&core->state.pi, setpoint, core->state.measured_mps, ff, dt_s);
+    uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u);
+    core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
+}
+
+static void queue_telemetry(rw_core *core, const rw_hal *hal)
+{
+    const rw_core_counters *c = &core->state.counters;
+    uint32_t age_ms = core->state.uptime_ms - core->state.last_host_frame_ms;
+    rw_msg_telemetry msg = {
+        .time_ms = core->state.uptime_ms,
+        .state = core->state.state,
+        .fault_bits = core->state.fault_bits,
+        .rope_speed_target_mmps = sat_u16(core->state.target_mps * 1000.0f),
+        .rope_speed_setpoint_mmps = sat_u16(core->state.setpoint_mps * 1000.0f),
+        .rope_speed_mmps = sat_u16(core->state.measured_mps * 1000.0f),
+        .motor_rpm = sat_u16(core->state.rpm),
+        .esc_pulse_us = core->state.pulse_us,
+        .battery_mv = core->state.battery_mv,
+        .heartbeat_age_ms = age_ms > 65535u ? 65535u : (uint16_t)age_ms,
+        .rx_ok = c->rx_ok,
+        .rx_bad = c->rx_bad,
+        .rx_duplicates = c->rx_duplicates,
+        .nacks = c->nacks,
+        .events = c->events,
+        .tick_overruns = hal->scheduler != NULL ? (uint16_t)hal->scheduler->tick_overruns(hal->scheduler->ctx) : 0u,
+    };
+    uint8_t frame[RW_MAX_FRAME_LEN];
+    size_t len = rw_msg_telemetry_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
+    rw_outbox_push(&core->state.outbox, RW_OUTBOX_TELEMETRY, frame, len);
+}
+
+void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
+{
+    if (!core->state.started) {
+        core->state.started = true;
+        core->state.last_now_us = now_us;
+        rw_core_emit_event(core, RW_EVENT_BOOT, core->state.state, core->state.state, 0);
+    }
+    uint32_t dt_us = now_us - core->state.last_now_us;
+    core->state.last_now_us = now_us;
+    uint32_t total_us = core->state.uptime_rem_us + dt_us;
+    uint32_t dt_ms = total_us / 1000u;
+    core->state.uptime_ms += dt_ms;
+    core->state.uptime_rem_us = total_us % 1000u;
+    float dt_s = (float)dt_us * 1.0e-6f;
+    if (dt_s > RW_CORE_MAX_CONTROL_DT_S) {
+        dt_s = RW_CORE_MAX_CONTROL_DT_S;
+    }
+
+    /* 1. sensors */
+    rw_encoder_sample enc = hal->encoder->read(hal->encoder->ctx);
+    uint32_t counts_delta = enc.counts - core->state.speed.state.last_count;
+    bool primed = core->state.speed.state.primed;
+    rw_mt_speed_estimator_step(&core->state.speed, enc.counts, enc.last_edge_us, now_us, dt_s);
+    core->state.measured_mps = rw_mt_speed_estimator_rope_mps(&core->state.speed);
+    core->state.rpm = rw_mt_speed_estimator_rpm(&core->state.speed);
+    core->state.battery_mv = hal->battery->read_mv(hal->battery->ctx);
+    core->state.battery_v = (float)core->state.battery_mv * 1.0e-3f;
+
+    /* 2. at most one received datagram */
+    bool sent = rw_core_handle_datagram(core, hal);
+
+    /* 3. supervision, 4. control */
+    supervise(core, dt_s, dt_ms, primed ? counts_delta : 1u);
+    control(core, dt_s);
+    hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
+
+    /* 5. telemetry, then at most one datagram out per tick */
+    float rate_hz = rw_params_get(&core->params, RW_PARAM_TELEMETRY_RATE_HZ);
+    if ((int32_t)(core->state.uptime_ms - core->state.telemetry_due_ms) >= 0) {
+        queue_telemetry(core, hal);
+        core->state.telemetry_due_ms = core->state.uptime_ms + (uint32_t)(1000.0f / rate_hz + 0.5f);
+    }
+    if (!sent) {
+        const rw_outbox_slot *slot = rw_outbox_peek(&core->state.outbox);
+        if (slot != NULL) {
+            hal->link->send(hal->link->ctx, slot->bytes, slot->len);
+            rw_outbox_pop(&core->state.outbox, slot);
+        }
+    }
+}

@@ -1,0 +1,95 @@
+/* The firmware core: rope speed loop, ToV guard, state machine, command handling and telemetry.
+ *
+ * Portable C: no Arduino header, no clock reads, no heap. The caller owns an rw_core, calls rw_core_init
+ * once, then rw_core_tick once per control period with the HAL (by reference) and the tick time. Every
+ * output goes through the HAL: the ESC pulse, replies, events and telemetry (at most one datagram
+ * received and one sent per tick).
+ *
+ * Tick (period = the time between calls, 1 ms on the board and in SIL):
+ *   1. encoder -> M/T estimator -> rope speed (m/s);  battery (V)
+ *   2. one received datagram -> decode -> duplicate check -> command -> ACK/NACK (straight to its sender)
+ *   3. supervision: arming hold, heartbeat loss -> SPINDOWN, encoder silence -> FAULT, loop collapse
+ *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us)
+ *   5. telemetry at telemetry_rate_hz; one queued frame to the peer
+ */
+#ifndef RW_CORE_H
+#define RW_CORE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "rw_duplicate_cache.h"
+#include "rw_hal.h"
+#include "rw_mt_speed_estimator.h"
+#include "rw_outbox.h"
+#include "rw_params.h"
+#include "rw_pi_controller.h"
+#include "rw_protocol.h"
+#include "rw_ramp.h"
+#include "rw_throttle_map.h"
+#include "rw_tov_guard.h"
+
+/* Under this measured speed the rope counts as stopped (spin-down done, DISARM allowed). */
+#define RW_CORE_STOPPED_MPS 0.15f
+/* Throttle above idle, for the encoder-silence check: the ESC pulse is more than this over esc_min_us. */
+#define RW_CORE_THROTTLE_ACTIVE_US 30u
+
+typedef struct rw_core_counters {
+    uint16_t rx_ok;
+    uint16_t rx_bad;
+    uint16_t rx_duplicates;
+    uint16_t nacks;
+    uint16_t events;
+} rw_core_counters;
+
+typedef struct rw_core {
+    rw_params params; /* public: read through rw_params_get; set through PARAM_SET or rw_core_set_param */
+    struct {
+        rw_mt_speed_estimator speed;
+        rw_pi_controller pi;
+        rw_ramp ramp;
+        rw_throttle_map throttle;
+        rw_tov_guard guard;
+        rw_duplicate_cache duplicates;
+        rw_outbox outbox;
+        rw_core_counters counters;
+
+        uint8_t state;            /* rw_state */
+        uint8_t spindown_cause;   /* rw_cause of the current SPINDOWN */
+        uint16_t fault_bits;      /* rw_fault */
+        bool started;             /* first tick seen */
+        bool arming_hold_done;
+        bool heartbeat_lost;      /* reported once per silence */
+        uint32_t last_now_us;
+        uint32_t uptime_ms;
+        uint32_t uptime_rem_us;   /* sub-millisecond remainder of uptime */
+        uint32_t last_host_frame_ms;
+        uint32_t encoder_silent_ms;
+        uint32_t telemetry_due_ms;
+        uint16_t tx_seq;
+        uint16_t last_cmd_seq;
+
+        float target_mps;         /* commanded rope speed */
+        float setpoint_mps;       /* ramped setpoint */
+        float measured_mps;
+        float rpm;
+        float battery_v;
+        uint16_t battery_mv;
+        uint16_t pulse_us;
+    } state;
+} rw_core;
+
+void rw_core_init(rw_core *core);
+
+/* One control tick at time now_us (the tick clock, wraps); the first call only latches the clock. */
+void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us);
+
+/* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. */
+int rw_core_set_param(rw_core *core, uint8_t param_id, float value);
+
+static inline uint8_t rw_core_state(const rw_core *core)
+{
+    return core->state.state;
+}
+
+#endif /* RW_CORE_H */

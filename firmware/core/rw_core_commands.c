@@ -1,0 +1,244 @@
+/* Received frames: decode, refuse with a reason, drop retransmissions, execute commands.
+ *
+ * Every frame gets exactly one verdict. Malformed frames and device-to-host messages: NACK to the
+ * sender, counted in rx_bad. Commands: executed once; a retransmission (same msg_id, seq and checksum
+ * within RW_DUPLICATE_WINDOW_MS) gets the cached verdict again and is counted in rx_duplicates. Nothing
+ * is ever clamped: a value out of range is refused with OUT_OF_RANGE and the limit in NACK.detail. */
+#include <math.h>
+
+#include "rw_core_internal.h"
+
+typedef struct verdict {
+    uint8_t reason; /* 0 = ACK */
+    int32_t detail;
+} verdict;
+
+static const verdict ACCEPT = { 0u, 0 };
+
+static verdict refuse(uint8_t reason, int32_t detail)
+{
+    verdict v = { reason, detail };
+    return v;
+}
+
+static bool rope_stopped(const rw_core *core)
+{
+    return core->state.measured_mps < RW_CORE_STOPPED_MPS;
+}
+
+static verdict cmd_arm(rw_core *core)
+{
+    switch (core->state.state) {
+    case RW_STATE_ARMED:
+        return ACCEPT;
+    case RW_STATE_DISARMED:
+        if (!core->state.arming_hold_done) {
+            return refuse(RW_NACK_REASON_NOT_READY,
+                          (int32_t)(rw_params_get(&core->params, RW_PARAM_ARM_HOLD_S) * 1000.0f));
+        }
+        rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_COMMAND);
+        return ACCEPT;
+    default:
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+}
+
+static verdict cmd_disarm(rw_core *core)
+{
+    switch (core->state.state) {
+    case RW_STATE_DISARMED:
+        return ACCEPT;
+    case RW_STATE_ARMED:
+    case RW_STATE_FAULT:
+    case RW_STATE_ESTOP:
+        if (!rope_stopped(core)) {
+            return refuse(RW_NACK_REASON_BAD_STATE, (int32_t)(core->state.measured_mps * 1000.0f));
+        }
+        core->state.fault_bits = 0u;
+        rw_core_set_state(core, RW_STATE_DISARMED, RW_CAUSE_COMMAND);
+        return ACCEPT;
+    default:
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+}
+
+static verdict cmd_set_rope_speed(rw_core *core, const rw_msg_set_rope_speed *msg)
+{
+    int32_t max_mmps = (int32_t)(rw_params_get(&core->params, RW_PARAM_MAX_ROPE_SPEED_MPS) * 1000.0f + 0.5f);
+    if (msg->rope_speed_mmps <= 0) {
+        return refuse(RW_NACK_REASON_OUT_OF_RANGE, 1);
+    }
+    if (msg->rope_speed_mmps > max_mmps) {
+        return refuse(RW_NACK_REASON_OUT_OF_RANGE, max_mmps);
+    }
+    float target_mps = (float)msg->rope_speed_mmps * 1.0e-3f;
+    uint8_t st = core->state.state;
+    switch (st) {
+    case RW_STATE_AIRBORNE: {
+        float guard_mps = rw_tov_guard_min_airborne_mps(&core->state.guard);
+        if (!rw_tov_guard_setpoint_allowed(&core->state.guard, target_mps)) {
+            return refuse(RW_NACK_REASON_BELOW_TOV_GUARD, (int32_t)ceilf(guard_mps * 1000.0f));
+        }
+        core->state.target_mps = target_mps;
+        return ACCEPT;
+    }
+    case RW_STATE_ARMED:
+    case RW_STATE_SPINUP:
+    case RW_STATE_SPINDOWN:
+        core->state.target_mps = target_mps;
+        rw_core_set_state(core, RW_STATE_SPINUP, RW_CAUSE_COMMAND);
+        return ACCEPT;
+    default:
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+}
+
+static verdict cmd_spindown(rw_core *core)
+{
+    switch (core->state.state) {
+    case RW_STATE_SPINUP:
+    case RW_STATE_AIRBORNE:
+        core->state.target_mps = 0.0f;
+        rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_COMMAND);
+        return ACCEPT;
+    case RW_STATE_DISARMED:
+    case RW_STATE_ARMED:
+    case RW_STATE_SPINDOWN:
+        return ACCEPT;
+    default:
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+}
+
+static verdict cmd_estop(rw_core *core)
+{
+    core->state.target_mps = 0.0f;
+    rw_core_set_state(core, RW_STATE_ESTOP, RW_CAUSE_COMMAND);
+    return ACCEPT;
+}
+
+static verdict cmd_param_set(rw_core *core, const rw_msg_param_set *msg)
+{
+    int result = rw_core_set_param(core, msg->param_id, msg->value);
+    if (result != RW_DECODE_OK) {
+        return refuse((uint8_t)result, msg->param_id);
+    }
+    uint8_t st = core->state.state;
+    rw_core_emit_event(core, RW_EVENT_PARAM_CHANGED, st, st, msg->param_id);
+    return ACCEPT;
+}
+
+static verdict execute(rw_core *core, const rw_frame *frame)
+{
+    switch (frame->msg_id) {
+    case RW_MSG_ID_ARM:
+        return cmd_arm(core);
+    case RW_MSG_ID_DISARM:
+        return cmd_disarm(core);
+    case RW_MSG_ID_SET_ROPE_SPEED: {
+        rw_msg_set_rope_speed msg;
+        rw_msg_set_rope_speed_unpack(&msg, frame->payload);
+        return cmd_set_rope_speed(core, &msg);
+    }
+    case RW_MSG_ID_SPINDOWN:
+        return cmd_spindown(core);
+    case RW_MSG_ID_ESTOP:
+        return cmd_estop(core);
+    case RW_MSG_ID_PARAM_GET: {
+        rw_msg_param_get msg;
+        rw_msg_param_get_unpack(&msg, frame->payload);
+        return msg.param_id < RW_PARAM_COUNT ? ACCEPT : refuse(RW_NACK_REASON_UNKNOWN_PARAM, msg.param_id);
+    }
+    case RW_MSG_ID_PARAM_SET: {
+        rw_msg_param_set msg;
+        rw_msg_param_set_unpack(&msg, frame->payload);
+        return cmd_param_set(core, &msg);
+    }
+    default:
+        return refuse(RW_NACK_REASON_NOT_A_COMMAND, 0);
+    }
+}
+
+static void send_verdict(rw_core *core, const rw_hal *hal, uint8_t msg_id, uint16_t seq, verdict v)
+{
+    uint8_t frame[RW_MAX_FRAME_LEN];
+    size_t len;
+    if (v.reason == 0u) {
+        rw_msg_ack ack = { .cmd_msg_id = msg_id, .cmd_seq = seq, .state = core->state.state };
+        len = rw_msg_ack_encode(&ack, core->state.tx_seq++, frame, sizeof frame);
+    } else {
+        rw_msg_nack nack = {
+            .cmd_msg_id = msg_id, .cmd_seq = seq, .reason = v.reason, .state = core->state.state, .detail = v.detail,
+        };
+        len = rw_msg_nack_encode(&nack, core->state.tx_seq++, frame, sizeof frame);
+        ++core->state.counters.nacks;
+    }
+    hal->link->reply(hal->link->ctx, frame, len);
+}
+
+/* PARAM_GET and PARAM_SET are followed by the parameter's value (queued: one datagram per tick). */
+static void queue_param_value(rw_core *core, const rw_frame *frame)
+{
+    uint8_t param_id = frame->payload[0];
+    if (param_id >= RW_PARAM_COUNT) {
+        return;
+    }
+    rw_msg_param_value msg = {
+        .param_id = param_id, .value = core->params.value[param_id], .param_count = (uint8_t)RW_PARAM_COUNT,
+    };
+    uint8_t out[RW_MAX_FRAME_LEN];
+    size_t len = rw_msg_param_value_encode(&msg, core->state.tx_seq++, out, sizeof out);
+    rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
+}
+
+bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN + 1u];
+    size_t n = hal->link->recv(hal->link->ctx, buf, sizeof buf);
+    if (n == 0u) {
+        return false;
+    }
+    rw_frame frame;
+    int result = rw_frame_decode(buf, n > sizeof buf ? sizeof buf : n, &frame);
+    if (result == RW_DECODE_OK && n > RW_MAX_FRAME_LEN) {
+        result = RW_NACK_REASON_OVERSIZE; /* the link truncated a longer datagram */
+    }
+    if (result != RW_DECODE_OK) {
+        ++core->state.counters.rx_bad;
+        send_verdict(core, hal, frame.msg_id, frame.seq, refuse((uint8_t)result, 0));
+        return true;
+    }
+    const rw_msg_info *info = rw_msg_info_find(frame.msg_id);
+    if (info->kind != RW_MSG_KIND_COMMAND && info->kind != RW_MSG_KIND_HEARTBEAT) {
+        ++core->state.counters.rx_bad;
+        send_verdict(core, hal, frame.msg_id, frame.seq, refuse(RW_NACK_REASON_NOT_A_COMMAND, 0));
+        return true;
+    }
+
+    ++core->state.counters.rx_ok;
+    hal->link->accept_peer(hal->link->ctx);
+    core->state.last_host_frame_ms = core->state.uptime_ms;
+    core->state.heartbeat_lost = false;
+    if (info->kind == RW_MSG_KIND_HEARTBEAT) {
+        return false;
+    }
+
+    uint16_t checksum = (uint16_t)(buf[n - 2u] | (buf[n - 1u] << 8));
+    const rw_duplicate_entry *dup =
+        rw_duplicate_cache_find(&core->state.duplicates, frame.msg_id, frame.seq, checksum, core->state.uptime_ms);
+    verdict v;
+    if (dup != NULL) {
+        ++core->state.counters.rx_duplicates;
+        v = refuse(dup->nack_reason, dup->nack_detail);
+    } else {
+        v = execute(core, &frame);
+        rw_duplicate_cache_store(&core->state.duplicates, frame.msg_id, frame.seq, checksum, v.reason, v.detail,
+                                 core->state.uptime_ms);
+        core->state.last_cmd_seq = frame.seq;
+    }
+    send_verdict(core, hal, frame.msg_id, frame.seq, v);
+    if (v.reason == 0u && (frame.msg_id == RW_MSG_ID_PARAM_GET || frame.msg_id == RW_MSG_ID_PARAM_SET)) {
+        queue_param_value(core, &frame);
+    }
+    return true;
+}

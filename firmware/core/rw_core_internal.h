@@ -1,0 +1,15 @@
+/* Shared between the core's translation units (rw_core.c, rw_core_commands.c); not for HAL or board code. */
+#ifndef RW_CORE_INTERNAL_H
+#define RW_CORE_INTERNAL_H
+
+#include "rw_core.h"
+
+void rw_core_apply_params(rw_core *core);
+void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, int32_t arg);
+void rw_core_set_state(rw_core *core, uint8_t new_state, uint8_t cause);
+void rw_core_raise_fault(rw_core *core, uint16_t fault_bit);
+
+/* Receive at most one datagram, answer it; returns true when a datagram was sent this tick. */
+bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal);
+
+#endif /* RW_CORE_INTERNAL_H */

@@ -1,0 +1,20 @@
+/* The HAL the firmware core is given by reference: one small interface per header, gathered here.
+ * Implementations: hal/arduino/ (MKR WiFi 1010) and hal/sil/ (host process in lockstep with the plant). */
+#ifndef RW_HAL_H
+#define RW_HAL_H
+
+#include "rw_hal_battery.h"
+#include "rw_hal_encoder.h"
+#include "rw_hal_esc_output.h"
+#include "rw_hal_link.h"
+#include "rw_hal_scheduler.h"
+
+typedef struct rw_hal {
+    const rw_hal_esc_output *esc;
+    const rw_hal_encoder *encoder;
+    const rw_hal_battery *battery;
+    const rw_hal_link *link;
+    const rw_hal_scheduler *scheduler;
+} rw_hal;
+
+#endif /* RW_HAL_H */

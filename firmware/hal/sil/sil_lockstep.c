@@ -1,0 +1,117 @@
+#include "sil_lockstep.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <poll.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+bool sil_lockstep_open(sil_lockstep *ls, uint16_t port)
+{
+    memset(ls, 0, sizeof *ls);
+    ls->fd = socket(AF_INET, SOCK_DGRAM, 0);
+    if (ls->fd < 0) {
+        return false;
+    }
+    struct sockaddr_in addr;
+    memset(&addr, 0, sizeof addr);
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(port);
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (bind(ls->fd, (struct sockaddr *)&addr, sizeof addr) != 0) {
+        close(ls->fd);
+        return false;
+    }
+    socklen_t alen = sizeof addr;
+    getsockname(ls->fd, (struct sockaddr *)&addr, &alen);
+    ls->port = ntohs(addr.sin_port);
+    ls->esc_pulse_us = 0u; /* no pulse until the core's first tick */
+    return true;
+}
+
+void sil_lockstep_close(sil_lockstep *ls)
+{
+    if (ls->fd >= 0) {
+        close(ls->fd);
+        ls->fd = -1;
+    }
+}
+
+int sil_lockstep_wait_sensors(sil_lockstep *ls, int timeout_ms)
+{
+    struct pollfd pfd = { .fd = ls->fd, .events = POLLIN, .revents = 0 };
+    for (;;) {
+        int r = poll(&pfd, 1, timeout_ms);
+        if (r == 0) {
+            return 0;
+        }
+        if (r < 0) {
+            return -1;
+        }
+        uint8_t buf[RW_MAX_FRAME_LEN + 1u];
+        struct sockaddr_in from;
+        socklen_t alen = sizeof from;
+        ssize_t n = recvfrom(ls->fd, buf, sizeof buf, 0, (struct sockaddr *)&from, &alen);
+        if (n < 0) {
+            return errno == EINTR ? -1 : 0;
+        }
+        rw_frame frame;
+        if (rw_frame_decode(buf, (size_t)n, &frame) != RW_DECODE_OK || frame.msg_id != RW_MSG_ID_SIL_SENSORS) {
+            ++ls->bad_datagrams;
+            continue;
+        }
+        rw_msg_sil_sensors_unpack(&ls->sensors, frame.payload);
+        ls->plant = from;
+        ls->has_plant = true;
+        return 1;
+    }
+}
+
+void sil_lockstep_send_actuators(sil_lockstep *ls)
+{
+    if (!ls->has_plant) {
+        return;
+    }
+    rw_msg_sil_actuators msg = { .time_us = ls->sensors.time_us, .esc_pulse_us = ls->esc_pulse_us };
+    uint8_t frame[RW_MAX_FRAME_LEN];
+    size_t len = rw_msg_sil_actuators_encode(&msg, ls->tx_seq++, frame, sizeof frame);
+    sendto(ls->fd, frame, len, 0, (const struct sockaddr *)&ls->plant, sizeof ls->plant);
+}
+
+static rw_encoder_sample encoder_read(void *ctx)
+{
+    const sil_lockstep *ls = ctx;
+    rw_encoder_sample s = { .counts = ls->sensors.encoder_counts, .last_edge_us = ls->sensors.encoder_last_edge_us };
+    return s;
+}
+
+static uint16_t battery_read_mv(void *ctx)
+{
+    const sil_lockstep *ls = ctx;
+    return ls->sensors.battery_mv;
+}
+
+static void esc_write_pulse_us(void *ctx, uint16_t pulse_us)
+{
+    sil_lockstep *ls = ctx;
+    ls->esc_pulse_us = pulse_us;
+}
+
+rw_hal_encoder sil_lockstep_encoder(sil_lockstep *ls)
+{
+    rw_hal_encoder hal = { .ctx = ls, .read = encoder_read };
+    return hal;
+}
+
+rw_hal_battery sil_lockstep_battery(sil_lockstep *ls)
+{
+    rw_hal_battery hal = { .ctx = ls, .read_mv = battery_read_mv };
+    return hal;
+}
+
+rw_hal_esc_output sil_lockstep_esc(sil_lockstep *ls)
+{
+    rw_hal_esc_output hal = { .ctx = ls, .write_pulse_us = esc_write_pulse_us };
+    return hal;
+}

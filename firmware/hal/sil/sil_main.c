@@ -1,0 +1,128 @@
+/* rw_sil: the firmware core with the sil HAL, as its own process.
+ *
+ *   rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S]
+ *
+ * Binds the command link (the host's UDP port, as the board's WiFi) and the plant port on 127.0.0.1
+ * (0 = any free port), prints "rw_sil ready cmd_port=N plant_port=N" on stdout, then runs one core tick
+ * per SIL_SENSORS datagram from the plant. Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
+ * for --plant-timeout-s (never hangs), 2 on bad arguments or sockets. */
+#include <errno.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rw_core.h"
+#include "sil_link.h"
+#include "sil_lockstep.h"
+
+static volatile sig_atomic_t stop_requested = 0;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
+
+static uint32_t tick_overruns(void *ctx)
+{
+    (void)ctx;
+    return 0u; /* lockstep: the plant waits for every tick, none can overrun */
+}
+
+static int parse_uint(const char *text, long max, long *out)
+{
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(text, &end, 10);
+    if (errno != 0 || end == text || *end != '\0' || v < 0 || v > max) {
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+static int usage(const char *msg)
+{
+    fprintf(stderr, "rw_sil: %s\nusage: rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S]\n", msg);
+    return 2;
+}
+
+int main(int argc, char **argv)
+{
+    long cmd_port = 14550, plant_port = 14560, plant_timeout_s = 10;
+    for (int i = 1; i < argc; ++i) {
+        long *target = NULL;
+        long max = 65535;
+        if (strcmp(argv[i], "--cmd-port") == 0) {
+            target = &cmd_port;
+        } else if (strcmp(argv[i], "--plant-port") == 0) {
+            target = &plant_port;
+        } else if (strcmp(argv[i], "--plant-timeout-s") == 0) {
+            target = &plant_timeout_s;
+            max = 3600;
+        } else {
+            return usage("unknown argument");
+        }
+        if (i + 1 >= argc || !parse_uint(argv[i + 1], max, target)) {
+            return usage("option needs a whole number in range");
+        }
+        ++i;
+    }
+
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    static sil_link link;
+    static sil_lockstep lockstep;
+    if (!sil_link_open(&link, (uint16_t)cmd_port)) {
+        fprintf(stderr, "rw_sil: cannot bind command port 127.0.0.1:%ld: %s\n", cmd_port, strerror(errno));
+        return 2;
+    }
+    if (!sil_lockstep_open(&lockstep, (uint16_t)plant_port)) {
+        fprintf(stderr, "rw_sil: cannot bind plant port 127.0.0.1:%ld: %s\n", plant_port, strerror(errno));
+        return 2;
+    }
+
+    rw_hal_link link_hal = sil_link_hal(&link);
+    rw_hal_encoder encoder_hal = sil_lockstep_encoder(&lockstep);
+    rw_hal_battery battery_hal = sil_lockstep_battery(&lockstep);
+    rw_hal_esc_output esc_hal = sil_lockstep_esc(&lockstep);
+    rw_hal_scheduler scheduler_hal = { .ctx = NULL, .tick_overruns = tick_overruns };
+    rw_hal hal = {
+        .esc = &esc_hal, .encoder = &encoder_hal, .battery = &battery_hal, .link = &link_hal, .scheduler = &scheduler_hal,
+    };
+    static rw_core core;
+    rw_core_init(&core);
+
+    printf("rw_sil ready cmd_port=%u plant_port=%u\n", link.port, lockstep.port);
+    fflush(stdout);
+
+    int exit_code = 0;
+    int silent_ms = 0;
+    while (!stop_requested) {
+        int got = sil_lockstep_wait_sensors(&lockstep, 100);
+        if (got <= 0) {
+            silent_ms += 100;
+            if (silent_ms >= plant_timeout_s * 1000) {
+                fprintf(stderr, "rw_sil: no SIL_SENSORS from the plant for %ld s, exiting\n", plant_timeout_s);
+                exit_code = 3;
+                break;
+            }
+            continue;
+        }
+        silent_ms = 0;
+        if (!sil_link_wait_for(&link, lockstep.sensors.host_frames_sent, 2000)) {
+            fprintf(stderr, "rw_sil: lockstep barrier: %u host frames announced, %u received\n",
+                    (unsigned)lockstep.sensors.host_frames_sent, (unsigned)link.received_total);
+        }
+        rw_core_tick(&core, &hal, lockstep.sensors.time_us);
+        sil_lockstep_send_actuators(&lockstep);
+    }
+    sil_link_close(&link);
+    sil_lockstep_close(&lockstep);
+    return exit_code;
+}

@@ -1,0 +1,202 @@
+"""A SIL session: the firmware process, the drive plant and the lockstep between them.
+
+The plant owns the clock: each tick the session sends the plant's sensor values at time t, the firmware
+runs one control tick and answers with its ESC pulse, and the plant integrates [t, t + tick). Nothing
+depends on the wall clock, so the same seed and the same host frames at the same ticks give the same
+telemetry at any pacing. Pacing (``speedup``): 1.0 is real time, 10.0 ten times faster, None as fast
+as the machine goes.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from robowrangler_sim.plants import DriveParams, DrivePlant
+from robowrangler_sim.sil.errors import SilError, SilFirmwareError
+from robowrangler_sim.sil.firmware import FirmwareProcess
+from robowrangler_sim.sil.lockstep import LockstepLink
+
+
+@dataclass(frozen=True)
+class PlantSample:
+    """Plant truth at one tick (what the firmware cannot see directly)."""
+
+    time_s: float
+    rope_speed_mps: float
+    esc_pulse_us: int
+    battery_v: float
+    external_rope_load_n: float
+    loop_airborne: bool
+
+
+class SilSession:
+    """Firmware + drive plant in lockstep. Use as a context manager, or start()/stop().
+
+    Args:
+        drive_params: drive plant parameters (defaults: AS2317-class motors, 3S LiPo, 15 mm wheels).
+        seed: plant noise seed.
+        tick_us: control tick, microseconds (the firmware's period; 1000 = 1 kHz as on the board).
+        speedup: pacing factor for run_for/background running; None = unpaced.
+        cmd_port: UDP port of the firmware's command link on 127.0.0.1 (0 = a free port).
+        trace_every: keep a PlantSample every this many ticks (0 = none).
+    """
+
+    def __init__(self, *, drive_params: DriveParams | None = None, seed: int = 0, tick_us: int = 1000,
+                 speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
+                 plant_timeout_s: int = 10) -> None:
+        if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
+            raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
+        if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
+            raise ValueError(f"speedup: expected a positive factor or None (unpaced), got {speedup!r}")
+        self.plant = DrivePlant(drive_params, seed=seed)
+        self.tick_us = tick_us
+        self.speedup = speedup
+        self.trace_every = trace_every
+        self.trace: list[PlantSample] = []
+        self.ticks = 0
+        self.last_esc_pulse_us = 0
+        self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s)
+        self._link: LockstepLink | None = None
+        self._actions: list[tuple[int, int, Callable[[], None]]] = []
+        self._action_counter = itertools.count()
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._error: BaseException | None = None
+        self._pace_origin: tuple[float, int] | None = None
+
+    # ---------------------------------------------------------------------------------------------
+    @property
+    def cmd_port(self) -> int:
+        return self._firmware.cmd_port
+
+    @property
+    def cmd_url(self) -> str:
+        """Where a host talks to this SIL device: the same protocol as the board on WiFi."""
+        return f"udp://127.0.0.1:{self.cmd_port}"
+
+    @property
+    def time_s(self) -> float:
+        return self.plant.time_us * 1e-6
+
+    def start(self) -> SilSession:
+        self._firmware.start()
+        self._link = LockstepLink(self._firmware.plant_port)
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+            self._thread = None
+        if self._link is not None:
+            self._link.close()
+            self._link = None
+        self._firmware.stop()
+
+    def __enter__(self) -> SilSession:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    # ---------------------------------------------------------------------------------------------
+    def at(self, time_s: float, action: Callable[[], None]) -> None:
+        """Run action() inside the loop at simulated time time_s (before that tick); thread-safe."""
+        t_us = round(time_s * 1e6)
+        with self._lock:
+            heapq.heappush(self._actions, (t_us, next(self._action_counter), action))
+
+    def set_rope_load(self, load_n: float, *, at_s: float | None = None) -> None:
+        """Apply an external rope load (N) now, or at simulated time at_s."""
+        def apply() -> None:
+            self.plant.external_rope_load_n = load_n
+        if at_s is None:
+            self.at(self.time_s, apply)
+        else:
+            self.at(at_s, apply)
+
+    def step(self, *, host_frames_sent: int = 0) -> None:
+        """One control tick in lockstep."""
+        if self._link is None:
+            raise SilError("session not started: use `with SilSession(...) as sil:` or call start()")
+        plant = self.plant
+        with self._lock:
+            while self._actions and self._actions[0][0] <= plant.time_us:
+                _, _, action = heapq.heappop(self._actions)
+                action()
+        try:
+            out = self._link.exchange(
+                time_us=plant.time_us, encoder_counts=plant.encoder_counts,
+                encoder_last_edge_us=plant.encoder_last_edge_us,
+                battery_mv=round(plant.battery_adc_v * 1000.0), host_frames_sent=host_frames_sent,
+            )
+        except SilError:
+            code = self._firmware.poll()
+            if code is not None:
+                raise SilFirmwareError(f"SIL firmware exited with code {code}: {self._firmware.stderr_text()}") from None
+            raise
+        self.last_esc_pulse_us = out.esc_pulse_us
+        plant.step_us(esc_pulse_us=float(out.esc_pulse_us), dt_us=self.tick_us)
+        self.ticks += 1
+        if self.trace_every and self.ticks % self.trace_every == 0:
+            self.trace.append(PlantSample(plant.time_us * 1e-6, plant.rope_speed_mps, out.esc_pulse_us,
+                                          plant.battery_v, plant.external_rope_load_n, plant.loop_airborne))
+        self._pace()
+
+    def _pace(self) -> None:
+        if self.speedup is None:
+            return
+        now = time.perf_counter()
+        if self._pace_origin is None:
+            self._pace_origin = (now, self.plant.time_us)
+            return
+        wall0, sim0_us = self._pace_origin
+        ahead_s = (self.plant.time_us - sim0_us) * 1e-6 / self.speedup - (now - wall0)
+        if ahead_s > 0.002:
+            time.sleep(ahead_s)
+        elif ahead_s < -0.5:
+            self._pace_origin = (now, self.plant.time_us)  # fell behind (machine busy): do not race to catch up
+
+    def run_for(self, duration_s: float, *, host_frames_sent: Callable[[], int] | None = None) -> None:
+        """Step for duration_s simulated seconds at the session's pacing."""
+        end_us = self.plant.time_us + round(duration_s * 1e6)
+        while self.plant.time_us < end_us:
+            self.step(host_frames_sent=host_frames_sent() if host_frames_sent else 0)
+
+    # ---------------------------------------------------------------------------------------------
+    def run_in_background(self) -> SilSession:
+        """Step in a thread until stop(): for a live host (CLI, Client) on cmd_url."""
+        if self._thread is not None:
+            raise SilError("already running in the background")
+        self._stop.clear()
+
+        def loop() -> None:
+            try:
+                while not self._stop.is_set():
+                    self.step()
+            except BaseException as exc:  # reported by check()
+                self._error = exc
+
+        self._thread = threading.Thread(target=loop, name="sil-lockstep", daemon=True)
+        self._thread.start()
+        return self
+
+    def check(self) -> None:
+        """Raise the background loop's error, if it stopped on one."""
+        if self._error is not None:
+            raise self._error
+
+    def wait_until(self, time_s: float, *, timeout_s: float = 60.0) -> None:
+        """Block (background mode) until the simulated clock reaches time_s."""
+        deadline = time.monotonic() + timeout_s
+        while self.time_s < time_s:
+            self.check()
+            if time.monotonic() > deadline:
+                raise SilError(f"simulated time stuck at {self.time_s:.3f} s, waiting for {time_s:.3f} s")
+            time.sleep(0.002)
