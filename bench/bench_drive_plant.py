@@ -51,6 +51,14 @@ def main() -> None:
         tau_ms = speed_time_constant_s(params, v) * 1e3
         print(f"  {v:5.2f} {rpm:7.0f}   {thr:7.4f}   {1000 + 1000 * thr:7.1f}  {kv:7.4f}  {kv - thr:+7.4f}"
               f"   {vb:8.3f}  {plant_i:8.3f}   {tau_ms:6.2f}")
+    print()
+    print("open loop in the plant (1.5 s at the pulse), firmware Kv map alone and with +deadband:")
+    print("  target_mps  kv_map_mps  kv_map+deadband_mps")
+    for v in [0.5, 1.0, 2.6, 5.0, 10.0, 20.0]:
+        vb = steady_battery_v(params, v)
+        pulse = 1000.0 + 1000.0 * kv_throttle_for_speed(params, v, battery_v=vb)
+        print(f"  {v:9.2f}  {open_loop_speed_mps(params, pulse):10.3f}  "
+              f"{open_loop_speed_mps(params, pulse + params.esc_deadband_us):10.3f}")
     full = DrivePlant(params)
     for _ in range(300):
         full.step(esc_pulse_us=1000.0, dt_s=0.001)
@@ -58,6 +66,16 @@ def main() -> None:
         full.step(esc_pulse_us=2000.0, dt_s=0.001)
     print(f"  full throttle: {full.motor_rpm:.0f} rpm, {full.rope_speed_mps:.2f} m/s, "
           f"{full.motor_current_a:.2f} A/motor, battery {full.battery_v:.3f} V")
+
+
+def open_loop_speed_mps(params: DriveParams, pulse_us: float) -> float:
+    """Rope speed after 1.5 s at a fixed pulse (armed first)."""
+    plant = DrivePlant(params)
+    for _ in range(300):
+        plant.step(esc_pulse_us=1000.0, dt_s=0.001)
+    for _ in range(1500):
+        plant.step(esc_pulse_us=pulse_us, dt_s=0.001)
+    return plant.rope_speed_mps
 
 
 def steady_torque_current_a(params: DriveParams, v: float) -> float:

@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from robowrangler_sim.plants.encoder import Encoder
 from robowrangler_sim.plants import (
     DriveParams,
     DriveParamsError,
@@ -78,6 +79,10 @@ def test_out_of_reach_speed_raises_naming_the_argument():
         steady_throttle_for_speed(PARAMS, 30.0)
     with pytest.raises(ValueError, match="rope_speed_mps"):
         steady_throttle_for_speed(PARAMS, -1.0)
+    with pytest.raises(ValueError, match="rope_speed_mps"):
+        steady_throttle_for_speed(PARAMS, 5.0, external_rope_load_n=45.0)  # beyond the current limit
+    with pytest.raises(ValueError, match="external_rope_load_n"):
+        steady_throttle_for_speed(PARAMS, 5.0, external_rope_load_n=-1.0)
 
 
 def test_throttle_step_response_has_the_documented_time_constant():
@@ -206,13 +211,15 @@ def test_last_edge_times_match_the_speed_at_constant_speed(rope_speed_mps):
 
 
 def test_encoder_counts_down_when_turning_backwards():
-    plant = DrivePlant()
-    plant.step(esc_pulse_us=MIN_US, dt_s=DT_S)
-    # drive the encoder directly through a backwards shaft motion (the ESC cannot reverse the motor)
-    enc = plant._encoder
-    enc.advance(-2.0 * math.pi, 1000.0, 1000.0)
-    assert enc.counts == -PARAMS.encoder_counts_per_rev
-    assert 1000 <= enc.last_edge_us <= 2000
+    enc = Encoder(counts_per_rev=64, phase_counts=0.25)
+    enc.advance(2.0 * math.pi * (10.5 / 64), 0.0, 1000.0)  # forward 10.5 counts to x = 10.75
+    assert enc.counts == 10
+    # the 10th edge (x = 10) at (10 - 0.25) / 10.5 of the way
+    assert enc.last_edge_us == math.floor(1000.0 * 9.75 / 10.5)
+    enc.advance(-2.0 * math.pi, 1000.0, 1000.0)  # one revolution backwards to x = -53.25
+    assert enc.counts == 10 - 64
+    # last edge crossed going down is x = -53, at (10.75 + 53) / 64 of the way
+    assert enc.last_edge_us == math.floor(1000.0 + 1000.0 * 63.75 / 64.0)
 
 
 # --- rope drag, load, battery ------------------------------------------------------------------------------
@@ -373,6 +380,14 @@ def test_bad_external_load_raises(load):
 def test_bad_params_raise_naming_the_field(field, value):
     with pytest.raises(DriveParamsError, match=field):
         replace(PARAMS, **{field: value})
+
+
+def test_numpy_scalars_are_accepted_and_give_the_same_result():
+    a, b = armed_plant(), armed_plant()
+    run(a, 1500.0, 0.1)
+    for _ in range(100):
+        b.step(esc_pulse_us=np.float32(1500.0), dt_s=np.float64(0.001))
+    assert a.snapshot() == b.snapshot()
 
 
 def test_bad_seed_and_params_type():

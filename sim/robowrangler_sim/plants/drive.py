@@ -21,6 +21,7 @@ speed); a slip model would add a rope degree of freedom coupled through a nip tr
 from __future__ import annotations
 
 import math
+from numbers import Real
 
 import numpy as np
 
@@ -31,6 +32,13 @@ from robowrangler_sim.plants.encoder import Encoder
 from robowrangler_sim.plants.esc import Esc
 
 _RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
+
+
+def _is_real(value: object) -> bool:
+    """True for int/float/numpy real scalars, False for bool and everything else (fast path for float)."""
+    if type(value) is float:
+        return True
+    return isinstance(value, Real) and not isinstance(value, bool)
 
 
 def rope_drag_force_n(params: DriveParams, rope_speed_mps: float) -> float:
@@ -85,8 +93,10 @@ def steady_throttle_for_speed(params: DriveParams, rope_speed_mps: float, *, ext
     firmware's pulse is esc_min_pulse_us + fraction * (esc_max_pulse_us - esc_min_pulse_us). Zero speed
     returns 0. Raises ValueError naming rope_speed_mps when the speed is negative, not finite or out of reach.
     """
-    if not math.isfinite(rope_speed_mps) or rope_speed_mps < 0.0:
+    if not _is_real(rope_speed_mps) or not math.isfinite(rope_speed_mps) or rope_speed_mps < 0.0:
         raise ValueError(f"rope_speed_mps: expected finite >= 0, got {rope_speed_mps!r}")
+    if not _is_real(external_rope_load_n) or not math.isfinite(external_rope_load_n) or external_rope_load_n < 0.0:
+        raise ValueError(f"external_rope_load_n: expected a finite force >= 0 N, got {external_rope_load_n!r}")
     if rope_speed_mps == 0.0:
         return 0.0
     voc = params.battery_open_circuit_v if battery_open_circuit_v is None else battery_open_circuit_v
@@ -138,7 +148,8 @@ class DrivePlant:
         battery_open_circuit_v: the pack's open-circuit voltage now (falls with charge drawn).
         esc_armed, esc_throttle, esc_duty: ESC state (throttle latched 0..1, applied duty 0..1).
         encoder_counts: cumulative signed edge count, encoder_counts_per_rev per revolution.
-        encoder_last_edge_us: plant time of the most recent edge (interpolated inside the step, floored to us).
+        encoder_last_edge_us: plant time of the most recent edge (interpolated inside the step, floored to us;
+            0 until the first edge).
         rope_drag_n: aerodynamic drag on the rope now, N.
         loop_airborne: rope speed above ToV, with +-airborne_hysteresis_mps hysteresis.
     Input between steps: external_rope_load_n (N >= 0, opposes the rope motion).
@@ -200,7 +211,7 @@ class DrivePlant:
 
     @external_rope_load_n.setter
     def external_rope_load_n(self, value: float) -> None:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0.0:
+        if not _is_real(value) or not math.isfinite(value) or value < 0.0:
             raise ValueError(f"external_rope_load_n: expected a finite force >= 0 N, got {value!r}")
         self._external_rope_load_n = float(value)
 
@@ -210,7 +221,7 @@ class DrivePlant:
 
         Raises ValueError naming the argument when either is not finite or out of range.
         """
-        if isinstance(dt_s, bool) or not isinstance(dt_s, (int, float)) or not math.isfinite(dt_s):
+        if not _is_real(dt_s) or not math.isfinite(dt_s):
             raise ValueError(f"dt_s: expected a finite number of seconds, got {dt_s!r}")
         dt_us_f = dt_s * 1e6
         dt_us = round(dt_us_f)
@@ -222,11 +233,11 @@ class DrivePlant:
         """As ``step`` with the interval in integer microseconds (1 <= dt_us <= max_step_s * 1e6)."""
         if isinstance(dt_us, bool) or not isinstance(dt_us, (int, np.integer)) or not 0 < dt_us <= self._max_step_us:
             raise ValueError(f"dt_us: expected an int in [1, {self._max_step_us}], got {dt_us!r}")
-        if (isinstance(esc_pulse_us, bool) or not isinstance(esc_pulse_us, (int, float))
-                or not math.isfinite(esc_pulse_us)
+        if (not _is_real(esc_pulse_us) or not math.isfinite(esc_pulse_us)
                 or not 0.0 <= esc_pulse_us <= self.params.esc_frame_us):
             raise ValueError(f"esc_pulse_us: expected a finite pulse width in [0, {self.params.esc_frame_us}] us "
                              f"(0 = no signal), got {esc_pulse_us!r}")
+        esc_pulse_us = float(esc_pulse_us)
         esc = self._esc
         t = self.time_us
         t_end = t + int(dt_us)
