@@ -59,12 +59,15 @@ static float clampf(float x, float lo, float hi)
  *     I'    = I[k-1] + ki_per_s * dt * e[k]                       (candidate integral)
  *     v     = ff[k] + p[k] + I'                                    (unsaturated output)
  * Anti-windup, two parts:
- *  1. conditional integration: if v > out_max and e[k] > 0, or v < out_min and e[k] < 0, the
- *     integral is frozen (I' = I[k-1]): it never grows deeper into a saturation it cannot act on,
- *     and it moves again at once when the error reverses;
- *  2. clamp: I[k] = clamp(I', out_min - ff[k], out_max - ff[k]): the integral term alone never
- *     drives the output past a limit, so a reversed error leaves saturation within one step even
- *     after a long saturation or a feed-forward jump.
+ *  1. conditional integration: if v > out_max and e[k] > 0, the integral only grows as far as
+ *     the limit and never backwards, I' = max(I[k-1], out_max - ff[k] - p[k]) (symmetrically
+ *     I' = min(I[k-1], out_min - ff[k] - p[k]) if v < out_min and e[k] < 0): it never grows deeper
+ *     into a saturation it cannot act on, the output lands exactly on the limit, and the integral
+ *     moves again at once when the error reverses;
+ *  2. clamp: I[k] = clamp(I', out_min - f, out_max - f) with f = clamp(ff[k], out_min, out_max):
+ *     the integral term alone never drives the output past a limit, so a reversed error leaves
+ *     saturation within one step even after a long saturation or a feed-forward jump (f rather than
+ *     ff so that a feed-forward beyond a limit does not force the integral to the opposite sign).
  *     u[k] = clamp(ff[k] + p[k] + I[k], out_min, out_max)
  * Bad input: dt_s <= 0 or not finite, or any input not finite -> u[k] = u[k-1] and nothing is
  * integrated. No NaN or infinity ever leaves the step. With out_min > out_max (invalid config,
@@ -82,19 +85,23 @@ float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measureme
     const float p = cfg->kp * error;
     float integral = c->state.integral + cfg->ki_per_s * dt_s * error;
     const float unsaturated = feed_forward + p + integral;
-    if ((unsaturated > cfg->out_max && error > 0.0f) || (unsaturated < cfg->out_min && error < 0.0f)) {
-        integral = c->state.integral; /* conditional integration: freeze */
+    if (unsaturated > cfg->out_max && error > 0.0f) {
+        /* conditional integration: only up to the limit, never backwards */
+        integral = fmaxf(c->state.integral, cfg->out_max - feed_forward - p);
+    } else if (unsaturated < cfg->out_min && error < 0.0f) {
+        integral = fminf(c->state.integral, cfg->out_min - feed_forward - p);
     }
-    integral = clampf(integral, cfg->out_min - feed_forward, cfg->out_max - feed_forward);
+    const float ff_in_limits = clampf(feed_forward, cfg->out_min, cfg->out_max);
+    integral = clampf(integral, cfg->out_min - ff_in_limits, cfg->out_max - ff_in_limits);
     const float u = feed_forward + p + integral;
     if (!isfinite(integral) || !isfinite(u)) { /* overflow of huge (but finite) inputs */
         return c->state.output;
     }
     c->state.integral = integral;
-    if (u > cfg->out_max) {
+    if (u >= cfg->out_max) {
         c->state.output = cfg->out_max;
         c->state.saturation = 1;
-    } else if (u < cfg->out_min) {
+    } else if (u <= cfg->out_min) {
         c->state.output = cfg->out_min;
         c->state.saturation = -1;
     } else {

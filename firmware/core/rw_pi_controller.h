@@ -29,7 +29,7 @@ typedef struct rw_pi_controller {
     struct {
         float integral;    /**< integral term, output units (already multiplied by ki_per_s) */
         float output;      /**< last output, output units, always within [out_min, out_max] */
-        int8_t saturation; /**< +1: last output clamped at out_max, -1: at out_min, 0: not clamped */
+        int8_t saturation; /**< +1: last output at out_max, -1: at out_min, 0: inside */
     } state;               /**< private history */
 } rw_pi_controller;
 
