@@ -86,7 +86,7 @@ def test_out_of_reach_speed_raises_naming_the_argument():
 
 
 def test_throttle_step_response_has_the_documented_time_constant():
-    """63 % rise of a small throttle step: mechanical tau (~6.6 ms at 5 m/s) + ESC lag 3 ms + latch delay."""
+    """63 % rise of a small throttle step: mechanical tau (~6.4 ms at 5 m/s) + ESC lag 3 ms + latch delay."""
     plant = armed_plant()
     run(plant, pulse_for_speed(5.0), 1.0)
     v0 = plant.rope_speed_mps
