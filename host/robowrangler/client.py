@@ -1,0 +1,542 @@
+"""Client: commands with ACK/NACK and retries, heartbeats, telemetry and events, over any transport.
+
+    with Client("udp://127.0.0.1:14550") as rw:
+        rw.arm()
+        rw.spin(5.0)
+        rw.wait_for_state(State.AIRBORNE, timeout_s=3.0)
+        rw.spindown()
+
+Threads: a receiver thread decodes every frame and hands ACK/NACK to the waiting command by
+(msg_id, seq), PARAM_VALUE by parameter id, TELEMETRY to `latest_telemetry` and to every open
+`telemetry()` iterator, EVENT to `events`. Frames it cannot decode are counted in `stats`, never
+raised. A heartbeat thread sends HEARTBEAT at heartbeat_hz while connected (the device spins the
+rope down after heartbeat_timeout_s of silence).
+
+Retries: a command is retransmitted with the SAME seq and bytes after each ack_timeout_s without an
+answer (the device answers a retransmission again but never executes it twice), at most `retries`
+times, then LinkTimeout. A new command always gets a new seq.
+"""
+
+from __future__ import annotations
+
+import collections
+import queue
+import secrets
+import threading
+import time
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field, replace
+
+from robowrangler import units
+from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, NotConnected, StateTimeout,
+                                 UnknownParameter)
+from robowrangler.protocol import generated as gen
+from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
+from robowrangler.telemetry import DeviceEvent, TelemetrySample
+from robowrangler.transport import DEFAULT_URL, Transport, open_transport, parse_url
+
+RECV_POLL_S = 0.05  # receiver thread wakes this often to notice close()
+TELEMETRY_QUEUE_LEN = 4096  # per telemetry() iterator; the oldest sample is dropped when full (~80 s at 50 Hz)
+EVENT_HISTORY_LEN = 10000
+NOT_READY_RETRY_S = 0.05  # pause between ARM attempts while the device reports NOT_READY
+_CLOSED = object()
+
+
+@dataclass
+class ClientStats:
+    """Link counters since connect(); a snapshot is returned by Client.stats."""
+
+    frames_sent: int = 0
+    heartbeats_sent: int = 0
+    commands_sent: int = 0
+    retransmissions: int = 0
+    send_errors: int = 0
+    frames_received: int = 0
+    decode_errors: int = 0
+    decode_errors_by_reason: dict[str, int] = field(default_factory=dict)
+    framing_errors: int = 0
+    recv_errors: int = 0
+    acks: int = 0
+    nacks: int = 0
+    late_replies: int = 0
+    param_values: int = 0
+    telemetry_received: int = 0
+    telemetry_dropped: int = 0
+    events_received: int = 0
+    events_lost: int = 0
+    unexpected_messages: int = 0
+
+
+class _Waiter:
+    __slots__ = ("event", "reply")
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        self.reply: gen.Message | None = None
+
+
+def param_spec(name: object) -> ParamSpec:
+    """The protocol's entry for a parameter name; UnknownParameter if there is none."""
+    if not isinstance(name, str) or name not in PARAMS_BY_NAME:
+        raise UnknownParameter(name)
+    return PARAMS_BY_NAME[name]
+
+
+def _check_positive(argument: str, value: object, *, allow_zero: bool = False) -> float:
+    x = units.check_real(argument, value, allow_inf=False)
+    if x < 0 or (x == 0 and not allow_zero):
+        raise InvalidArgument(argument, "a number >= 0" if allow_zero else "a number > 0", value)
+    return x
+
+
+class Client:
+    """A connection to one RoboWrangler device (board or SIL), identified by a link URL.
+
+    Args:
+        url: udp://HOST:PORT or serial://PORT?baud=N (see robowrangler.transport).
+        ack_timeout_s: wait for ACK/NACK per transmission [s].
+        retries: retransmissions (same seq) after the first send before LinkTimeout.
+        heartbeat_hz: HEARTBEAT rate while connected [Hz].
+        connect_timeout_s: wait for the first TELEMETRY in connect(); also the longest telemetry gap
+            telemetry() and wait_for_state() accept before LinkTimeout [s].
+        first_seq: sequence number of the first frame (0..65535); None draws a random one so that a
+            new process never repeats the bytes of a previous one inside the device's duplicate window.
+        transport: an already open Transport to use instead of opening `url` (tests, custom links).
+    """
+
+    def __init__(self, url: str = DEFAULT_URL, *, ack_timeout_s: float = 0.2, retries: int = 5,
+                 heartbeat_hz: float = 10.0, connect_timeout_s: float = 3.0, first_seq: int | None = None,
+                 transport: Transport | None = None) -> None:
+        if transport is None:
+            parse_url(url)  # raises InvalidArgument before any socket is opened
+        self.url = url if transport is None else getattr(transport, "url", url)
+        self.ack_timeout_s = _check_positive("ack_timeout_s", ack_timeout_s)
+        if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
+            raise InvalidArgument("retries", "an integer >= 0", retries)
+        self.retries = retries
+        self.heartbeat_hz = _check_positive("heartbeat_hz", heartbeat_hz)
+        self.connect_timeout_s = _check_positive("connect_timeout_s", connect_timeout_s)
+        if first_seq is None:
+            first_seq = secrets.randbelow(0x10000)
+        if isinstance(first_seq, bool) or not isinstance(first_seq, int) or not 0 <= first_seq <= 0xFFFF:
+            raise InvalidArgument("first_seq", "an integer in [0, 65535] or None", first_seq)
+        self._next_seq_value = first_seq
+        self._transport = transport
+        self._lock = threading.Lock()  # guards waiters, subscribers, stats, events
+        self._send_lock = threading.Lock()  # seq allocation + send keep frames in seq order
+        self._waiters: dict[tuple[int, int], _Waiter] = {}
+        self._param_waiters: dict[int, list[_Waiter]] = collections.defaultdict(list)
+        self._subscribers: list[queue.Queue] = []
+        self._events: collections.deque[DeviceEvent] = collections.deque(maxlen=EVENT_HISTORY_LEN)
+        self._last_event_seq: int | None = None
+        self._latest: TelemetrySample | None = None
+        self._first_telemetry = threading.Event()
+        self._stats = ClientStats()
+        self._stop = threading.Event()
+        self._threads: list[threading.Thread] = []
+        self._connected = False
+
+    # ----------------------------------------------------------------- lifecycle
+
+    def connect(self) -> Client:
+        """Open the link, start the receiver and heartbeat threads, wait for the first TELEMETRY.
+
+        Raises LinkTimeout (naming the URL) if none arrives within connect_timeout_s; the link is
+        closed again in that case. Returns self.
+        """
+        if self._connected:
+            return self
+        if self._transport is None:
+            self._transport = open_transport(self.url)
+        self._stop.clear()
+        self._first_telemetry.clear()
+        self._threads = [threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True),
+                         threading.Thread(target=self._heartbeat_loop, name="robowrangler-hb", daemon=True)]
+        for t in self._threads:
+            t.start()
+        self._connected = True
+        if not self._first_telemetry.wait(self.connect_timeout_s):
+            self.close()
+            raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
+                              "(or the SIL firmware) running and listening at that address?",
+                              url=self.url, waited_s=self.connect_timeout_s)
+        return self
+
+    def close(self) -> None:
+        """Stop the threads and release the link; open telemetry() iterators end. Idempotent.
+
+        Heartbeats stop, so a device left spinning lands by itself after heartbeat_timeout_s.
+        """
+        self._stop.set()
+        for t in self._threads:
+            if t is not threading.current_thread():
+                t.join(timeout=2.0)
+        self._threads = []
+        if self._transport is not None:
+            self._transport.close()
+            self._transport = None
+        self._connected = False
+        with self._lock:
+            for q in self._subscribers:
+                _put_dropping_oldest(q, _CLOSED)
+
+    def __enter__(self) -> Client:
+        return self.connect()
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    @property
+    def connected(self) -> bool:
+        return self._connected
+
+    @property
+    def stats(self) -> ClientStats:
+        """A snapshot of the link counters."""
+        with self._lock:
+            snap = replace(self._stats, decode_errors_by_reason=dict(self._stats.decode_errors_by_reason))
+        if self._transport is not None:
+            snap.framing_errors = self._transport.framing_errors
+        return snap
+
+    # ----------------------------------------------------------------- commands
+
+    def arm(self, *, timeout_s: float | None = None) -> State:
+        """DISARMED -> ARMED; returns the state the ACK reports.
+
+        While the device answers NOT_READY (ESC arming hold after boot) ARM is sent again, each time
+        with a new seq, until timeout_s (default connect_timeout_s) has passed; then the last
+        CommandRefused(NOT_READY) is raised. Any other NACK is raised at once.
+        """
+        limit_s = self.connect_timeout_s if timeout_s is None else _check_positive("timeout_s", timeout_s)
+        deadline = time.monotonic() + limit_s
+        while True:
+            try:
+                return State(self._command(gen.Arm()).state)
+            except CommandRefused as refused:
+                if refused.reason != NackReason.NOT_READY or time.monotonic() + NOT_READY_RETRY_S > deadline:
+                    raise
+            time.sleep(NOT_READY_RETRY_S)
+
+    def disarm(self) -> State:
+        """ARMED, FAULT or ESTOP -> DISARMED (BAD_STATE while the rope moves)."""
+        return State(self._command(gen.Disarm()).state)
+
+    def spin(self, rope_speed_mps: float) -> State:
+        """Set the rope speed target [m/s]; from ARMED this starts the spin-up.
+
+        Only values that cannot be encoded (NaN, inf, not a number) raise InvalidArgument here; the
+        device range-checks the rest (OUT_OF_RANGE, BELOW_TOV_GUARD -> CommandRefused).
+        """
+        mmps = units.mps_to_mmps(rope_speed_mps)
+        return State(self._command(gen.SetRopeSpeed(mmps), value=float(rope_speed_mps)).state)
+
+    def spindown(self) -> State:
+        """Controlled ramp to zero at ramp_down_mps2; the device ends in ARMED."""
+        return State(self._command(gen.Spindown()).state)
+
+    def estop(self) -> State:
+        """Emergency stop: ESC minimum at once, latched until disarm(). Accepted in every state."""
+        return State(self._command(gen.Estop()).state)
+
+    def get_param(self, name: str) -> float:
+        """A parameter's value on the device, in its SI unit (see robowrangler.protocol PARAMS)."""
+        spec = param_spec(name)
+        return self._param_exchange(spec, gen.ParamGet(spec.id), value=None)
+
+    def set_param(self, name: str, value: float) -> float:
+        """Set a parameter; returns the value the device now holds (float32, shortest decimal).
+
+        NaN or a non-number raises InvalidArgument; out-of-range values are sent and refused by the
+        device (CommandRefused OUT_OF_RANGE / PARAM_LOCKED).
+        """
+        spec = param_spec(name)
+        x = units.param_to_float32(name, value)
+        return self._param_exchange(spec, gen.ParamSet(spec.id, x), value=x)
+
+    def params(self) -> dict[str, float]:
+        """Every parameter of the protocol table, read from the device: {name: value}."""
+        return {p.name: self.get_param(p.name) for p in PARAMS}
+
+    # ----------------------------------------------------------------- telemetry and events
+
+    @property
+    def latest_telemetry(self) -> TelemetrySample | None:
+        """The most recent TelemetrySample, or None before the first one."""
+        return self._latest
+
+    @property
+    def events(self) -> list[DeviceEvent]:
+        """Every EVENT received since connect (oldest first, at most the last 10000)."""
+        with self._lock:
+            return list(self._events)
+
+    def telemetry(self, *, timeout_s: float | None = None) -> Iterator[TelemetrySample]:
+        """Iterate over TELEMETRY samples received from now on (every sample, in order).
+
+        timeout_s: longest gap between samples before LinkTimeout [s]; None uses connect_timeout_s.
+        The iterator ends when the client is closed. Break out of the loop to stop.
+        """
+        gap_s = self.connect_timeout_s if timeout_s is None else _check_positive("timeout_s", timeout_s)
+        self._require_connected()
+        q: queue.Queue = queue.Queue(maxsize=TELEMETRY_QUEUE_LEN)
+        with self._lock:
+            self._subscribers.append(q)
+        return self._iterate(q, gap_s)
+
+    def _iterate(self, q: queue.Queue, gap_s: float) -> Iterator[TelemetrySample]:
+        try:
+            while True:
+                try:
+                    item = q.get(timeout=gap_s)
+                except queue.Empty:
+                    raise LinkTimeout(f"telemetry from {self.url} stopped: no sample for {gap_s:g} s",
+                                      url=self.url, waited_s=gap_s) from None
+                if item is _CLOSED:
+                    return
+                yield item
+        finally:
+            with self._lock:
+                if q in self._subscribers:
+                    self._subscribers.remove(q)
+
+    def wait_for_state(self, state: State | Iterable[State], *, timeout_s: float) -> TelemetrySample:
+        """Wait for a TELEMETRY sample received after this call whose state is `state` (or one of them).
+
+        Returns that sample. StateTimeout if telemetry arrives but not that state within timeout_s;
+        LinkTimeout if telemetry stops for connect_timeout_s.
+        """
+        wanted = (state,) if isinstance(state, (State, int)) else tuple(state)
+        try:
+            wanted = tuple(State(s) for s in wanted)
+        except (ValueError, TypeError):
+            raise InvalidArgument("state", "a State or an iterable of States", state) from None
+        if not wanted:
+            raise InvalidArgument("state", "at least one State", state)
+        limit_s = _check_positive("timeout_s", timeout_s)
+        deadline = time.monotonic() + limit_s
+        stream = self.telemetry(timeout_s=min(self.connect_timeout_s, limit_s + RECV_POLL_S))
+        last: TelemetrySample | None = None
+        try:
+            while True:
+                try:
+                    sample = next(stream)
+                except LinkTimeout:
+                    if time.monotonic() >= deadline and last is not None:
+                        break
+                    raise
+                except StopIteration:
+                    raise NotConnected("the client was closed while waiting for a state") from None
+                if sample.state in wanted:
+                    return sample
+                last = sample
+                if time.monotonic() >= deadline:
+                    break
+        finally:
+            stream.close()
+        raise StateTimeout(expected=wanted, actual=last.state if last else None, waited_s=limit_s)
+
+    # ----------------------------------------------------------------- internals: sending
+
+    def _require_connected(self) -> None:
+        if not self._connected or self._transport is None:
+            raise NotConnected(f"not connected to {self.url}: call connect() or use `with Client(...)`")
+
+    def _send_new(self, message: gen.Message, waiter_key_msg_id: int | None = None) -> tuple[int, bytes, _Waiter | None]:
+        """Allocate a seq, encode and send; registers an ACK/NACK waiter first if asked."""
+        with self._send_lock:
+            seq = self._next_seq_value
+            self._next_seq_value = (seq + 1) & 0xFFFF
+            frame = gen.encode_frame(message, seq)
+            waiter = None
+            if waiter_key_msg_id is not None:
+                waiter = _Waiter()
+                with self._lock:
+                    self._waiters[(waiter_key_msg_id, seq)] = waiter
+            self._send_raw(frame)
+        return seq, frame, waiter
+
+    def _send_raw(self, frame: bytes) -> None:
+        transport = self._transport
+        if transport is None:
+            raise NotConnected(f"not connected to {self.url}")
+        try:
+            transport.send(frame)
+        except OSError:
+            with self._lock:
+                self._stats.send_errors += 1
+            return  # a lost frame: the retries and timeouts report it
+        with self._lock:
+            self._stats.frames_sent += 1
+
+    def _command(self, message: gen.Message, *, value: float | None = None, param: str | None = None) -> gen.Ack:
+        """Send a command and wait for its ACK (returned) or NACK (CommandRefused), retransmitting the same
+        bytes every ack_timeout_s up to `retries` times; LinkTimeout after that."""
+        self._require_connected()
+        seq, frame, waiter = self._send_new(message, waiter_key_msg_id=message.MSG_ID)
+        key = (message.MSG_ID, seq)
+        with self._lock:
+            self._stats.commands_sent += 1
+        try:
+            attempts = 1
+            while not waiter.event.wait(self.ack_timeout_s):
+                if attempts > self.retries:
+                    waited_s = attempts * self.ack_timeout_s
+                    raise LinkTimeout(
+                        f"{message.NAME} (seq {seq}): no ACK/NACK from {self.url} after {attempts} attempts "
+                        f"in {waited_s:.2f} s; the link or the device is down", url=self.url, waited_s=waited_s)
+                self._require_connected()
+                self._send_raw(frame)
+                attempts += 1
+                with self._lock:
+                    self._stats.retransmissions += 1
+        finally:
+            with self._lock:
+                self._waiters.pop(key, None)
+        reply = waiter.reply
+        if isinstance(reply, gen.Nack):
+            raise CommandRefused(command_msg_id=message.MSG_ID, reason=reply.reason, state=reply.state,
+                                 detail=reply.detail, value=value, param=param)
+        return reply
+
+    def _param_exchange(self, spec: ParamSpec, message: gen.Message, *, value: float | None) -> float:
+        """PARAM_GET or PARAM_SET, then the PARAM_VALUE that follows its ACK.
+
+        If the ACK arrives but the PARAM_VALUE is lost, a PARAM_GET (new seq; reading twice is
+        harmless) asks again, up to `retries` times.
+        """
+        request: gen.Message = message
+        for _ in range(self.retries + 1):
+            waiter = _Waiter()
+            with self._lock:
+                self._param_waiters[spec.id].append(waiter)
+            try:
+                self._command(request, value=value, param=spec.name)
+                if waiter.event.wait(self.ack_timeout_s):
+                    return units.float32_to_si(waiter.reply.value)
+            finally:
+                with self._lock:
+                    if waiter in self._param_waiters[spec.id]:
+                        self._param_waiters[spec.id].remove(waiter)
+            request = gen.ParamGet(spec.id)
+        waited_s = (self.retries + 1) * self.ack_timeout_s
+        raise LinkTimeout(f"{spec.name}: ACKed by {self.url} but no PARAM_VALUE arrived after "
+                          f"{self.retries + 1} requests", url=self.url, waited_s=waited_s)
+
+    def _heartbeat_loop(self) -> None:
+        period_s = 1.0 / self.heartbeat_hz
+        next_s = time.monotonic()
+        while not self._stop.is_set():
+            try:
+                self._send_new(gen.Heartbeat(units.s_to_ms_u32(time.monotonic())))
+                with self._lock:
+                    self._stats.heartbeats_sent += 1
+            except NotConnected:
+                return
+            next_s += period_s
+            now = time.monotonic()
+            if next_s < now:  # fell behind (suspended process): do not burst
+                next_s = now
+            self._stop.wait(next_s - now)
+
+    # ----------------------------------------------------------------- internals: receiving
+
+    def _receive_loop(self) -> None:
+        transport = self._transport
+        while not self._stop.is_set():
+            try:
+                data = transport.recv(RECV_POLL_S)
+            except Exception:  # a dying link must not kill the thread: timeouts will report it
+                with self._lock:
+                    self._stats.recv_errors += 1
+                self._stop.wait(RECV_POLL_S)
+                continue
+            if data is None:
+                continue
+            self._handle_datagram(data, time.monotonic())
+
+    def _handle_datagram(self, data: bytes, received_s: float) -> None:
+        try:
+            frame, msg = gen.decode_message(data)
+        except FrameError as err:
+            self._count_decode_error(err.reason.name)
+            return
+        except Exception:  # noqa: BLE001 - any unpack failure is bad data, counted not raised
+            self._count_decode_error("UNPACK")
+            return
+        with self._lock:
+            self._stats.frames_received += 1
+        msg_id = frame.msg_id
+        if msg_id in (MsgId.ACK, MsgId.NACK):
+            self._on_reply(msg)
+        elif msg_id == MsgId.PARAM_VALUE:
+            with self._lock:
+                self._stats.param_values += 1
+                waiters = self._param_waiters.get(msg.param_id, [])
+                for w in waiters:
+                    w.reply = msg
+                    w.event.set()
+        elif msg_id == MsgId.TELEMETRY:
+            self._on_telemetry(TelemetrySample.from_wire(msg, received_s=received_s))
+        elif msg_id == MsgId.EVENT:
+            self._on_event(DeviceEvent.from_wire(msg, received_s=received_s))
+        else:
+            with self._lock:
+                self._stats.unexpected_messages += 1
+
+    def _count_decode_error(self, reason: str) -> None:
+        with self._lock:
+            self._stats.decode_errors += 1
+            by_reason = self._stats.decode_errors_by_reason
+            by_reason[reason] = by_reason.get(reason, 0) + 1
+
+    def _on_reply(self, msg: gen.Ack | gen.Nack) -> None:
+        with self._lock:
+            if isinstance(msg, gen.Nack):
+                self._stats.nacks += 1
+            else:
+                self._stats.acks += 1
+            waiter = self._waiters.get((msg.cmd_msg_id, msg.cmd_seq))
+            if waiter is None or waiter.reply is not None:
+                self._stats.late_replies += 1  # answer to a retransmission, or after a timeout
+                return
+            waiter.reply = msg
+            waiter.event.set()
+
+    def _on_telemetry(self, sample: TelemetrySample) -> None:
+        self._latest = sample
+        with self._lock:
+            self._stats.telemetry_received += 1
+            for q in self._subscribers:
+                if _put_dropping_oldest(q, sample):
+                    self._stats.telemetry_dropped += 1
+        self._first_telemetry.set()
+
+    def _on_event(self, event: DeviceEvent) -> None:
+        with self._lock:
+            self._stats.events_received += 1
+            if self._last_event_seq is not None:
+                gap = (event.event_seq - self._last_event_seq - 1) & 0xFFFF
+                if gap >= 0x8000:  # a repeated or reordered (older) event: keep it, count nothing
+                    self._events.append(event)
+                    return
+                self._stats.events_lost += gap
+            self._last_event_seq = event.event_seq
+            self._events.append(event)
+
+
+def _put_dropping_oldest(q: queue.Queue, item: object) -> bool:
+    """Put without blocking; if the queue is full drop its oldest item. True if one was dropped."""
+    try:
+        q.put_nowait(item)
+        return False
+    except queue.Full:
+        try:
+            q.get_nowait()
+        except queue.Empty:
+            pass
+        q.put_nowait(item)
+        return True
+
+
+__all__ = ["Client", "ClientStats", "DeviceEvent", "State", "TelemetrySample", "param_spec"]
