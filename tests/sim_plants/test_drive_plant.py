@@ -251,6 +251,30 @@ def test_rope_drag_is_carried_by_the_motors():
     assert extra_a == pytest.approx(drag_share_a, rel=0.05)  # minus the little speed it also costs
 
 
+def test_exposed_rope_length_scales_the_drag_and_reset_restores_it():
+    plant = armed_plant()
+    run(plant, 2000.0, 1.0)
+    full_drag_n = plant.rope_drag_n
+    plant.rope_exposed_length_m = 1.0  # a spindle shortened the loop in the air
+    run(plant, 2000.0, 1.0)
+    assert plant.rope_drag_n == pytest.approx(rope_drag_force_n(PARAMS, plant.rope_speed_mps) / 2.0, rel=1e-12)
+    assert plant.rope_drag_n < 0.51 * full_drag_n
+    with pytest.raises(ValueError, match="rope_exposed_length_m"):
+        plant.rope_exposed_length_m = 2.5
+    plant.reset()
+    assert plant.rope_exposed_length_m == PARAMS.rope_exposed_length_m
+
+
+def test_aux_load_on_the_pack_lowers_the_terminal_voltage():
+    plant = armed_plant()
+    rest_v = plant.battery_v
+    plant.battery_aux_current_a = 1.1  # e.g. the spindle servo moving
+    run(plant, MIN_US, 0.01)
+    assert rest_v - plant.battery_v == pytest.approx(PARAMS.battery_internal_resistance_ohm * 1.0, rel=1e-3)
+    with pytest.raises(ValueError, match="battery_aux_current_a"):
+        plant.battery_aux_current_a = -1.0
+
+
 def test_battery_sags_under_load():
     plant = armed_plant()
     rest_v = plant.battery_v

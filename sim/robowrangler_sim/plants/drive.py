@@ -152,7 +152,8 @@ class DrivePlant:
             0 until the first edge).
         rope_drag_n: aerodynamic drag on the rope now, N.
         loop_airborne: rope speed above ToV, with +-airborne_hysteresis_mps hysteresis.
-    Input between steps: external_rope_load_n (N >= 0, opposes the rope motion).
+    Inputs between steps: external_rope_load_n (N >= 0, opposes the rope motion), rope_exposed_length_m
+    (m, rope in moving air), battery_aux_current_a (A, other loads on the pack). reset() restores them.
     """
 
     def __init__(self, params: DriveParams | None = None, *, seed: int = 0) -> None:
@@ -170,7 +171,6 @@ class DrivePlant:
         self._kt = p.torque_constant_nm_per_a
         self._r = p.wheel_radius_m
         self._j = p.total_inertia_kg_m2
-        self._k_drag = p.rope_drag_coeff_n_s2_per_m2
         self._r_circ = p.circuit_resistance_ohm
         self._rb = p.battery_internal_resistance_ohm
         self._max_step_us = round(p.max_step_s * 1e6)
@@ -186,6 +186,7 @@ class DrivePlant:
         self._next_frame_us = 0
         self._omega = 0.0
         self._external_rope_load_n = 0.0
+        self.rope_exposed_length_m = p.rope_exposed_length_m
         self.time_us = 0
         self.shaft_angle_rad = 0.0
         self.wheel_speed_rad_s = 0.0
@@ -214,6 +215,34 @@ class DrivePlant:
         if not _is_real(value) or not math.isfinite(value) or value < 0.0:
             raise ValueError(f"external_rope_load_n: expected a finite force >= 0 N, got {value!r}")
         self._external_rope_load_n = float(value)
+
+    @property
+    def rope_exposed_length_m(self) -> float:
+        """Rope length moving through air (carries the skin-friction drag), m; starts at the params' value.
+
+        Settable between steps (e.g. by a spindle plant as the loop grows or shrinks), 0..rope_loop_length_m.
+        """
+        return self._exposed_length_m
+
+    @rope_exposed_length_m.setter
+    def rope_exposed_length_m(self, value: float) -> None:
+        loop_m = self.params.rope_loop_length_m
+        if not _is_real(value) or not math.isfinite(value) or not 0.0 <= value <= loop_m:
+            raise ValueError(f"rope_exposed_length_m: expected a length in [0, {loop_m}] m, got {value!r}")
+        p = self.params
+        self._exposed_length_m = float(value)
+        self._k_drag = 0.5 * p.air_density_kg_per_m3 * p.rope_cf_pi_d_m * self._exposed_length_m
+
+    @property
+    def battery_aux_current_a(self) -> float:
+        """Current other loads draw from the pack (board, encoder, spindle servo...), A; settable, >= 0."""
+        return self._battery.aux_current_a
+
+    @battery_aux_current_a.setter
+    def battery_aux_current_a(self, value: float) -> None:
+        if not _is_real(value) or not math.isfinite(value) or value < 0.0:
+            raise ValueError(f"battery_aux_current_a: expected a finite current >= 0 A, got {value!r}")
+        self._battery.aux_current_a = float(value)
 
     def step(self, *, esc_pulse_us: float, dt_s: float) -> None:
         """Advance the plant by dt_s seconds (a whole number of microseconds, 0 < dt_s <= max_step_s) with the
@@ -355,5 +384,5 @@ class DrivePlant:
 _SNAPSHOT_FIELDS = (
     "time_us", "rope_speed_mps", "wheel_speed_rad_s", "motor_rpm", "shaft_angle_rad", "motor_current_a",
     "battery_v", "battery_adc_v", "battery_current_a", "battery_open_circuit_v", "esc_armed", "esc_throttle", "esc_duty",
-    "encoder_counts", "encoder_last_edge_us", "rope_drag_n", "loop_airborne", "external_rope_load_n",
+    "encoder_counts", "encoder_last_edge_us", "rope_drag_n", "loop_airborne", "external_rope_load_n", "rope_exposed_length_m", "battery_aux_current_a",
 )
