@@ -3,11 +3,18 @@
 from __future__ import annotations
 
 import ctypes
+import sys
 from pathlib import Path
 
 import pytest
 
-import rw_core_ctypes
+# The helper modules of this suite (rw_core_ctypes, sim_encoder) are imported by plain name: make
+# that work under pytest's importlib import mode too, where test folders are not put on sys.path.
+_HERE = str(Path(__file__).resolve().parent)
+if _HERE not in sys.path:
+    sys.path.insert(0, _HERE)
+
+import rw_core_ctypes  # noqa: E402
 
 
 @pytest.fixture(scope="session")
