@@ -215,6 +215,9 @@ def load_spec(path: Path = SPEC_PATH) -> Spec:
                             float(p["default"]), bool(p.get("locked", False)), bool(p.get("integer", False)),
                             p.get("description", "")))
     _require(sorted(pids) == list(range(len(pids))), "[[param]]", "parameter ids must be 0..N-1 with no gap")
+    py_names = [e.py_name for e in enums] + [m.py_name for m in messages]
+    clashes = sorted({n for n in py_names if py_names.count(n) > 1})
+    _require(not clashes, "[[enum]]/[[message]]", f"generated class names clash: {clashes} (rename the enum)")
     params.sort(key=lambda p: p.id)
     messages.sort(key=lambda m: m.id)
     return Spec(proto["version"], proto["magic"], proto["max_payload_len"], proto.get("description", "").strip(),

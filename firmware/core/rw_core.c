@@ -110,14 +110,14 @@ void rw_core_set_state(rw_core *core, uint8_t new_state, uint8_t cause)
     if (new_state == RW_STATE_AIRBORNE) {
         rw_tov_guard_reset(&core->state.guard);
     }
-    rw_core_emit_event(core, RW_EVENT_STATE_CHANGED, old, new_state, (int32_t)cause);
+    rw_core_emit_event(core, RW_EVENT_KIND_STATE_CHANGED, old, new_state, (int32_t)cause);
 }
 
 void rw_core_raise_fault(rw_core *core, uint16_t fault_bit)
 {
     if ((core->state.fault_bits & fault_bit) == 0u) {
         core->state.fault_bits |= fault_bit;
-        rw_core_emit_event(core, RW_EVENT_FAULT_RAISED, core->state.state, core->state.state, (int32_t)fault_bit);
+        rw_core_emit_event(core, RW_EVENT_KIND_FAULT_RAISED, core->state.state, core->state.state, (int32_t)fault_bit);
     }
     if (core->state.state != RW_STATE_ESTOP) {
         rw_core_set_state(core, RW_STATE_FAULT, RW_CAUSE_FAULT);
@@ -137,7 +137,7 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     if (!core->state.arming_hold_done &&
         (float)core->state.uptime_ms >= rw_params_get(p, RW_PARAM_ARM_HOLD_S) * 1000.0f) {
         core->state.arming_hold_done = true;
-        rw_core_emit_event(core, RW_EVENT_ARMING_HOLD_DONE, st, st, 0);
+        rw_core_emit_event(core, RW_EVENT_KIND_ARMING_HOLD_DONE, st, st, 0);
     }
 
     /* Heartbeat: the host must be heard from within heartbeat_timeout_s while the rope is driven. */
@@ -145,7 +145,7 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     if ((float)silence_ms > rw_params_get(p, RW_PARAM_HEARTBEAT_TIMEOUT_S) * 1000.0f) {
         if (!core->state.heartbeat_lost && st != RW_STATE_DISARMED) {
             core->state.heartbeat_lost = true;
-            rw_core_emit_event(core, RW_EVENT_HEARTBEAT_LOST, st, st, (int32_t)silence_ms);
+            rw_core_emit_event(core, RW_EVENT_KIND_HEARTBEAT_LOST, st, st, (int32_t)silence_ms);
         }
         if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
             rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_HEARTBEAT_LOST);
@@ -167,7 +167,7 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     float guard_mps = rw_tov_guard_min_airborne_mps(&core->state.guard);
     if (st == RW_STATE_AIRBORNE) {
         if (rw_tov_guard_step(&core->state.guard, core->state.measured_mps, dt_s)) {
-            rw_core_emit_event(core, RW_EVENT_LOOP_COLLAPSED, st, st,
+            rw_core_emit_event(core, RW_EVENT_KIND_LOOP_COLLAPSED, st, st,
                                (int32_t)sat_u16(core->state.measured_mps * 1000.0f));
             rw_core_set_state(core, RW_STATE_SPINUP, RW_CAUSE_LOOP_COLLAPSED);
         }
@@ -237,7 +237,7 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     if (!core->state.started) {
         core->state.started = true;
         core->state.last_now_us = now_us;
-        rw_core_emit_event(core, RW_EVENT_BOOT, core->state.state, core->state.state, 0);
+        rw_core_emit_event(core, RW_EVENT_KIND_BOOT, core->state.state, core->state.state, 0);
     }
     uint32_t dt_us = now_us - core->state.last_now_us;
     core->state.last_now_us = now_us;

@@ -124,7 +124,7 @@ static verdict cmd_param_set(rw_core *core, const rw_msg_param_set *msg)
         return refuse((uint8_t)result, msg->param_id);
     }
     uint8_t st = core->state.state;
-    rw_core_emit_event(core, RW_EVENT_PARAM_CHANGED, st, st, msg->param_id);
+    rw_core_emit_event(core, RW_EVENT_KIND_PARAM_CHANGED, st, st, msg->param_id);
     return ACCEPT;
 }
 

@@ -52,15 +52,15 @@ typedef enum {
 
 /* Event kinds (EVENT.event). */
 typedef enum {
-    RW_EVENT_BOOT = 0, /* Firmware started; arg = reset reason (board specific, 0 in SIL). */
-    RW_EVENT_STATE_CHANGED = 1, /* state_from -> state_to; arg = cause (enum cause). */
-    RW_EVENT_LOOP_COLLAPSED = 2, /* Measured speed under ToV for longer than collapse_time_s while airborne; arg = speed, mm/s. */
-    RW_EVENT_HEARTBEAT_LOST = 3, /* No valid frame from the host for heartbeat_timeout_s; a spin-down follows if the rope moves. arg = silence, ms. */
-    RW_EVENT_FAULT_RAISED = 4, /* arg = the fault bit that was raised. */
-    RW_EVENT_PARAM_CHANGED = 5, /* arg = parameter id. */
-    RW_EVENT_ARMING_HOLD_DONE = 6, /* The ESC has seen its minimum pulse for arm_hold_s: ARM is now accepted. */
-} rw_event;
-#define RW_EVENT_COUNT 7u
+    RW_EVENT_KIND_BOOT = 0, /* Firmware started; arg = reset reason (board specific, 0 in SIL). */
+    RW_EVENT_KIND_STATE_CHANGED = 1, /* state_from -> state_to; arg = cause (enum cause). */
+    RW_EVENT_KIND_LOOP_COLLAPSED = 2, /* Measured speed under ToV for longer than collapse_time_s while airborne; arg = speed, mm/s. */
+    RW_EVENT_KIND_HEARTBEAT_LOST = 3, /* No valid frame from the host for heartbeat_timeout_s; a spin-down follows if the rope moves. arg = silence, ms. */
+    RW_EVENT_KIND_FAULT_RAISED = 4, /* arg = the fault bit that was raised. */
+    RW_EVENT_KIND_PARAM_CHANGED = 5, /* arg = parameter id. */
+    RW_EVENT_KIND_ARMING_HOLD_DONE = 6, /* The ESC has seen its minimum pulse for arm_hold_s: ARM is now accepted. */
+} rw_event_kind;
+#define RW_EVENT_KIND_COUNT 7u
 
 /* Why a state changed (EVENT.arg of STATE_CHANGED). */
 typedef enum {
@@ -176,10 +176,10 @@ size_t rw_msg_telemetry_encode(const rw_msg_telemetry *msg, uint16_t seq, uint8_
 typedef struct {
     uint32_t time_ms; /* [ms] Device time since boot. */
     uint16_t event_seq; /* Event counter (matches TELEMETRY.events after it). */
-    uint8_t event; /* (rw_event) Event kind. */
+    uint8_t event; /* (rw_event_kind) Event kind. */
     uint8_t state_from; /* (rw_state) State before. */
     uint8_t state_to; /* (rw_state) State after. */
-    int32_t arg; /* Event-specific argument (see enum event). */
+    int32_t arg; /* Event-specific argument (see enum event_kind). */
 } rw_msg_event;
 void rw_msg_event_pack(const rw_msg_event *msg, uint8_t *payload);
 void rw_msg_event_unpack(rw_msg_event *msg, const uint8_t *payload);

@@ -76,7 +76,7 @@ class NackReason(IntEnum):
     """A device-to-host message (ACK, TELEMETRY, ...) was sent to the device."""
 
 
-class Event(IntEnum):
+class EventKind(IntEnum):
     """Event kinds (EVENT.event)."""
 
     BOOT = 0
@@ -352,10 +352,10 @@ class Event(Message):
     Fields:
         time_ms: uint32 [ms] Device time since boot.
         event_seq: uint16 Event counter (matches TELEMETRY.events after it).
-        event: uint8 (event) Event kind.
+        event: uint8 (event_kind) Event kind.
         state_from: uint8 (state) State before.
         state_to: uint8 (state) State after.
-        arg: int32 Event-specific argument (see enum event).
+        arg: int32 Event-specific argument (see enum event_kind).
     """
 
     MSG_ID: ClassVar[int] = 4
@@ -368,10 +368,10 @@ class Event(Message):
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time_ms', 'uint32', 'ms', '', 'Device time since boot.'),
         FieldSpec('event_seq', 'uint16', '', '', 'Event counter (matches TELEMETRY.events after it).'),
-        FieldSpec('event', 'uint8', '', 'event', 'Event kind.'),
+        FieldSpec('event', 'uint8', '', 'event_kind', 'Event kind.'),
         FieldSpec('state_from', 'uint8', '', 'state', 'State before.'),
         FieldSpec('state_to', 'uint8', '', 'state', 'State after.'),
-        FieldSpec('arg', 'int32', '', '', 'Event-specific argument (see enum event).'),
+        FieldSpec('arg', 'int32', '', '', 'Event-specific argument (see enum event_kind).'),
     )
 
     time_ms: int

@@ -122,5 +122,17 @@ class ScriptedHost:
         assert verdict is not None, f"no ACK/NACK for {message.NAME} seq {seq} within {timeout_s} s"
         return verdict
 
+    def arm_and_spin(self, rope_speed_mmps: int, *, settle_s: float = 1.5) -> None:
+        """ARM, SET_ROPE_SPEED, then run settle_s; AssertionError if either command is refused."""
+        for message in (gen.Arm(), gen.SetRopeSpeed(rope_speed_mmps)):
+            verdict = self.command(message)
+            assert isinstance(verdict, gen.Ack), f"{message.NAME} refused: {verdict}"
+        self.run_for(settle_s)
+
+    def telemetry_series(self, field_name: str, *, since_ms: int = 0) -> tuple[list[float], list[int]]:
+        """(times in s, values) of one TELEMETRY field from since_ms on."""
+        rows = [t for t in self.received.telemetry if t.time_ms >= since_ms]
+        return [t.time_ms / 1000.0 for t in rows], [getattr(t, field_name) for t in rows]
+
     def close(self) -> None:
         self._sock.close()
