@@ -69,6 +69,11 @@ void rw_core_init(rw_core *core)
     core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
 }
 
+size_t rw_core_sizeof(void)
+{
+    return sizeof(rw_core);
+}
+
 int rw_core_set_param(rw_core *core, uint8_t param_id, float value)
 {
     int result = rw_params_set(&core->params, param_id, value, core->state.state == RW_STATE_DISARMED);

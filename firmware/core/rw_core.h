@@ -16,6 +16,7 @@
 #define RW_CORE_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "rw_duplicate_cache.h"
@@ -86,6 +87,9 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us);
 
 /* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. */
 int rw_core_set_param(rw_core *core, uint8_t param_id, float value);
+
+/* sizeof(rw_core), for bindings that allocate the core themselves (the pytest suites use ctypes). */
+size_t rw_core_sizeof(void);
 
 static inline uint8_t rw_core_state(const rw_core *core)
 {
