@@ -1,0 +1,73 @@
+"""What every command gets: the link settings from the global options and the output channel."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import click
+
+from robowrangler.cli.environment import Environment
+from robowrangler.client import Client
+
+URL_ENV_VAR = "ROBOWRANGLER_URL"
+DEFAULT_TIMEOUT_S = 3.0
+
+
+@dataclass
+class CliContext:
+    """Global options of one `wrangler` run plus its Environment.
+
+    url: link URL (--url, else $ROBOWRANGLER_URL, else the default); timeout_s: --timeout [s], used
+    as the connect timeout, the longest telemetry gap and the ARM NOT_READY retry window;
+    json_mode: --json.
+    """
+
+    env: Environment
+    url: str
+    timeout_s: float = DEFAULT_TIMEOUT_S
+    json_mode: bool = False
+
+    def client(self) -> Client:
+        """A Client for this run's URL (not yet connected: use it in a `with`)."""
+        return Client(self.url, connect_timeout_s=self.timeout_s)
+
+    # -- output: machine output on stdout only with --json, prose on stderr
+    def result(self, data: dict[str, Any], human: str) -> None:
+        """The final result: one JSON object (ok: true) on stdout with --json, else `human` on stdout."""
+        if self.json_mode:
+            self.json_line({"type": "result", "ok": True, **data})
+        else:
+            self.env.stdout.write(human.rstrip("\n") + "\n")
+            self.env.stdout.flush()
+
+    def json_line(self, data: dict[str, Any]) -> None:
+        """One JSON object on one line of stdout (JSON lines for streams)."""
+        self.env.stdout.write(json.dumps(_jsonable(data), allow_nan=False) + "\n")
+        self.env.stdout.flush()
+
+    def human_line(self, text: str) -> None:
+        """A line of human stream output on stdout (not used with --json)."""
+        self.env.stdout.write(text + "\n")
+        self.env.stdout.flush()
+
+    def note(self, text: str) -> None:
+        """Prose for the user on stderr (both modes)."""
+        self.env.stderr.write(f"wrangler: {text}\n")
+        self.env.stderr.flush()
+
+
+def _jsonable(value: Any) -> Any:
+    """JSON-safe copy: non-finite floats become null (JSON has no NaN)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    return value
+
+
+pass_context = click.make_pass_decorator(CliContext)

@@ -1,0 +1,121 @@
+"""`wrangler`: command the RoboWrangler device (board or SIL) from a shell.
+
+main(argv, env) is the one place where exceptions become exit statuses (ExitStatus) and one-line
+messages on stderr; with --json the same failure is also one JSON object on stdout.
+
+Adding a command group: write robowrangler/cli/<group>.py with click commands and append them to
+COMMANDS below.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+import click
+
+from robowrangler.cli import monitor, motion, param
+from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext
+from robowrangler.cli.environment import Environment
+from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
+                                 UnknownParameter)
+from robowrangler.transport import DEFAULT_URL, parse_url
+
+COMMANDS: list[click.Command] = [
+    motion.arm, motion.disarm, motion.spin, motion.spindown, motion.estop,
+    monitor.status, monitor.watch,
+    param.param,
+]
+
+_EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStatus) + "."
+
+
+@click.group(epilog=_EXIT_HELP)
+@click.option("--url", default=None, metavar="URL",
+              help=f"Link: udp://HOST:PORT or serial:///dev/ttyACM0?baud=115200 "
+                   f"[env {URL_ENV_VAR}; default {DEFAULT_URL}]")
+@click.option("--json", "json_mode", is_flag=True, help="Machine output on stdout: one JSON object, JSON lines for streams.")
+@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.0, min_open=True), default=DEFAULT_TIMEOUT_S,
+              show_default=True, metavar="SECONDS",
+              help="Connect timeout, longest telemetry gap, and ARM retry window.")
+@click.pass_context
+def cli(click_ctx: click.Context, url: str | None, json_mode: bool, timeout_s: float) -> None:
+    """Command a RoboWrangler rope lasso (board or SIL) over UDP or USB serial."""
+    env: Environment = click_ctx.obj
+    url = url or env.environ.get(URL_ENV_VAR) or DEFAULT_URL
+    parse_url(url)  # a malformed URL is a usage error before anything is opened
+    click_ctx.obj = CliContext(env=env, url=url, timeout_s=timeout_s, json_mode=json_mode)
+
+
+for _command in COMMANDS:
+    cli.add_command(_command)
+
+
+def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> ExitStatus:
+    """Run `wrangler` with argv (without the program name); returns the exit status.
+
+    Every exception is turned into an ExitStatus and one line on env.stderr here, and nowhere else.
+    """
+    env = env or Environment.from_process()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    json_mode = "--json" in argv
+    try:
+        with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
+            rv = cli.main(args=argv, prog_name="wrangler", standalone_mode=False, obj=env)
+        # click returns the Exit code for --help and friends, the command's value otherwise
+        return ExitStatus(rv) if isinstance(rv, int) and rv in ExitStatus._value2member_map_ else ExitStatus.OK
+    except click.exceptions.Exit as exit_:
+        return _status_from_code(exit_.exit_code)
+    except click.UsageError as err:
+        hint = f" (see `{err.ctx.command_path} --help`)" if err.ctx is not None else ""
+        return _fail(env, json_mode, ExitStatus.USAGE, err, err.format_message() + hint)
+    except (click.Abort, KeyboardInterrupt) as err:
+        return _fail(env, json_mode, ExitStatus.CTRL_C, err, "interrupted")
+    except (InvalidArgument, UnknownParameter) as err:
+        return _fail(env, json_mode, ExitStatus.USAGE, err, str(err))
+    except CommandRefused as err:
+        return _fail(env, json_mode, ExitStatus.NACK, err, str(err),
+                     command=err.command, reason=_name(err.reason), state=_name(err.state), detail=err.detail)
+    except LinkTimeout as err:
+        return _fail(env, json_mode, ExitStatus.LINK_TIMEOUT, err, str(err), url=err.url, waited_s=err.waited_s)
+    except RoboWranglerError as err:
+        return _fail(env, json_mode, ExitStatus.ERROR, err, str(err))
+    except OSError as err:
+        return _fail(env, json_mode, ExitStatus.ERROR, err, f"link error: {err}")
+    except Exception as err:  # noqa: BLE001 - the CLI's last line of defence: one line, no traceback
+        return _fail(env, json_mode, ExitStatus.ERROR, err, f"internal error: {type(err).__name__}: {err}")
+
+
+def _fail(env: Environment, json_mode: bool, status: ExitStatus, err: BaseException, message: str,
+          **fields: Any) -> ExitStatus:
+    """Write the one-line message on stderr (and the JSON error object on stdout with --json)."""
+    line = " ".join(message.split())  # one line, whatever the exception text contained
+    env.stderr.write(f"wrangler: {line}\n")
+    env.stderr.flush()
+    if json_mode:
+        import json
+
+        obj = {"type": "result", "ok": False, "exit_status": status.name, "exit_code": int(status),
+               "error": type(err).__name__, "message": line, **fields}
+        env.stdout.write(json.dumps(obj) + "\n")
+        env.stdout.flush()
+    return status
+
+
+def _status_from_code(code: int | None) -> ExitStatus:
+    try:
+        return ExitStatus(code or 0)
+    except ValueError:
+        return ExitStatus.ERROR
+
+
+def _name(value: Any) -> Any:
+    return getattr(value, "name", value)
+
+
+def entry_point() -> None:
+    """Console script `wrangler` (pyproject [project.scripts])."""
+    sys.exit(int(main(sys.argv[1:], Environment.from_process())))

@@ -1,0 +1,258 @@
+"""A scripted UDP peer on 127.0.0.1 that speaks the wire protocol like the device's link layer.
+
+It is a test double for the client side only (retries, duplicates, NACK reasons, silence): it keeps a
+duplicate cache keyed by (seq, frame bytes), executes each new command once, and can be told to
+drop replies, answer scripted NACKs, or stay silent. The rope "physics" is a ramp, nothing more;
+the real device behaviour is tested against the SIL firmware elsewhere.
+"""
+
+from __future__ import annotations
+
+import math
+import select
+import socket
+import struct
+import threading
+import time
+from collections import defaultdict, deque
+
+from robowrangler.protocol import generated as gen
+from robowrangler.protocol.generated import MsgId, NackReason, PARAMS, State
+
+EVENT_MSG = gen.MESSAGES[MsgId.EVENT]
+EV_STATE_CHANGED, EV_PARAM_CHANGED, EV_ARMING_HOLD_DONE = 1, 5, 6
+CAUSE_COMMAND, CAUSE_SPEED_REACHED = 0, 1
+
+
+def _f32(x: float) -> float:
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+class ScriptedDevice:
+    """Run with `with ScriptedDevice(...) as dev:`; `dev.url` is the udp:// URL to connect to.
+
+    Knobs (set before or while running):
+        silent: answer no command (telemetry still flows unless telemetry_hz is 0).
+        drop_replies[msg_id]: drop this many of the next ACKs for that command (it still executes).
+        drop_param_values: drop this many of the next PARAM_VALUE messages.
+        nack_script[msg_id]: list of (NackReason, detail) answered to the next new commands of that id.
+        arm_hold_s: ARM is refused with NOT_READY this long after start.
+        drop_event_seqs: event_seq values whose EVENT is not sent (to test lost-event counting).
+    Records: received (frames with msg), executed (msg name, seq) per executed command,
+    duplicates (retransmissions answered from the cache).
+    """
+
+    def __init__(self, *, telemetry_hz: float = 50.0, arm_hold_s: float = 0.0, state: State = State.DISARMED,
+                 ramp_mps2: float = 100.0) -> None:
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self._sock.bind(("127.0.0.1", 0))
+        self.port = self._sock.getsockname()[1]
+        self.url = f"udp://127.0.0.1:{self.port}"
+        self.telemetry_hz = telemetry_hz
+        self.arm_hold_s = arm_hold_s
+        self.state = state
+        self.ramp_mps2 = ramp_mps2
+        self.silent = False
+        self.drop_replies: dict[int, int] = defaultdict(int)
+        self.drop_param_values = 0
+        self.nack_script: dict[int, list[tuple[NackReason, int]]] = defaultdict(list)
+        self.drop_event_seqs: set[int] = set()
+        self.params = {p.id: _f32(p.default) for p in PARAMS}
+        self.received: list[tuple[gen.Frame, gen.Message]] = []
+        self.executed: list[tuple[str, int]] = []
+        self.duplicates = 0
+        self.bad_frames = 0
+        self.nacks_sent = 0
+        self.target_mps = 0.0
+        self.setpoint_mps = 0.0
+        self._cache: deque[tuple[int, bytes, list[bytes]]] = deque(maxlen=8)
+        self._host = None
+        self._seq = 0
+        self._event_seq = 0
+        self._last_host_frame_s: float | None = None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="scripted-device", daemon=True)
+        self._start_s = time.monotonic()
+        self.lock = threading.Lock()
+
+    # ------------------------------------------------------------------ lifecycle
+    def __enter__(self) -> ScriptedDevice:
+        self._start_s = time.monotonic()
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self._sock.close()
+
+    def executed_names(self) -> list[str]:
+        with self.lock:
+            return [name for name, _ in self.executed]
+
+    def received_commands(self, msg_id: int) -> list[tuple[int, bytes]]:
+        """(seq, raw frame bytes re-encoded) for every received frame of msg_id, in order."""
+        with self.lock:
+            return [(f.seq, gen.encode_frame(m, f.seq)) for f, m in self.received if f.msg_id == msg_id]
+
+    # ------------------------------------------------------------------ loop
+    def _run(self) -> None:
+        period_s = 1.0 / self.telemetry_hz if self.telemetry_hz > 0 else None
+        next_tick = time.monotonic()
+        while not self._stop.is_set():
+            timeout = 0.05 if period_s is None else max(0.0, next_tick - time.monotonic())
+            ready, _, _ = select.select([self._sock], [], [], timeout)
+            if ready:
+                try:
+                    data, addr = self._sock.recvfrom(2048)
+                except OSError:
+                    continue
+                with self.lock:
+                    self._on_datagram(data, addr)
+            if period_s is not None and time.monotonic() >= next_tick:
+                next_tick += period_s
+                with self.lock:
+                    self._tick(period_s)
+
+    def _send(self, msg: gen.Message) -> bytes:
+        frame = gen.encode_frame(msg, self._seq)
+        self._seq = (self._seq + 1) & 0xFFFF
+        return frame
+
+    def _emit(self, frames: list[bytes]) -> None:
+        if self._host is not None:
+            for f in frames:
+                self._sock.sendto(f, self._host)
+
+    def _on_datagram(self, data: bytes, addr) -> None:
+        try:
+            frame, msg = gen.decode_message(data)
+        except gen.FrameError as err:
+            self.bad_frames += 1
+            self._host = addr
+            self.nacks_sent += 1
+            self._emit([self._send(gen.Nack(err.msg_id if err.msg_id is not None else 255, err.seq or 0,
+                                            err.reason, self.state, 0))])
+            return
+        self._host = addr
+        self._last_host_frame_s = time.monotonic()
+        self.received.append((frame, msg))
+        if msg.KIND != gen.MsgKind.COMMAND or self.silent:
+            return
+        for seq, raw, replies in self._cache:
+            if seq == frame.seq and raw == data:
+                self.duplicates += 1
+                self._emit(replies)
+                return
+        replies = self._execute(frame, msg)
+        answers = [r for r in replies if r[3] != MsgId.EVENT]  # a retransmission is answered, events are not repeated
+        self._cache.append((frame.seq, data, answers))
+        sent = []
+        for r in replies:
+            _, decoded = gen.decode_message(r)
+            if frame.msg_id in self.drop_replies and self.drop_replies[frame.msg_id] > 0 and decoded.MSG_ID == MsgId.ACK:
+                self.drop_replies[frame.msg_id] -= 1
+                continue
+            if decoded.MSG_ID == MsgId.PARAM_VALUE and self.drop_param_values > 0:
+                self.drop_param_values -= 1
+                continue
+            sent.append(r)
+        self._emit(sent)
+
+    def _nack(self, frame: gen.Frame, reason: NackReason, detail: int = 0) -> list[bytes]:
+        self.nacks_sent += 1
+        return [self._send(gen.Nack(frame.msg_id, frame.seq, reason, self.state, detail))]
+
+    def _ack(self, frame: gen.Frame) -> bytes:
+        return self._send(gen.Ack(frame.msg_id, frame.seq, self.state))
+
+    def _set_state(self, new: State, cause: int) -> list[bytes]:
+        old, self.state = self.state, new
+        return self._event(EV_STATE_CHANGED, old, new, cause)
+
+    def _event(self, kind: int, old: State, new: State, arg: int) -> list[bytes]:
+        seq = self._event_seq
+        self._event_seq = (seq + 1) & 0xFFFF
+        if seq in self.drop_event_seqs:
+            return []
+        return [self._send(EVENT_MSG(self._time_ms(), seq, kind, old, new, arg))]
+
+    def _time_ms(self) -> int:
+        return int((time.monotonic() - self._start_s) * 1000) & 0xFFFFFFFF
+
+    def _guard_mps(self) -> float:
+        return self.params[0] * self.params[1]
+
+    def _execute(self, frame: gen.Frame, msg: gen.Message) -> list[bytes]:
+        script = self.nack_script.get(frame.msg_id)
+        if script:
+            reason, detail = script.pop(0)
+            return self._nack(frame, reason, detail)
+        mid, s = frame.msg_id, self.state
+        if mid == MsgId.ARM:
+            if time.monotonic() - self._start_s < self.arm_hold_s:
+                return self._nack(frame, NackReason.NOT_READY)
+            if s != State.DISARMED:
+                return self._nack(frame, NackReason.BAD_STATE)
+            events = self._set_state(State.ARMED, CAUSE_COMMAND)
+        elif mid == MsgId.DISARM:
+            if s not in (State.ARMED, State.FAULT, State.ESTOP):
+                return self._nack(frame, NackReason.BAD_STATE)
+            events = self._set_state(State.DISARMED, CAUSE_COMMAND)
+        elif mid == MsgId.SET_ROPE_SPEED:
+            v = msg.rope_speed_mmps / 1000.0
+            max_mps = self.params[10]
+            if s not in (State.ARMED, State.SPINUP, State.AIRBORNE):
+                return self._nack(frame, NackReason.BAD_STATE)
+            if v <= 0:
+                return self._nack(frame, NackReason.OUT_OF_RANGE, 0)
+            if v > max_mps:
+                return self._nack(frame, NackReason.OUT_OF_RANGE, round(max_mps * 1000))
+            if s == State.AIRBORNE and v < self._guard_mps():
+                return self._nack(frame, NackReason.BELOW_TOV_GUARD, round(self._guard_mps() * 1000))
+            self.target_mps = v
+            events = self._set_state(State.SPINUP, CAUSE_COMMAND) if s == State.ARMED else []
+        elif mid == MsgId.SPINDOWN:
+            if s not in (State.SPINUP, State.AIRBORNE, State.SPINDOWN):
+                return self._nack(frame, NackReason.BAD_STATE)
+            self.target_mps = 0.0
+            events = self._set_state(State.SPINDOWN, CAUSE_COMMAND) if s != State.SPINDOWN else []
+        elif mid == MsgId.ESTOP:
+            self.target_mps = self.setpoint_mps = 0.0
+            events = self._set_state(State.ESTOP, CAUSE_COMMAND) if s != State.ESTOP else []
+        elif mid in (MsgId.PARAM_GET, MsgId.PARAM_SET):
+            if msg.param_id not in self.params:
+                return self._nack(frame, NackReason.UNKNOWN_PARAM, msg.param_id)
+            spec = PARAMS[msg.param_id]
+            events = []
+            if mid == MsgId.PARAM_SET:
+                if spec.locked and s != State.DISARMED:
+                    return self._nack(frame, NackReason.PARAM_LOCKED)
+                x = msg.value
+                if math.isnan(x) or not spec.min <= x <= spec.max or (spec.integer and x != int(x)):
+                    return self._nack(frame, NackReason.OUT_OF_RANGE)
+                self.params[spec.id] = _f32(x)
+                events = self._event(EV_PARAM_CHANGED, s, s, spec.id)
+            self.executed.append((msg.NAME, frame.seq))
+            return [self._ack(frame), self._send(gen.ParamValue(spec.id, self.params[spec.id], len(PARAMS)))] + events
+        else:
+            return self._nack(frame, NackReason.NOT_A_COMMAND)
+        self.executed.append((msg.NAME, frame.seq))
+        return [self._ack(frame)] + events
+
+    def _tick(self, dt_s: float) -> None:
+        step = self.ramp_mps2 * dt_s
+        self.setpoint_mps += max(-step, min(step, self.target_mps - self.setpoint_mps))
+        out = []
+        if self.state == State.SPINUP and self.setpoint_mps >= self._guard_mps():
+            out += self._set_state(State.AIRBORNE, CAUSE_SPEED_REACHED)
+        if self.state == State.SPINDOWN and self.setpoint_mps <= 0.0:
+            out += self._set_state(State.ARMED, CAUSE_SPEED_REACHED)
+        age_ms = 65535 if self._last_host_frame_s is None else int((time.monotonic() - self._last_host_frame_s) * 1000)
+        mmps = round(self.setpoint_mps * 1000)
+        out.append(self._send(gen.Telemetry(
+            self._time_ms(), self.state, 0, round(self.target_mps * 1000), mmps, mmps,
+            round(self.setpoint_mps / (2 * math.pi * 0.015) * 60), 1000 + min(1000, mmps // 20), 12600,
+            min(age_ms, 65535), len(self.received) & 0xFFFF, self.bad_frames & 0xFFFF, self.duplicates & 0xFFFF,
+            self.nacks_sent & 0xFFFF, self._event_seq & 0xFFFF, 0)))
+        self._emit(out)
