@@ -86,6 +86,12 @@ class ScriptedDevice:
         self._thread.join(timeout=2.0)
         self._sock.close()
 
+    def send_raw(self, data: bytes) -> None:
+        """Send arbitrary bytes to the host that last sent a frame (bad-data tests)."""
+        with self.lock:
+            if self._host is not None:
+                self._sock.sendto(data, self._host)
+
     def executed_names(self) -> list[str]:
         with self.lock:
             return [name for name, _ in self.executed]
@@ -142,18 +148,21 @@ class ScriptedDevice:
         for seq, raw, replies in self._cache:
             if seq == frame.seq and raw == data:
                 self.duplicates += 1
-                self._emit(replies)
+                self._deliver(frame.msg_id, replies)
                 return
         replies = self._execute(frame, msg)
         answers = [r for r in replies if r[3] != MsgId.EVENT]  # a retransmission is answered, events are not repeated
         self._cache.append((frame.seq, data, answers))
+        self._deliver(frame.msg_id, replies)
+
+    def _deliver(self, cmd_msg_id: int, replies: list[bytes]) -> None:
+        """Send replies except the ones the script says to drop."""
         sent = []
         for r in replies:
-            _, decoded = gen.decode_message(r)
-            if frame.msg_id in self.drop_replies and self.drop_replies[frame.msg_id] > 0 and decoded.MSG_ID == MsgId.ACK:
-                self.drop_replies[frame.msg_id] -= 1
+            if r[3] == MsgId.ACK and self.drop_replies.get(cmd_msg_id, 0) > 0:
+                self.drop_replies[cmd_msg_id] -= 1
                 continue
-            if decoded.MSG_ID == MsgId.PARAM_VALUE and self.drop_param_values > 0:
+            if r[3] == MsgId.PARAM_VALUE and self.drop_param_values > 0:
                 self.drop_param_values -= 1
                 continue
             sent.append(r)
