@@ -76,6 +76,18 @@ def test_wraps_of_count_and_clock_are_harmless(rw_core):
     assert enc.capture(times[-1])[0] < 10_000 and enc.capture(times[-1])[2] < 1_000_000
 
 
+def test_measures_across_the_wrap_between_two_steps(rw_core):
+    est = make(rw_core, filter_tau_s=0.0)
+    est.step(U32 - 8, U32 - 600, U32 - 500, TICK_S)
+    # 16 edges (count wrapped) in 1000 us (clock wrapped): 0.25 rev per ms = 250 rev/s.
+    est.step(8, 400, 450, TICK_S)
+    assert est.raw_rev_per_s == pytest.approx(250.0, rel=1e-6)
+    # Silence across the wrap: bound 1 / (64 * 1000 us) = 15.6 rev/s.
+    est.step(8, 400, 1400, TICK_S)
+    assert est.raw_rev_per_s == pytest.approx(1e6 / (64 * 1000), rel=1e-6)
+    assert not est.stale
+
+
 def test_tracks_an_acceleration_without_lag_beyond_the_filter(rw_core):
     """1650 -> 15000 rpm in 0.5 s (26,700 rpm/s). The raw estimate is the mean speed over the last
     ~1 ms of edges (lag ~0.5 ms); the low-pass adds a lag of about tau."""

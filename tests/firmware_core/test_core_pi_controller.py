@@ -92,6 +92,31 @@ def test_integral_frozen_while_clamped_and_output_leaves_saturation_at_once(rw_c
     assert t_settle["after_saturation"] <= t_settle["fresh"] + 0.02
 
 
+def test_integral_stops_when_a_load_saturates_the_output(rw_core):
+    """Half the expected plant gain (load, sag): 20 m/s needs 1.25 x full throttle. The feed-forward
+    (0.625) is within limits, so only conditional integration keeps the integral from winding."""
+    pi = make_speed_pi(rw_core)
+    v = 0.0
+    ff = 20.0 / FULL_MPS
+    saturated_integrals = []
+    for _ in range(3000):
+        p = f32(0.03) * f32(20.0 - v)
+        integral_before = pi.integral
+        u = pi.step(20.0, v, ff, DT_S)
+        v = plant_step(v, u, gain=0.5)
+        if pi.saturation == 1:
+            saturated_integrals.append(pi.integral)
+            # Grows at most to what holds the output exactly at the limit.
+            assert pi.integral <= max(integral_before, 1.0 - ff - p) + 1e-6
+    assert v == pytest.approx(16.0, rel=1e-3)
+    assert len(saturated_integrals) > 2900
+    # Clamped at steady state: the integral no longer moves, and it is far from the 0.375 the clamp allows.
+    assert max(saturated_integrals[-1000:]) - min(saturated_integrals[-1000:]) < 1e-5
+    assert pi.integral == pytest.approx(1.0 - ff - 0.03 * (20.0 - v), abs=1e-4)
+    # Error reverses: out of saturation on the first step.
+    assert pi.step(5.0, v, 5.0 / FULL_MPS, DT_S) < 1.0
+
+
 def test_lower_limit_is_symmetric(rw_core):
     pi = PiController(rw_core, kp=0.01, ki_per_s=1.0, out_min=-1.0, out_max=1.0)
     integrals = []
