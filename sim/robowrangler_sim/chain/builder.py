@@ -117,6 +117,9 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
              euler=(0, math.pi / 2, 0), mass=params.link_mass_kg,
              rgba=(0.95, 0.45, 0.1, 1) if upper else (0.95, 0.75, 0.2, 1),
              friction=(params.rope_friction, 0.005, 0.0001), **_bits(CHAIN_BITS))
+        _sub(body, "geom", name=f"link_{i}_visual", type="capsule", size=(params.visual_rope_radius_m, link_len / 2),
+             pos=(link_len / 2, 0, 0), euler=(0, math.pi / 2, 0), mass="0", contype="0", conaffinity="0",
+             group="1", rgba=(0.95, 0.45, 0.1, 1) if upper else (0.95, 0.75, 0.2, 1))
         _sub(body, "site", name=f"link_{i}_end", pos=(link_len, 0, 0), size=(r,))
         parent = body
 

@@ -33,6 +33,7 @@ class ChainParams:
         guide_stroke_mm: guide travel of the lead screw (hardware: 180 mm).
         rope_linear_density_kg_per_m: 0.221 g/m wool rope; a 2 m / 20-link chain has 2.2e-5 kg links.
         rope_radius_m: collision radius of the chain links (2 mm rope).
+        visual_rope_radius_m: radius of the drawn rope (visual only, no contact, no mass).
     Drives (IsaacGym drive gains, see module doc):
         kp_upper_nm_per_rad, kd_upper_nms_per_rad: in-plane drives of the upper branch (1e4, 5e3).
         kp_lower_nm_per_rad, kd_lower_nms_per_rad: in-plane drives of the lower branch (0, 0).
@@ -63,6 +64,7 @@ class ChainParams:
     guide_stroke_mm: float = 180.0
     rope_linear_density_kg_per_m: float = 2.21e-4
     rope_radius_m: float = 1.0e-3
+    visual_rope_radius_m: float = 5.0e-3
     kp_upper_nm_per_rad: float = 1.0e4
     kd_upper_nms_per_rad: float = 5.0e3
     kp_lower_nm_per_rad: float = 0.0

@@ -122,7 +122,7 @@ class ChainPlant:
         floor_height_m: z of a floor plane, or None.
         initial: PlantInputs the plant starts from (base pose, speed, guide).
         airborne: True: start airborne in the target shape (lift 1); False: start at rest, lift 0,
-            chain straight along the launch axis.
+            the loop collapsed into a doubled line along the launch axis (see _rest_angles).
         seed: seeds the optional initial joint noise (same seed -> same trajectory).
         initial_noise_rad: standard deviation of noise added to the initial joint angles.
     """
@@ -155,6 +155,7 @@ class ChainPlant:
                                            m.jnt_dofadr[name(J, f"outplane_{i}")]] for i in range(n)])
         self._link_body = np.array([name(B, f"link_{i}") for i in range(n)])
         self._link_geom = np.array([name(G, f"link_{i}") for i in range(n)])
+        self._visual_geom = np.array([name(G, f"link_{i}_visual") for i in range(n)])
         self._end_site = np.array([name(S, f"link_{i}_end") for i in range(n)])
         self._exit_site = name(S, "exit")
         self._return_site = name(S, "return")
@@ -188,9 +189,11 @@ class ChainPlant:
 
         self._apply_inputs(initial)
         if airborne:
+            # the whole chain (both branches) starts on the target contour
             q = self.targets.joint_targets(self._phi_rad, speed_index=self._speed_index(initial.rope_speed_mps))
             self.data.qpos[self._inplane_qpos] = q
-            self._place_lower_branch_on_contour(q)
+        else:
+            self.data.qpos[self._inplane_qpos] = self._rest_angles()
         rng = np.random.default_rng(seed)
         if initial_noise_rad > 0:
             self.data.qpos[self._inplane_qpos] += rng.normal(0.0, initial_noise_rad, n)
@@ -226,6 +229,11 @@ class ChainPlant:
         m.geom_rbound[self._link_geom] = r + link_len_m / 2
         m.geom_aabb[self._link_geom, 5] = r + link_len_m / 2
         m.site_pos[self._end_site, 0] = link_len_m
+        rv = self.params.visual_rope_radius_m
+        m.geom_pos[self._visual_geom, 0] = link_len_m / 2
+        m.geom_size[self._visual_geom, 1] = link_len_m / 2
+        m.geom_rbound[self._visual_geom] = rv + link_len_m / 2
+        m.geom_aabb[self._visual_geom, 5] = rv + link_len_m / 2
         self._link_len_m = link_len_m
 
     def _apply_drives(self) -> None:
@@ -245,9 +253,16 @@ class ChainPlant:
         if self._drive_act.size:
             self.data.ctrl[self._drive_act] = self._ctrl_targets[self._drive_joint]
 
-    def _place_lower_branch_on_contour(self, q: np.ndarray) -> None:
-        """Initial lower-branch angles: the target contour too (the drives only hold the upper branch)."""
-        self.data.qpos[self._inplane_qpos] = q
+    def _rest_angles(self) -> np.ndarray:
+        """The loop at rest: collapsed into a doubled line along the launch axis, the upper branch out,
+        the lower branch folded back under it to end at the return point."""
+        n, n_up = self.params.n_links, self.params.n_upper
+        q = np.zeros(n)
+        ret = self.model.site_pos[self._return_site]
+        half = self._link_len_m * max(n_up, n - n_up)
+        delta = 2.0 * math.asin(min(1.0, abs(ret[2]) / (2.0 * half)))
+        q[n_up] = -(math.pi - delta)
+        return q
 
     # --- stepping --------------------------------------------------------------------------
     @property
