@@ -8,28 +8,9 @@ from typing import Any
 
 from robowrangler import units
 from robowrangler.protocol import generated as gen
-from robowrangler.protocol.generated import Cause, Fault, State
+from robowrangler.protocol.generated import Cause, EventKind, Fault, State
 
 
-def _event_kind_enum() -> type[enum.IntEnum]:
-    """The protocol's `event` enum.
-
-    The generator names both the `event` enum and the EVENT message class `Event`, so the message
-    class shadows the enum in generated.py (reported; the spec/generator needs a rename). Until then
-    this mirror of protocol/spec/robowrangler.toml [[enum]] event is used; tests/host checks it
-    against the spec so it cannot drift.
-    """
-    for name in ("EventKind", "Event"):
-        candidate = getattr(gen, name, None)
-        if isinstance(candidate, type) and issubclass(candidate, enum.IntEnum):
-            return candidate
-    return enum.IntEnum("EventKind", [
-        ("BOOT", 0), ("STATE_CHANGED", 1), ("LOOP_COLLAPSED", 2), ("HEARTBEAT_LOST", 3),
-        ("FAULT_RAISED", 4), ("PARAM_CHANGED", 5), ("ARMING_HOLD_DONE", 6),
-    ])
-
-
-EventKind = _event_kind_enum()
 
 
 def _enum_or_int(enum_cls, value: int):
@@ -103,14 +84,14 @@ class DeviceEvent:
 
     time_s: float
     event_seq: int
-    kind: Any  # EventKind, or int for a kind this host does not know
+    kind: EventKind | int  # int for a kind this host does not know
     state_from: State
     state_to: State
     arg: int
     received_s: float
 
     @classmethod
-    def from_wire(cls, msg: Any, *, received_s: float) -> DeviceEvent:
+    def from_wire(cls, msg: gen.Event, *, received_s: float) -> DeviceEvent:
         return cls(
             time_s=units.ms_to_s(msg.time_ms),
             event_seq=msg.event_seq,

@@ -19,7 +19,7 @@ from collections import defaultdict, deque
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import MsgId, NackReason, PARAMS, State
 
-EVENT_MSG = gen.MESSAGES[MsgId.EVENT]
+EVENT_MSG = gen.Event
 EV_STATE_CHANGED, EV_PARAM_CHANGED, EV_ARMING_HOLD_DONE = 1, 5, 6
 CAUSE_COMMAND, CAUSE_SPEED_REACHED = 0, 1
 
@@ -85,6 +85,11 @@ class ScriptedDevice:
         self._stop.set()
         self._thread.join(timeout=2.0)
         self._sock.close()
+
+    def halt(self) -> None:
+        """Stop the device loop: no telemetry, no answers (a board that lost power)."""
+        self._stop.set()
+        self._thread.join(timeout=2.0)
 
     def send_raw(self, data: bytes) -> None:
         """Send arbitrary bytes to the host that last sent a frame (bad-data tests)."""

@@ -1,0 +1,101 @@
+"""Telemetry, events, heartbeats and bad data as the client sees them."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from conftest import FAST
+from robowrangler.client import Client
+from robowrangler.errors import LinkTimeout, StateTimeout
+from robowrangler.protocol import generated as gen
+from robowrangler.protocol.generated import EventKind, Fault, MsgId, State
+from scripted_device import ScriptedDevice
+
+
+def test_telemetry_samples_are_si_and_in_order(device: ScriptedDevice) -> None:
+    with Client(device.url, **FAST) as rw:
+        rw.arm()
+        rw.spin(4.0)
+        samples = []
+        for s in rw.telemetry():
+            samples.append(s)
+            if len(samples) == 10:
+                break
+    times = [s.time_s for s in samples]
+    assert times == sorted(times) and 0.15 < times[-1] - times[0] < 0.3  # 50 Hz
+    last = samples[-1]
+    assert last.rope_speed_target_mps == 4.0 and 0 < last.rope_speed_mps <= 4.0
+    assert last.battery_v == 12.6 and last.fault_bits == Fault(0) and isinstance(last.state, State)
+    d = last.to_dict()
+    assert d["state"] in ("SPINUP", "AIRBORNE") and d["fault_bits"] == []
+
+
+def test_wait_for_state_returns_the_sample_and_times_out_typed(device: ScriptedDevice) -> None:
+    with Client(device.url, **FAST) as rw:
+        rw.arm()
+        rw.spin(5.0)
+        reached = rw.wait_for_state(State.AIRBORNE, timeout_s=1.0)
+        assert reached.state == State.AIRBORNE and reached.rope_speed_mps >= 2.99
+        with pytest.raises(StateTimeout) as info:
+            rw.wait_for_state([State.DISARMED, State.ESTOP], timeout_s=0.2)
+    assert info.value.actual == State.AIRBORNE
+    assert str(info.value) == "state: expected DISARMED or ESTOP within 0.2 s, still AIRBORNE"
+
+
+def test_telemetry_that_stops_is_a_link_timeout(device: ScriptedDevice) -> None:
+    with Client(device.url, **FAST) as rw:
+        device.halt()
+        start = time.monotonic()
+        with pytest.raises(LinkTimeout, match="telemetry from .* stopped: no sample for 0.2 s"):
+            for _ in rw.telemetry(timeout_s=0.2):
+                pass
+        assert time.monotonic() - start < 0.5
+
+
+def test_closing_the_client_ends_open_telemetry_iterators_at_once(device: ScriptedDevice) -> None:
+    rw = Client(device.url, **FAST).connect()
+    stream = rw.telemetry()
+    next(stream)
+    rw.close()
+    start = time.monotonic()
+    list(stream)  # ends instead of waiting connect_timeout_s for a sample and raising LinkTimeout
+    assert time.monotonic() - start < 0.1
+
+
+def test_heartbeats_keep_the_link_alive_while_idle(device: ScriptedDevice) -> None:
+    with Client(device.url, **{**FAST, "heartbeat_hz": 10.0}) as rw:
+        time.sleep(0.6)
+        sample = next(rw.telemetry())
+    assert sample.heartbeat_age_s < 0.15  # device heartbeat_timeout_s is 0.5 s by default
+    beats = device.received_commands(MsgId.HEARTBEAT)
+    assert 6 <= len(beats) <= 9
+
+
+def test_events_arrive_in_si_and_lost_ones_are_counted(device: ScriptedDevice) -> None:
+    device.drop_event_seqs = {1}
+    with Client(device.url, **FAST) as rw:
+        rw.arm()                            # event 0: DISARMED -> ARMED
+        rw.spin(5.0)                        # event 1 (dropped): ARMED -> SPINUP
+        rw.wait_for_state(State.AIRBORNE, timeout_s=1.0)
+        time.sleep(0.05)                    # event 2: SPINUP -> AIRBORNE
+        events, stats = rw.events, rw.stats
+    assert [e.event_seq for e in events] == [0, 2]
+    assert stats.events_lost == 1
+    assert events[0].kind == EventKind.STATE_CHANGED and events[0].state_to == State.ARMED
+    assert events[1].describe() == "STATE_CHANGED SPINUP -> AIRBORNE (SPEED_REACHED)"
+    assert events[1].to_dict()["cause"] == "SPEED_REACHED"
+
+
+def test_bad_datagrams_are_counted_never_raised(device: ScriptedDevice) -> None:
+    with Client(device.url, **FAST) as rw:
+        good = gen.encode_frame(gen.Telemetry(*([0] * 16)), 7)
+        corrupted = good[:-1] + bytes([good[-1] ^ 0xFF])
+        for junk in (b"", b"\x00" * 3, b"hello world", corrupted, good + b"\x00"):
+            device.send_raw(junk)
+        time.sleep(0.1)
+        assert rw.arm() == State.ARMED  # the receiver thread survived
+        stats = rw.stats
+    assert stats.decode_errors == 5
+    assert stats.decode_errors_by_reason == {"TRUNCATED": 2, "BAD_MAGIC": 1, "BAD_CHECKSUM": 1, "BAD_LENGTH": 1}
