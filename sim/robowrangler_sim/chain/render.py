@@ -29,7 +29,7 @@ class ChainRenderer:
         plant: the ChainPlant to draw.
         width_px, height_px: image size (at most 1280 x 720, the model's offscreen buffer).
         azimuth_deg, elevation_deg: camera direction (azimuth 90: looking along +y, x to the right).
-        distance_m: camera distance; None frames the loop (about 1.4 loop lengths).
+        distance_m: camera distance; None frames the loop (0.9 loop lengths).
     Use as a context manager, or call close(): the GL context is released explicitly.
     """
 
@@ -43,7 +43,7 @@ class ChainRenderer:
         self.camera.type = mujoco.mjtCamera.mjCAMERA_FREE
         self.camera.azimuth = azimuth_deg
         self.camera.elevation = elevation_deg
-        self.camera.distance = distance_m if distance_m is not None else 1.4 * plant.loop_length_m()
+        self.camera.distance = distance_m if distance_m is not None else 0.9 * plant.loop_length_m()
         self._fixed_distance = distance_m is not None
 
     def frame(self) -> np.ndarray:
@@ -52,7 +52,7 @@ class ChainRenderer:
         centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
         self.camera.lookat[:] = centre
         if not self._fixed_distance:
-            self.camera.distance = max(0.6, 1.4 * self.plant.loop_length_m())
+            self.camera.distance = max(0.6, 0.9 * self.plant.loop_length_m())
         self._renderer.update_scene(self.plant.data, camera=self.camera)
         return self._renderer.render().copy()
 
