@@ -1,0 +1,188 @@
+"""`wrangler` in-process via main(argv, env): exit statuses, stdout/stderr discipline, --json output,
+against the scripted UDP device."""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+
+import pytest
+
+from robowrangler.cli.environment import Environment
+from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.cli.main import main
+from robowrangler.client import Client
+from robowrangler.protocol.generated import MsgId, State
+from scripted_device import ScriptedDevice
+
+
+class Run:
+    def __init__(self, status: ExitStatus, stdout: str, stderr: str) -> None:
+        self.status, self.stdout, self.stderr = status, stdout, stderr
+
+    @property
+    def json(self) -> dict:
+        """The single JSON object on stdout (fails if there is anything else)."""
+        lines = self.stdout.splitlines()
+        assert len(lines) == 1, self.stdout
+        return json.loads(lines[0])
+
+    @property
+    def json_lines(self) -> list[dict]:
+        return [json.loads(line) for line in self.stdout.splitlines()]
+
+
+def wrangler(*argv: str, environ: dict[str, str] | None = None) -> Run:
+    env = Environment(stdout=io.StringIO(), stderr=io.StringIO(), environ=environ or {})
+    status = main(list(argv), env)
+    assert isinstance(status, ExitStatus)
+    return Run(status, env.stdout.getvalue(), env.stderr.getvalue())
+
+
+def test_exit_statuses_are_the_documented_numbers() -> None:
+    assert {s.name: int(s) for s in ExitStatus} == {"OK": 0, "ERROR": 1, "USAGE": 2, "NACK": 3, "LINK_TIMEOUT": 4,
+                                                    "CTRL_C": 130}
+
+
+def test_arm_ok_human_and_json(device: ScriptedDevice) -> None:
+    human = wrangler("--url", device.url, "arm")
+    assert human.status == ExitStatus.OK and human.stdout == "armed (state ARMED)\n" and human.stderr == ""
+    machine = wrangler("--url", device.url, "--json", "disarm")
+    assert machine.status == ExitStatus.OK and machine.stderr == ""
+    assert machine.json == {"type": "result", "ok": True, "command": "disarm", "state": "DISARMED"}
+    assert device.executed_names() == ["ARM", "DISARM"]
+
+
+def test_url_comes_from_the_environment_and_the_option_wins(device: ScriptedDevice) -> None:
+    assert wrangler("arm", environ={"ROBOWRANGLER_URL": device.url}).status == ExitStatus.OK
+    overridden = wrangler("--url", device.url, "--json", "estop", environ={"ROBOWRANGLER_URL": "udp://127.0.0.1:9"})
+    assert overridden.status == ExitStatus.OK and overridden.json["state"] == "ESTOP"
+
+
+def test_nack_exits_3_with_one_line_on_stderr_and_the_reason_in_json(device: ScriptedDevice) -> None:
+    human = wrangler("--url", device.url, "spin", "5")
+    assert human.status == ExitStatus.NACK and human.stdout == ""
+    assert human.stderr == ("wrangler: SET_ROPE_SPEED refused: BAD_STATE: not accepted in state DISARMED; "
+                            "arm first\n")
+    machine = wrangler("--url", device.url, "--json", "spin", "5")
+    assert machine.status == ExitStatus.NACK
+    obj = machine.json
+    assert obj["ok"] is False and obj["exit_status"] == "NACK" and obj["exit_code"] == 3
+    assert (obj["command"], obj["reason"], obj["state"]) == ("SET_ROPE_SPEED", "BAD_STATE", "DISARMED")
+    assert machine.stderr.count("\n") == 1
+
+
+def test_negative_speed_is_sent_and_refused_by_the_device(device: ScriptedDevice) -> None:
+    wrangler("--url", device.url, "arm")
+    run = wrangler("--url", device.url, "--json", "spin", "--", "-1")
+    assert run.status == ExitStatus.NACK and run.json["reason"] == "OUT_OF_RANGE"
+
+
+def test_no_device_exits_4_naming_the_url() -> None:
+    with ScriptedDevice(telemetry_hz=0) as quiet:
+        run = wrangler("--url", quiet.url, "--timeout", "0.2", "--json", "status")
+    assert run.status == ExitStatus.LINK_TIMEOUT
+    assert run.json["exit_status"] == "LINK_TIMEOUT" and run.json["url"] == quiet.url
+    assert quiet.url in run.stderr and run.stderr.count("\n") == 1
+
+
+def test_silent_device_after_connect_exits_4(device: ScriptedDevice) -> None:
+    device.silent = True  # telemetry flows, commands get no answer: 6 sends x 0.2 s
+    run = wrangler("--url", device.url, "--json", "arm")
+    assert run.status == ExitStatus.LINK_TIMEOUT and "no ACK/NACK" in run.json["message"]
+    assert len(device.received_commands(MsgId.ARM)) == 6
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["spin", "fast"], "Invalid value for 'MPS'"),
+    (["spin", "nan"], "MPS: expected a real number, not NaN"),
+    (["spin"], "Missing argument 'MPS'"),
+    (["param", "get", "tov"], "unknown parameter 'tov'; did you mean tov_mps?"),
+    (["param", "set", "tov_mps", "nan"], "tov_mps: expected a real number, not NaN"),
+    (["fly"], "No such command 'fly'"),
+    (["--timeout", "0", "status"], "Invalid value for '--timeout'"),
+    (["--url", "tcp://x:1", "status"], "url: expected a scheme udp:// or serial://"),
+])
+def test_usage_errors_exit_2_before_touching_the_link(argv: list[str], expected: str) -> None:
+    with ScriptedDevice() as dev:
+        run = wrangler("--url", dev.url, *argv) if "--url" not in argv else wrangler(*argv)
+        machine = wrangler("--json", "--url", dev.url, *argv) if "--url" not in argv else wrangler("--json", *argv)
+        assert dev.received == []
+    assert run.status == ExitStatus.USAGE and expected in run.stderr and run.stdout == ""
+    assert run.stderr.count("\n") == 1
+    assert machine.status == ExitStatus.USAGE and machine.json["exit_status"] == "USAGE"
+
+
+def test_help_goes_to_stdout_and_exits_0() -> None:
+    run = wrangler("--help")
+    assert run.status == ExitStatus.OK and "Exit status: 0 OK" in run.stdout and "param" in run.stdout
+
+
+def test_status_prints_one_sample(device: ScriptedDevice) -> None:
+    table = wrangler("--url", device.url, "status")
+    assert table.status == ExitStatus.OK and "state" in table.stdout and "DISARMED" in table.stdout
+    obj = wrangler("--url", device.url, "--json", "status").json
+    assert obj["telemetry"]["state"] == "DISARMED" and obj["telemetry"]["battery_v"] == 12.6
+
+
+def test_watch_streams_json_lines_for_the_duration(device: ScriptedDevice) -> None:
+    run = wrangler("--url", device.url, "--json", "watch", "--duration", "0.3")
+    lines = run.json_lines
+    assert run.status == ExitStatus.OK and run.stderr == ""
+    assert 10 <= len(lines) <= 20 and all(line["type"] == "telemetry" for line in lines)
+    times = [line["time_s"] for line in lines]
+    assert times == sorted(times)
+
+
+def test_spin_hold_streams_then_spins_down_and_lands(device: ScriptedDevice) -> None:
+    assert wrangler("--url", device.url, "arm").status == ExitStatus.OK
+    run = wrangler("--url", device.url, "--json", "spin", "5", "--hold", "0.3")
+    lines = run.json_lines
+    assert run.status == ExitStatus.OK, run.stderr
+    kinds = [line["type"] for line in lines]
+    assert kinds[-1] == "result" and kinds.count("telemetry") >= 10 and "event" in kinds
+    assert lines[-1]["state"] == "ARMED" and lines[-1]["ok"] is True
+    assert any(line.get("state") == "AIRBORNE" for line in lines if line["type"] == "telemetry")
+    assert device.executed_names() == ["ARM", "SET_ROPE_SPEED", "SPINDOWN"]
+
+
+def test_ctrl_c_during_hold_spins_down_and_exits_130(device: ScriptedDevice, monkeypatch) -> None:
+    original = Client.telemetry
+
+    def interrupted(self, **kwargs):
+        for i, sample in enumerate(original(self, **kwargs)):
+            if i == 3:
+                raise KeyboardInterrupt
+            yield sample
+
+    monkeypatch.setattr(Client, "telemetry", interrupted)
+    wrangler("--url", device.url, "arm")
+    run = wrangler("--url", device.url, "--json", "spin", "5", "--hold", "10")
+    assert run.status == ExitStatus.CTRL_C
+    assert run.json_lines[-1]["exit_status"] == "CTRL_C" and "interrupted" in run.stderr
+    assert device.executed_names() == ["ARM", "SET_ROPE_SPEED", "SPINDOWN"]
+
+
+def test_unexpected_exceptions_become_one_line_and_exit_1(device: ScriptedDevice, monkeypatch) -> None:
+    def broken(self, **kwargs):
+        raise RuntimeError("boom\nsecond line")
+
+    monkeypatch.setattr(Client, "arm", broken)
+    run = wrangler("--url", device.url, "--json", "arm")
+    assert run.status == ExitStatus.ERROR
+    assert run.stderr == "wrangler: internal error: RuntimeError: boom second line\n"
+    assert run.json["error"] == "RuntimeError"
+
+
+def test_param_list_get_set(device: ScriptedDevice) -> None:
+    listing = wrangler("--url", device.url, "--json", "param", "list").json
+    assert [p["name"] for p in listing["params"]][:2] == ["tov_mps", "tov_margin"] and len(listing["params"]) == 17
+    assert wrangler("--url", device.url, "param", "get", "tov_mps").stdout == "tov_mps = 2.6 m/s\n"
+    held = wrangler("--url", device.url, "--json", "param", "set", "tov_margin", "1.3").json
+    assert held["value"] == 1.3 and held["units"] == "1"
+    refused = wrangler("--url", device.url, "--json", "param", "set", "tov_mps", "50")
+    assert refused.status == ExitStatus.NACK and refused.json["reason"] == "OUT_OF_RANGE"
+    human = wrangler("--url", device.url, "param", "list")
+    assert "wheel_radius_m" in human.stdout and "locked" in human.stdout
+    assert not math.isnan(held["value"])
