@@ -16,7 +16,7 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param
+from robowrangler.cli import monitor, motion, param, sil
 from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
@@ -28,6 +28,7 @@ COMMANDS: list[click.Command] = [
     motion.arm, motion.disarm, motion.spin, motion.spindown, motion.estop,
     monitor.status, monitor.watch,
     param.param,
+    sil.sil_command, sil.demo_command,
 ]
 
 _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStatus) + "."

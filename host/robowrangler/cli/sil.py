@@ -1,0 +1,96 @@
+"""Simulation commands: `wrangler sil` (a SIL device on UDP) and `wrangler demo` (the end-to-end demo).
+
+They need the simulator package (robowrangler_sim) and the native SIL build; both are imported only when
+these commands run, so the rest of the CLI works on a host without them.
+"""
+
+from __future__ import annotations
+
+import time
+
+import click
+
+from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.errors import RoboWranglerError
+
+
+class SimulatorUnavailable(RoboWranglerError):
+    """The SIL firmware or the simulator cannot run here; the message says what to build or install."""
+
+
+def _sil_modules():
+    try:
+        from robowrangler_sim import demo, sil
+    except ImportError as exc:  # pragma: no cover - only without the sim package
+        raise SimulatorUnavailable(f"the simulator package is not installed ({exc}); run ./run.sh demo") from exc
+    return sil, demo
+
+
+@click.command("sil")
+@click.option("--port", "cmd_port", type=click.IntRange(0, 65535), default=14550, show_default=True,
+              help="UDP port on 127.0.0.1 the SIL device listens on (0 = any free port).")
+@click.option("--speedup", type=click.FloatRange(min=0.0, min_open=True), default=1.0, show_default=True,
+              help="Simulated seconds per wall second (1 = real time; hosts' heartbeats run on the wall clock).")
+@click.option("--unpaced", is_flag=True, help="Run as fast as the machine goes (scripted hosts only).")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Plant noise seed.")
+@click.option("--duration", "duration_s", type=click.FloatRange(min=0.0, min_open=True), default=None,
+              metavar="SECONDS", help="Stop after this much simulated time (default: until Ctrl-C).")
+@pass_context
+def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
+                duration_s: float | None) -> None:
+    """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
+
+    Point any wrangler command or the Python client at it: it speaks the board's protocol.
+    """
+    sil_pkg, _ = _sil_modules()
+    try:
+        session = sil_pkg.SilSession(speedup=None if unpaced else speedup, seed=seed, cmd_port=cmd_port,
+                                     trace_every=0)
+        session.start()
+    except sil_pkg.SilError as exc:
+        raise SimulatorUnavailable(str(exc)) from exc
+    try:
+        session.run_in_background()
+        if ctx.json_mode:
+            ctx.json_line({"type": "ready", "url": session.cmd_url, "speedup": None if unpaced else speedup})
+        else:
+            ctx.note(f"SIL device on {session.cmd_url} (speed-up {'max' if unpaced else speedup:g}x); Ctrl-C to stop"
+                     if not unpaced else f"SIL device on {session.cmd_url} (unpaced); Ctrl-C to stop")
+        while duration_s is None or session.time_s < duration_s:
+            session.check()
+            time.sleep(0.05)
+        session.check()
+    except sil_pkg.SilError as exc:
+        raise SimulatorUnavailable(f"the SIL stopped: {exc}") from exc
+    finally:
+        session.stop()
+    ctx.result({"command": "sil", "simulated_s": round(session.time_s, 3)},
+               f"SIL stopped after {session.time_s:.3f} simulated seconds")
+
+
+@click.command("demo")
+@click.option("--out", "out_png", type=click.Path(dir_okay=False, writable=True), default="out/demo.png",
+              show_default=True, help="Where to write the plot (PNG).")
+@click.option("--speedup", type=click.FloatRange(0.1, 3.0), default=1.0, show_default=True,
+              help="Simulated seconds per wall second.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Plant noise seed.")
+@pass_context
+def demo_command(ctx: CliContext, out_png: str, speedup: float, seed: int) -> None:
+    """The end-to-end demo on the simulated rope: arm, 4 m/s, 6 m/s, spin down, disarm, plot."""
+    sil_pkg, demo = _sil_modules()
+    try:
+        result = demo.run_demo(out_png, speedup=speedup, seed=seed, progress=ctx.note)
+    except sil_pkg.SilError as exc:
+        raise SimulatorUnavailable(str(exc)) from exc
+
+    def fmt(x: float | None) -> str:
+        return "did not settle" if x is None else f"{x:.2f} s"
+
+    ctx.result(
+        {"command": "demo", "plot": str(result.plot_path), "settle_4_mps_s": result.settle_4_mps_s,
+         "settle_6_mps_s": result.settle_6_mps_s, "min_airborne_speed_mps": result.min_airborne_speed_mps,
+         "telemetry_samples": result.samples, "wall_s": round(result.wall_s, 2)},
+        f"plot written to {result.plot_path}\n"
+        f"0 -> 4 m/s settled within 2 % in {fmt(result.settle_4_mps_s)}; 4 -> 6 m/s in {fmt(result.settle_6_mps_s)}; "
+        f"slowest airborne sample {result.min_airborne_speed_mps:.2f} m/s (guard 2.99 m/s)",
+    )
