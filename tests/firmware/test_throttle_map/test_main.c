@@ -1,0 +1,97 @@
+/*
+ * Unity tests of rw_throttle_map (feed-forward throttle, throttle <-> ESC pulse).
+ * Run with `pio test -e native`.
+ */
+#include <math.h>
+#include <unity.h>
+
+#include "rw_throttle_map.h"
+
+/* 1400 rpm/V x 14.8 V = 20,720 rpm; at a 15 mm wheel that is 32.55 m/s of rope. */
+#define FULL_MPS 32.5501f
+
+static rw_throttle_map map;
+
+void setUp(void)
+{
+    const rw_throttle_map_config cfg = {
+        .kv_rpm_per_v = 1400.0f, .wheel_radius_m = 0.015f, .pulse_min_us = 1050u, .pulse_max_us = 2000u};
+    rw_throttle_map_init(&map, &cfg);
+}
+
+void tearDown(void) {}
+
+static void test_feed_forward_from_kv_battery_radius(void)
+{
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 2.6f / FULL_MPS, rw_throttle_map_feed_forward(&map, 2.6f, 14.8f));
+    /* 15,000 rpm = 23.56 m/s */
+    TEST_ASSERT_FLOAT_WITHIN(1e-3f, 15000.0f / 20720.0f, rw_throttle_map_feed_forward(&map, 23.56f, 14.8f));
+    TEST_ASSERT_EQUAL_FLOAT(1.0f, rw_throttle_map_feed_forward(&map, 50.0f, 14.8f));
+}
+
+static void test_feed_forward_zero_for_bad_input(void)
+{
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_throttle_map_feed_forward(&map, -1.0f, 14.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_throttle_map_feed_forward(&map, NAN, 14.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_throttle_map_feed_forward(&map, 5.0f, 0.0f));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_throttle_map_feed_forward(&map, 5.0f, NAN));
+}
+
+static void test_pulse_end_points_and_midpoint(void)
+{
+    TEST_ASSERT_EQUAL_UINT16(1050u, rw_throttle_map_pulse_us(&map, 0.0f));
+    TEST_ASSERT_EQUAL_UINT16(1525u, rw_throttle_map_pulse_us(&map, 0.5f));
+    TEST_ASSERT_EQUAL_UINT16(2000u, rw_throttle_map_pulse_us(&map, 1.0f));
+    TEST_ASSERT_EQUAL_UINT16(2000u, rw_throttle_map_pulse_us(&map, 7.0f));
+}
+
+static void test_pulse_never_below_esc_minimum(void)
+{
+    TEST_ASSERT_EQUAL_UINT16(1050u, rw_throttle_map_pulse_us(&map, -0.5f));
+    TEST_ASSERT_EQUAL_UINT16(1050u, rw_throttle_map_pulse_us(&map, -INFINITY));
+    TEST_ASSERT_EQUAL_UINT16(1050u, rw_throttle_map_pulse_us(&map, NAN));
+    TEST_ASSERT_EQUAL_UINT16(1050u, rw_throttle_map_pulse_us(&map, INFINITY));
+    for (int i = -100; i <= 200; ++i) {
+        const uint16_t pulse = rw_throttle_map_pulse_us(&map, (float)i * 0.01f);
+        TEST_ASSERT_TRUE(pulse >= 1050u && pulse <= 2000u);
+    }
+}
+
+static void test_out_of_range_config_narrowed(void)
+{
+    map.cfg.pulse_min_us = 900u;
+    map.cfg.pulse_max_us = 2500u;
+    TEST_ASSERT_FALSE(rw_throttle_map_config_is_valid(&map.cfg));
+    TEST_ASSERT_EQUAL_UINT16(1000u, rw_throttle_map_pulse_us(&map, 0.0f));
+    TEST_ASSERT_EQUAL_UINT16(2000u, rw_throttle_map_pulse_us(&map, 1.0f));
+}
+
+static void test_pulse_round_trip(void)
+{
+    for (uint16_t pulse = 1050u; pulse <= 2000u; pulse = (uint16_t)(pulse + 5u)) {
+        TEST_ASSERT_EQUAL_UINT16(pulse,
+                                 rw_throttle_map_pulse_us(&map, rw_throttle_map_throttle_from_pulse(&map, pulse)));
+    }
+}
+
+static void test_defaults_valid(void)
+{
+    rw_throttle_map_config cfg;
+    rw_throttle_map_config_defaults(&cfg);
+    TEST_ASSERT_TRUE(rw_throttle_map_config_is_valid(&cfg));
+    TEST_ASSERT_EQUAL_UINT16(1000u, cfg.pulse_min_us);
+    TEST_ASSERT_EQUAL_UINT16(2000u, cfg.pulse_max_us);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_feed_forward_from_kv_battery_radius);
+    RUN_TEST(test_feed_forward_zero_for_bad_input);
+    RUN_TEST(test_pulse_end_points_and_midpoint);
+    RUN_TEST(test_pulse_never_below_esc_minimum);
+    RUN_TEST(test_out_of_range_config_narrowed);
+    RUN_TEST(test_pulse_round_trip);
+    RUN_TEST(test_defaults_valid);
+    return UNITY_END();
+}
