@@ -144,6 +144,8 @@ def test_spin_hold_streams_then_spins_down_and_lands(device: ScriptedDevice) -> 
     assert kinds[-1] == "result" and kinds.count("telemetry") >= 10 and "event" in kinds
     assert lines[-1]["state"] == "ARMED" and lines[-1]["ok"] is True
     assert any(line.get("state") == "AIRBORNE" for line in lines if line["type"] == "telemetry")
+    events = [(line["state_from"], line["state_to"]) for line in lines if line["type"] == "event"]
+    assert events[:2] == [("ARMED", "SPINUP"), ("SPINUP", "AIRBORNE")]  # the spin's own event is not missed
     assert device.executed_names() == ["ARM", "SET_ROPE_SPEED", "SPINDOWN"]
 
 

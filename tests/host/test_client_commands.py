@@ -179,3 +179,12 @@ def test_local_argument_errors_send_nothing(device: ScriptedDevice) -> None:
         with pytest.raises(InvalidArgument, match="rope_speed_mps"):
             rw.spin("5")
     assert all(m.KIND.name == "HEARTBEAT" for _, m in device.received)
+
+
+def test_an_injected_transport_is_used_and_closed(device: ScriptedDevice) -> None:
+    from robowrangler.transport_udp import UdpTransport
+
+    transport = UdpTransport("127.0.0.1", device.port)
+    with Client(transport=transport, **FAST) as rw:
+        assert rw.url == device.url and rw.arm() == State.ARMED
+    assert transport.recv(0.01) is None and transport._closed

@@ -45,6 +45,7 @@ def spin(ctx: CliContext, mps: float, hold_s: float | None) -> None:
     """
     units.mps_to_mmps(mps, argument="MPS")  # NaN/inf fail before connecting
     with ctx.client() as rw:
+        first_event = len(rw.events)
         state = rw.spin(mps)
         if hold_s is None:
             ctx.note("no --hold: the device spins down heartbeat_timeout_s after this command exits")
@@ -53,7 +54,7 @@ def spin(ctx: CliContext, mps: float, hold_s: float | None) -> None:
             return
         landed = False
         try:
-            samples = stream_telemetry(ctx, rw, duration_s=hold_s)
+            samples = stream_telemetry(ctx, rw, duration_s=hold_s, events_from=first_event)
             rw.spindown()
             final = rw.wait_for_state(State.ARMED, timeout_s=ctx.timeout_s + abs(mps) / SLOWEST_RAMP_MPS2)
             landed = True

@@ -32,14 +32,17 @@ def event_line(e: DeviceEvent) -> str:
     return f"{e.time_s:9.3f} s  event #{e.event_seq}: {e.describe()}"
 
 
-def stream_telemetry(ctx: CliContext, client: Client, *, duration_s: float | None) -> int:
+def stream_telemetry(ctx: CliContext, client: Client, *, duration_s: float | None,
+                     events_from: int | None = None) -> int:
     """Print telemetry (and new events) until duration_s has passed (None: until Ctrl-C).
 
     --json: every sample as a JSON line {"type": "telemetry", ...}, events as {"type": "event", ...}.
-    Human: at most 10 telemetry lines per second, events as they come. Returns the sample count.
+    Human: at most 10 telemetry lines per second, events as they come. events_from: index in
+    client.events of the first event to print (default: events arriving from now on). Returns the
+    sample count.
     """
     start_s = time.monotonic()
-    seen_events = len(client.events)
+    seen_events = len(client.events) if events_from is None else events_from
     count = 0
     last_human_s = -1.0
     for sample in client.telemetry(timeout_s=ctx.timeout_s):
