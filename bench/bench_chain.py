@@ -29,8 +29,8 @@ from robowrangler_sim.chain.synthetic_table import synthetic_ellipse_table
 
 def _plant(n_links: int, *, contact: bool) -> tuple[ChainPlant, PlantInputs]:
     table = synthetic_ellipse_table()
-    pos = (0.0, 0.0, 0.6)
-    quat = pitch_quat_wxyz(math.radians(-10))
+    pos = (0.0, 0.0, 0.25) if contact else (0.0, 0.0, 0.6)
+    quat = pitch_quat_wxyz(math.radians(30 if contact else -10))
     up = PlantInputs(rope_speed_mps=5.0, base_pos_m=pos, base_quat_wxyz=quat)
     plant = ChainPlant(table=table, params=ChainParams(n_links=n_links), initial=up,
                        floor_height_m=0.0 if contact else None)

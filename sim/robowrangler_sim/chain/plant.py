@@ -185,7 +185,9 @@ class ChainPlant:
         self._steps = 0
         self._warn_badqacc = 0
         self._inputs = initial
+        self._inputs_applied = None
         self._force6 = np.zeros(6)
+        self._warning_badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
 
         self._apply_inputs(initial)
         if airborne:
@@ -206,8 +208,11 @@ class ChainPlant:
         return self.targets.speed_index(abs(rope_speed_mps))
 
     def _apply_inputs(self, inputs: PlantInputs) -> None:
+        if inputs is self._inputs_applied or inputs == self._inputs_applied:
+            return
         p = self.params
         self._inputs = inputs
+        self._inputs_applied = inputs
         self.data.mocap_pos[0] = inputs.base_pos_m
         self.data.mocap_quat[0] = inputs.base_quat_wxyz
         self._phi_rad = base_inclination_rad(np.asarray(inputs.base_quat_wxyz))
@@ -297,17 +302,17 @@ class ChainPlant:
 
     def _check_divergence(self) -> None:
         d = self.data
-        bad = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+        bad = self._warning_badqacc.number
         if bad != self._warn_badqacc:
-            self._warn_badqacc = bad
+            self._warn_badqacc = int(bad)
             raise ChainDivergenceError(time_s=self.time_s, reason="badqacc",
                                        detail="MuJoCo reset the state after a non-finite acceleration")
-        if not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel)):
-            raise ChainDivergenceError(time_s=self.time_s, reason="nonfinite", detail="qpos/qvel not finite")
-        vmax = float(np.max(np.abs(d.qvel[self._chain_dof])))
-        if vmax > MAX_JOINT_SPEED_RAD_S:
+        vmax = float(np.abs(d.qvel).max())
+        if not vmax < MAX_JOINT_SPEED_RAD_S:  # also catches NaN
+            if not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel)):
+                raise ChainDivergenceError(time_s=self.time_s, reason="nonfinite", detail="qpos/qvel not finite")
             raise ChainDivergenceError(time_s=self.time_s, reason="velocity",
-                                       detail=f"chain joint speed {vmax:.3g} rad/s > {MAX_JOINT_SPEED_RAD_S:g}")
+                                       detail=f"joint speed {vmax:.3g} (rad|m)/s > {MAX_JOINT_SPEED_RAD_S:g}")
 
     # --- named outputs ---------------------------------------------------------------------
     @property

@@ -18,6 +18,8 @@ from +x towards +z (up), matching atan2 in the (x, z) plane.
 
 from __future__ import annotations
 
+import bisect
+
 import numpy as np
 
 from robowrangler_sim.chain.errors import ChainModelError
@@ -76,6 +78,10 @@ class ShapeTargets:
         lo, hi = float(table.phi_deg[0]), float(table.phi_deg[-1])
         n_grid = int(np.ceil((hi - lo) / phi_step_deg)) + 1
         self.phi_grid_rad = np.deg2rad(np.linspace(lo, hi, n_grid))
+        self._grid_lo, self._grid_hi = float(self.phi_grid_rad[0]), float(self.phi_grid_rad[-1])
+        self._grid_step = float(self.phi_grid_rad[1] - self.phi_grid_rad[0])
+        self._grid_n = n_grid
+        self._speeds = [float(v) for v in table.rope_speed_mps]
         n_speeds = table.rope_speed_mps.size
         self._q = np.empty((n_speeds, n_grid, self.n_links))
         self._ret = np.empty((n_speeds, n_grid, 2))
@@ -93,14 +99,13 @@ class ShapeTargets:
 
     def speed_index(self, rope_speed_mps: float) -> int:
         """Nearest tabulated speed at or below ``rope_speed_mps`` (the lowest when below all)."""
-        speeds = self.table.rope_speed_mps
-        return int(np.clip(np.searchsorted(speeds, rope_speed_mps, side="right") - 1, 0, speeds.size - 1))
+        speeds = self._speeds
+        return min(max(bisect.bisect_right(speeds, rope_speed_mps) - 1, 0), len(speeds) - 1)
 
     def _interp(self, arr: np.ndarray, phi_rad: float, speed_index: int) -> np.ndarray:
-        grid = self.phi_grid_rad
-        x = float(np.clip(phi_rad, grid[0], grid[-1]))
-        f = (x - grid[0]) / (grid[1] - grid[0])
-        i = min(int(f), grid.size - 2)
+        x = min(max(float(phi_rad), self._grid_lo), self._grid_hi)
+        f = (x - self._grid_lo) / self._grid_step
+        i = min(int(f), self._grid_n - 2)
         w = f - i
         return (1.0 - w) * arr[speed_index, i] + w * arr[speed_index, i + 1]
 
