@@ -85,3 +85,27 @@ def test_python_decoder_never_fails_other_than_frame_error(data: bytes) -> None:
         gen.decode_message(data)
     except gen.FrameError as exc:
         assert isinstance(exc.reason, gen.NackReason)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda s: s.replace('id = 12\nname = "SET_ROPE_SPEED"', 'id = 11\nname = "SET_ROPE_SPEED"'), "reused"),
+        (lambda s: s.replace('type = "int32", units = "mm/s", description = "Target',
+                             'type = "int24", units = "mm/s", description = "Target'), "type must be one of"),
+        (lambda s: s.replace("default = 2.6\n", "default = 20.0\n"), "default must lie in"),
+        (lambda s: s.replace('name = "event_kind"', 'name = "event"').replace('enum = "event_kind"', 'enum = "event"'),
+         "class names clash"),
+    ],
+    ids=["reused_id", "unknown_type", "default_out_of_range", "class_name_clash"],
+)
+def test_generator_rejects_a_bad_spec_with_a_precise_message(tmp_path: Path, edit, message: str) -> None:
+    sys.path.insert(0, str(ROOT / "protocol"))
+    import generate
+
+    spec_text = (ROOT / "protocol" / "spec" / "robowrangler.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(edit(spec_text))
+    assert bad.read_text() != spec_text, "the edit must apply"
+    with pytest.raises(generate.SpecError, match=message):
+        generate.load_spec(bad)
