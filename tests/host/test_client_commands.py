@@ -98,7 +98,7 @@ def test_silent_device_gives_link_timeout_after_retries_plus_one_ack_timeouts(de
             rw.arm()
         elapsed = time.monotonic() - start
     budget = (FAST["retries"] + 1) * FAST["ack_timeout_s"]
-    assert budget <= elapsed < budget + 0.15
+    assert budget <= elapsed < budget + 0.3  # slack for a loaded 2-core machine
     assert info.value.url == device.url and device.url in str(info.value) and "4 attempts" in str(info.value)
     frames = device.received_commands(MsgId.ARM)
     assert len(frames) == FAST["retries"] + 1 and len({seq for seq, _ in frames}) == 1
@@ -120,7 +120,7 @@ def test_arm_gives_up_on_not_ready_at_its_timeout() -> None:
         start = time.monotonic()
         with pytest.raises(CommandRefused) as info:
             rw.arm(timeout_s=0.3)
-        assert time.monotonic() - start < 0.6
+        assert time.monotonic() - start < 0.8
     assert info.value.reason == NackReason.NOT_READY and "retry in a moment" in str(info.value)
 
 
@@ -137,7 +137,7 @@ def test_connect_to_nobody_is_a_link_timeout_naming_the_url() -> None:
         start = time.monotonic()
         with pytest.raises(LinkTimeout) as info:
             rw.connect()
-        assert 0.3 <= time.monotonic() - start < 0.6
+        assert 0.3 <= time.monotonic() - start < 0.9
         assert quiet.url in str(info.value) and not rw.connected
         assert len(quiet.received_commands(MsgId.HEARTBEAT)) >= 2  # connecting = heartbeats, then telemetry
 

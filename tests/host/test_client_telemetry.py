@@ -24,7 +24,7 @@ def test_telemetry_samples_are_si_and_in_order(device: ScriptedDevice) -> None:
             if len(samples) == 10:
                 break
     times = [s.time_s for s in samples]
-    assert times == sorted(times) and 0.15 < times[-1] - times[0] < 0.3  # 50 Hz
+    assert times == sorted(times) and 0.15 < times[-1] - times[0] < 0.5  # 50 Hz: 9 periods of 20 ms
     last = samples[-1]
     assert last.rope_speed_target_mps == 4.0 and 0 < last.rope_speed_mps <= 4.0
     assert last.battery_v == 12.6 and last.fault_bits == Fault(0) and isinstance(last.state, State)
@@ -70,7 +70,7 @@ def test_heartbeats_keep_the_link_alive_while_idle(device: ScriptedDevice) -> No
         sample = next(rw.telemetry())
     assert sample.heartbeat_age_s < 0.15  # device heartbeat_timeout_s is 0.5 s by default
     beats = device.received_commands(MsgId.HEARTBEAT)
-    assert 6 <= len(beats) <= 9
+    assert 5 <= len(beats) <= 10  # 10 Hz for ~0.6 s
 
 
 def test_events_arrive_in_si_and_lost_ones_are_counted(device: ScriptedDevice) -> None:

@@ -16,6 +16,12 @@ URL_ENV_VAR = "ROBOWRANGLER_URL"
 DEFAULT_TIMEOUT_S = 3.0
 
 
+class OutputClosed(Exception):
+    """stdout was closed by its reader (`wrangler watch --json | head`): stop quietly, exit OK.
+
+    Deliberately not an OSError, so that click does not turn it into its own exit."""
+
+
 @dataclass
 class CliContext:
     """Global options of one `wrangler` run plus its Environment.
@@ -40,18 +46,22 @@ class CliContext:
         if self.json_mode:
             self.json_line({"type": "result", "ok": True, **data})
         else:
-            self.env.stdout.write(human.rstrip("\n") + "\n")
-            self.env.stdout.flush()
+            self._write(human.rstrip("\n") + "\n")
 
     def json_line(self, data: dict[str, Any]) -> None:
         """One JSON object on one line of stdout (JSON lines for streams)."""
-        self.env.stdout.write(json.dumps(_jsonable(data), allow_nan=False) + "\n")
-        self.env.stdout.flush()
+        self._write(json.dumps(_jsonable(data), allow_nan=False) + "\n")
 
     def human_line(self, text: str) -> None:
         """A line of human stream output on stdout (not used with --json)."""
-        self.env.stdout.write(text + "\n")
-        self.env.stdout.flush()
+        self._write(text + "\n")
+
+    def _write(self, text: str) -> None:
+        try:
+            self.env.stdout.write(text)
+            self.env.stdout.flush()
+        except BrokenPipeError:
+            raise OutputClosed from None
 
     def note(self, text: str) -> None:
         """Prose for the user on stderr (both modes)."""

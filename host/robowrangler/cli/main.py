@@ -10,6 +10,7 @@ COMMANDS below.
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -17,7 +18,7 @@ from typing import Any
 import click
 
 from robowrangler.cli import monitor, motion, param, sil
-from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext
+from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext, OutputClosed
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
@@ -73,6 +74,10 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
     except click.UsageError as err:
         hint = f" (see `{err.ctx.command_path} --help`)" if err.ctx is not None else ""
         return _fail(env, json_mode, ExitStatus.USAGE, err, err.format_message() + hint)
+    except OutputClosed:  # `wrangler watch --json | head`: the reader has all it wanted
+        return ExitStatus.OK
+    except SystemExit as exit_:  # click exits by itself on some I/O errors even in non-standalone mode
+        return _status_from_code(exit_.code if isinstance(exit_.code, int) else 1)
     except (click.Abort, KeyboardInterrupt) as err:
         return _fail(env, json_mode, ExitStatus.CTRL_C, err, "interrupted")
     except (InvalidArgument, UnknownParameter) as err:
@@ -119,4 +124,9 @@ def _name(value: Any) -> Any:
 
 def entry_point() -> None:
     """Console script `wrangler` (pyproject [project.scripts])."""
-    sys.exit(int(main(sys.argv[1:], Environment.from_process())))
+    status = main(sys.argv[1:], Environment.from_process())
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:  # keep the interpreter from complaining about the closed pipe at exit
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    sys.exit(int(status))
