@@ -1,0 +1,395 @@
+"""A fake HAL in Python and a harness that drives the whole firmware core (rw_core) tick by tick.
+
+The core comes from build/native/librw_core.so (loaded by rw_core_ctypes.load, the suite's `rw_core`
+fixture). Every input is set exactly by the test: the tick clock (now_us, wraps at 2^32), the encoder
+(cumulative counts and the capture time of the latest edge), the battery voltage and the datagrams
+the link delivers. Every output is recorded: the ESC pulse of each tick, the replies (ACK/NACK, to the
+sender of the received datagram), the frames sent to the peer (PARAM_VALUE, EVENT, TELEMETRY),
+accept_peer calls. Frames are built and decoded with the Python generated codec.
+
+Units: times in microseconds (_us) on the tick clock, milliseconds (_ms) for device uptime, rope
+speed in m/s (_mps) and mm/s on the wire (_mmps).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import platform
+import sys
+from collections import deque
+from ctypes import POINTER, c_size_t, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
+from dataclasses import dataclass, field
+
+from robowrangler.protocol import generated as proto
+
+U32 = 1 << 32
+TICK_US = 1000
+_CANARY = b"\xa5" * 64
+
+
+# ---- HAL structs (firmware/hal/rw_hal*.h) --------------------------------------------------------
+
+# rw_encoder_sample {uint32 counts; uint32 last_edge_us} is returned by value. ctypes callbacks
+# cannot return structures, so the callback returns a uint64: on x86-64 (SysV) and AArch64 an
+# 8-byte struct of two uint32 comes back in one integer register, first member in the low half.
+if platform.machine().lower() not in ("x86_64", "amd64", "aarch64", "arm64") or sys.byteorder != "little":
+    raise RuntimeError(f"core_harness: encoder callback ABI: expected a little-endian x86_64/aarch64 host, "
+                       f"got {platform.machine()} ({sys.byteorder})")
+
+_EncoderRead = ctypes.CFUNCTYPE(c_uint64, c_void_p)
+_BatteryRead = ctypes.CFUNCTYPE(c_uint16, c_void_p)
+_EscWrite = ctypes.CFUNCTYPE(None, c_void_p, c_uint16)
+_LinkRecv = ctypes.CFUNCTYPE(c_size_t, c_void_p, POINTER(c_uint8), c_size_t)
+_LinkOut = ctypes.CFUNCTYPE(None, c_void_p, POINTER(c_uint8), c_size_t)
+_LinkAccept = ctypes.CFUNCTYPE(None, c_void_p)
+_Overruns = ctypes.CFUNCTYPE(c_uint32, c_void_p)
+
+
+class _HalEsc(ctypes.Structure):
+    _fields_ = [("ctx", c_void_p), ("write_pulse_us", _EscWrite)]
+
+
+class _HalEncoder(ctypes.Structure):
+    _fields_ = [("ctx", c_void_p), ("read", _EncoderRead)]
+
+
+class _HalBattery(ctypes.Structure):
+    _fields_ = [("ctx", c_void_p), ("read_mv", _BatteryRead)]
+
+
+class _HalLink(ctypes.Structure):
+    _fields_ = [("ctx", c_void_p), ("recv", _LinkRecv), ("reply", _LinkOut), ("accept_peer", _LinkAccept),
+                ("send", _LinkOut)]
+
+
+class _HalScheduler(ctypes.Structure):
+    _fields_ = [("ctx", c_void_p), ("tick_overruns", _Overruns)]
+
+
+class _Hal(ctypes.Structure):
+    _fields_ = [("esc", POINTER(_HalEsc)), ("encoder", POINTER(_HalEncoder)), ("battery", POINTER(_HalBattery)),
+                ("link", POINTER(_HalLink)), ("scheduler", POINTER(_HalScheduler))]
+
+
+def declare_core(lib: ctypes.CDLL) -> ctypes.CDLL:
+    """Declares the top-level core API (rw_core.h) on the loaded library; returns lib."""
+    lib.rw_core_sizeof.restype = c_size_t
+    lib.rw_core_sizeof.argtypes = []
+    lib.rw_core_init.restype = None
+    lib.rw_core_init.argtypes = [c_void_p]
+    lib.rw_core_tick.restype = None
+    lib.rw_core_tick.argtypes = [c_void_p, POINTER(_Hal), c_uint32]
+    lib.rw_core_set_param.restype = ctypes.c_int
+    lib.rw_core_set_param.argtypes = [c_void_p, c_uint8, ctypes.c_float]
+    return lib
+
+
+# ---- Records -------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Out:
+    """One datagram the core emitted: channel 'reply' (to the sender) or 'send' (to the peer)."""
+
+    tick_ms: int          # harness time of the tick that emitted it, ms since the first tick
+    channel: str
+    raw: bytes
+    frame: proto.Frame
+    msg: proto.Message
+
+
+@dataclass
+class FakeHal:
+    """The HAL's state: inputs the test sets, outputs the core produced."""
+
+    encoder_counts: int = 0
+    encoder_last_edge_us: int = 0
+    battery_mv: int = 14800
+    tick_overruns: int = 0
+    inbox: deque = field(default_factory=deque)   # datagrams (bytes) waiting for recv
+    pulses_us: list = field(default_factory=list)  # one per tick
+    out: list = field(default_factory=list)        # list[Out]
+    accept_peer_calls: int = 0
+    recv_calls: int = 0
+
+
+# ---- Encoder model ---------------------------------------------------------------------------------
+
+class RopeEncoder:
+    """Edges of a wheel turning at a set rope speed: cumulative counts and the time of the latest edge.
+
+    phase_counts integrates rate = v / (2 pi r) * counts_per_rev; an edge happens at every whole count,
+    its time (rounded to the microsecond) is interpolated inside the tick.
+    """
+
+    def __init__(self, *, wheel_radius_m: float = 0.015, counts_per_rev: int = 64) -> None:
+        self.wheel_radius_m = wheel_radius_m
+        self.counts_per_rev = counts_per_rev
+        self.speed_mps = 0.0
+        self.phase_counts = 0.0
+        self.last_edge_t_us = 0.0
+
+    def counts_per_s(self) -> float:
+        return self.speed_mps / (2.0 * math.pi * self.wheel_radius_m) * self.counts_per_rev
+
+    def advance(self, t_us: int, dt_us: int) -> None:
+        """Move from t_us - dt_us to t_us at the current speed."""
+        rate_per_us = self.counts_per_s() * 1e-6
+        if rate_per_us <= 0.0:
+            return
+        before = math.floor(self.phase_counts)
+        self.phase_counts += rate_per_us * dt_us
+        after = math.floor(self.phase_counts)
+        if after > before:
+            self.last_edge_t_us = t_us - (self.phase_counts - after) / rate_per_us
+
+    @property
+    def counts(self) -> int:
+        return math.floor(self.phase_counts)
+
+
+# ---- The harness -----------------------------------------------------------------------------------
+
+class CoreHarness:
+    """One rw_core instance with a fake HAL. tick() advances the harness time t_us by dt_us and calls
+    rw_core_tick(core, hal, (clock_offset_us + t_us) mod 2^32); the first tick is at t_us = 0.
+
+    Keyword options: clock_offset_us puts the tick clock anywhere (to cross the 2^32 wrap);
+    battery_mv the battery reading; params {name: value} set through rw_core_set_param before the first
+    tick (the checks are those of PARAM_SET, a refusal raises ValueError).
+    """
+
+    def __init__(self, lib: ctypes.CDLL, *, clock_offset_us: int = 0, battery_mv: int = 14800,
+                 params: dict[str, float] | None = None) -> None:
+        self.lib = declare_core(lib)
+        self.clock_offset_us = int(clock_offset_us)
+        self.size = int(lib.rw_core_sizeof())
+        self._mem = ctypes.create_string_buffer(self.size + len(_CANARY))
+        ctypes.memmove(ctypes.addressof(self._mem) + self.size, _CANARY, len(_CANARY))
+        self.core = ctypes.addressof(self._mem)
+        lib.rw_core_init(self.core)
+        self.hal = FakeHal(battery_mv=battery_mv, encoder_last_edge_us=self.clock_offset_us % U32)
+        self.encoder = RopeEncoder()
+        self.t_us = 0
+        self.started = False
+        self.seq = 0
+        self._build_hal()
+        for name, value in (params or {}).items():
+            self.set_param(name, value)
+
+    # -- HAL callbacks --
+    def _build_hal(self) -> None:
+        hal = self.hal
+
+        def encoder_read(_ctx):
+            return (hal.encoder_counts & 0xFFFFFFFF) | ((hal.encoder_last_edge_us & 0xFFFFFFFF) << 32)
+
+        def battery_read(_ctx):
+            return hal.battery_mv
+
+        def esc_write(_ctx, pulse_us):
+            hal.pulses_us.append(int(pulse_us))
+
+        def link_recv(_ctx, buf, cap):
+            hal.recv_calls += 1
+            if not hal.inbox:
+                return 0
+            data = hal.inbox.popleft()
+            n = min(len(data), cap)
+            ctypes.memmove(buf, data, n)
+            return len(data) if len(data) <= cap else cap + 1
+
+        def record(channel):
+            def out(_ctx, frame, length):
+                raw = ctypes.string_at(frame, length)
+                fr, msg = proto.decode_message(raw)  # the core must only emit well-formed frames
+                hal.out.append(Out(self.t_us // 1000, channel, raw, fr, msg))
+            return out
+
+        def accept_peer(_ctx):
+            hal.accept_peer_calls += 1
+
+        def overruns(_ctx):
+            return hal.tick_overruns
+
+        # Keep every CFUNCTYPE object alive as long as the harness.
+        self._callbacks = [_EncoderRead(encoder_read), _BatteryRead(battery_read), _EscWrite(esc_write),
+                           _LinkRecv(link_recv), _LinkOut(record("reply")), _LinkAccept(accept_peer),
+                           _LinkOut(record("send")), _Overruns(overruns)]
+        enc_r, bat_r, esc_w, recv, reply, accept, send, ovr = self._callbacks
+        self._esc = _HalEsc(None, esc_w)
+        self._enc = _HalEncoder(None, enc_r)
+        self._bat = _HalBattery(None, bat_r)
+        self._link = _HalLink(None, recv, reply, accept, send)
+        self._sched = _HalScheduler(None, ovr)
+        self._hal = _Hal(ctypes.pointer(self._esc), ctypes.pointer(self._enc), ctypes.pointer(self._bat),
+                         ctypes.pointer(self._link), ctypes.pointer(self._sched))
+
+    def _check_canary(self) -> None:
+        if ctypes.string_at(self.core + self.size, len(_CANARY)) != _CANARY:
+            raise AssertionError("rw_core wrote past rw_core_sizeof() bytes")
+
+    # -- time --
+    @property
+    def now_us(self) -> int:
+        """The tick clock value of the latest tick (wraps at 2^32)."""
+        return (self.clock_offset_us + self.t_us) % U32
+
+    @property
+    def t_ms(self) -> int:
+        return self.t_us // 1000
+
+    def tick(self, dt_us: int = TICK_US) -> None:
+        """One control tick dt_us after the previous one (the first tick is at t_us = 0)."""
+        if self.started:
+            self.t_us += int(dt_us)
+            self.encoder.advance(self.t_us, int(dt_us))
+        self.started = True
+        if self.encoder.speed_mps > 0.0 or self.encoder.counts > 0:
+            self.hal.encoder_counts = self.encoder.counts
+            self.hal.encoder_last_edge_us = (self.clock_offset_us + round(self.encoder.last_edge_t_us)) % U32
+        self.lib.rw_core_tick(self.core, ctypes.byref(self._hal), self.now_us)
+        self._check_canary()
+
+    def run_ms(self, ms: int) -> None:
+        for _ in range(int(ms)):
+            self.tick()
+
+    def run_until(self, predicate, *, max_ms: int, what: str) -> None:
+        """Ticks until predicate() is true; AssertionError naming `what` after max_ms."""
+        for _ in range(int(max_ms)):
+            if predicate():
+                return
+            self.tick()
+        if not predicate():
+            raise AssertionError(f"{what}: not reached within {max_ms} ms (t = {self.t_ms} ms)")
+
+    # -- link input --
+    def next_seq(self) -> int:
+        self.seq = (self.seq + 1) & 0xFFFF
+        return self.seq
+
+    def frame(self, msg: proto.Message, *, seq: int | None = None) -> bytes:
+        return proto.encode_frame(msg, self.next_seq() if seq is None else seq)
+
+    def queue(self, data: bytes) -> bytes:
+        """Queues one datagram for the link (received on a coming tick); returns it."""
+        self.hal.inbox.append(bytes(data))
+        return bytes(data)
+
+    def command(self, msg: proto.Message | bytes, *, seq: int | None = None) -> proto.Message:
+        """Queues msg (a Message, or raw bytes), runs one tick and returns the reply of that tick."""
+        data = msg if isinstance(msg, (bytes, bytearray)) else self.frame(msg, seq=seq)
+        before = len(self.hal.out)
+        self.queue(data)
+        self.tick()
+        replies = [o for o in self.hal.out[before:] if o.channel == "reply"]
+        if len(replies) != 1:
+            raise AssertionError(f"expected exactly one reply in the tick, got {len(replies)}")
+        return replies[0].msg
+
+    def heartbeat(self) -> None:
+        self.queue(self.frame(proto.Heartbeat(self.t_ms)))
+
+    def set_param(self, name: str, value: float) -> None:
+        """rw_core_set_param by parameter name (same checks as PARAM_SET)."""
+        spec = proto.PARAMS_BY_NAME[name]
+        result = self.lib.rw_core_set_param(self.core, spec.id, value)
+        if result != 0:
+            raise ValueError(f"set_param({name}={value}): refused with {proto.NackReason(result).name}")
+        if name == "wheel_radius_m":
+            self.encoder.wheel_radius_m = value
+        if name == "encoder_counts_per_rev":
+            self.encoder.counts_per_rev = int(value)
+
+    # -- outputs --
+    def sent(self, cls: type | None = None, *, since: int = 0) -> list[Out]:
+        """Frames sent to the peer (not replies), optionally of one message class, from index since."""
+        return [o for o in self.hal.out[since:] if o.channel == "send" and (cls is None or isinstance(o.msg, cls))]
+
+    def replies(self, *, since: int = 0) -> list[Out]:
+        return [o for o in self.hal.out[since:] if o.channel == "reply"]
+
+    def events(self, kind: proto.EventKind | None = None) -> list[proto.Event]:
+        return [o.msg for o in self.sent(proto.Event) if kind is None or o.msg.event == kind]
+
+    def transitions(self) -> list[tuple[int, int, int, int]]:
+        """(time_ms, from, to, cause) of every STATE_CHANGED event sent so far."""
+        return [(e.time_ms, e.state_from, e.state_to, e.arg) for e in self.events(proto.EventKind.STATE_CHANGED)]
+
+    def telemetry(self) -> list[proto.Telemetry]:
+        return [o.msg for o in self.sent(proto.Telemetry)]
+
+    def drain(self, ticks: int = 12) -> None:
+        """Runs ticks with heartbeats withheld so queued frames go out (outbox: 8 slots)."""
+        for _ in range(ticks):
+            self.tick()
+
+    @property
+    def state(self) -> proto.State:
+        """The state the peer has been told last (latest STATE_CHANGED event sent; DISARMED before any)."""
+        tr = self.transitions()
+        return proto.State(tr[-1][2]) if tr else proto.State.DISARMED
+
+    @property
+    def pulse_us(self) -> int:
+        return self.hal.pulses_us[-1]
+
+    # -- scenario steps --
+    def boot_and_arm(self) -> None:
+        """Ticks through the arming hold, then ARM; the ARM must be ACKed."""
+        self.tick()
+        hold_ms = round(self.get_param_value("arm_hold_s") * 1000)
+        while self.t_ms <= hold_ms:
+            self.tick()
+        reply = self.command(proto.Arm())
+        if not isinstance(reply, proto.Ack):
+            raise AssertionError(f"ARM after the hold: expected ACK, got {reply}")
+
+    def get_param_value(self, name: str) -> float:
+        """Reads a parameter straight from rw_core.params (the first member: float value[RW_PARAM_COUNT])."""
+        spec = proto.PARAMS_BY_NAME[name]
+        return ctypes.c_float.from_address(self.core + 4 * spec.id).value
+
+    def spin_to_airborne(self, *, target_mmps: int = 4000, max_ms: int = 2000) -> None:
+        """From ARMED: SET_ROPE_SPEED, then the rope follows the setpoint (encoder at the telemetry
+        setpoint, a perfect plant) until the core reports AIRBORNE; heartbeats every 100 ms."""
+        reply = self.command(proto.SetRopeSpeed(target_mmps))
+        if not isinstance(reply, proto.Ack):
+            raise AssertionError(f"SET_ROPE_SPEED {target_mmps}: expected ACK, got {reply}")
+        self.follow_setpoint(until=lambda: self.state == proto.State.AIRBORNE, max_ms=max_ms, what="AIRBORNE")
+
+    def follow_setpoint(self, *, until, max_ms: int, what: str, heartbeat_ms: int | None = 100) -> None:
+        """Ticks with the rope speed tracking the last telemetry setpoint (a perfect plant) until
+        until() is true; a heartbeat every heartbeat_ms (None: the host stays silent)."""
+        for _ in range(int(max_ms)):
+            if until():
+                return
+            tel = self.telemetry()
+            if tel:
+                self.encoder.speed_mps = tel[-1].rope_speed_setpoint_mmps / 1000.0
+            if heartbeat_ms is not None and self.t_ms % heartbeat_ms == 0:
+                self.heartbeat()
+            self.tick()
+        if not until():
+            raise AssertionError(f"{what}: not reached within {max_ms} ms (t = {self.t_ms} ms)")
+
+
+# ---- Helpers for raw (possibly malformed) frames -------------------------------------------------------
+
+def raw_frame(msg_id: int, seq: int, payload: bytes, *, crc_extra: int | None = None, version: int = 1,
+              flags: int = 0, magic: int = proto.MAGIC) -> bytes:
+    """A frame built byte by byte; the checksum uses crc_extra (default: the message's own, 0 if unknown)."""
+    if crc_extra is None:
+        cls = proto.MESSAGES.get(msg_id)
+        crc_extra = cls.CRC_EXTRA if cls is not None else 0
+    body = bytes([magic, version, flags, msg_id]) + seq.to_bytes(2, "little") + bytes([len(payload) & 0xFF]) + payload
+    return body + proto.checksum(body[1:], crc_extra).to_bytes(2, "little")
+
+
+_COUNTERS = ("rx_ok", "rx_bad", "rx_duplicates", "nacks", "events")
+
+
+def telemetry_without(tel: proto.Telemetry, *names: str) -> dict:
+    """The telemetry fields as a dict, without the named ones."""
+    return {f.name: getattr(tel, f.name) for f in tel.FIELDS if f.name not in names}
