@@ -95,16 +95,16 @@ class CommandRefused(RoboWranglerError):
         r, st, cmd = self.reason, _state_name(self.state), self.command_msg_id
         if r == NackReason.BELOW_TOV_GUARD:
             guard = units.mmps_to_mps(self.detail)
-            return (f"{self.value:g} m/s is under the ToV guard {guard:.2f} m/s while airborne; "
+            return (f"{_fmt(self.value)} m/s is under the ToV guard {guard:.2f} m/s while airborne; "
                     "command spindown to land")
         if r == NackReason.OUT_OF_RANGE:
             if cmd == MsgId.SET_ROPE_SPEED:
                 limit = units.mmps_to_mps(self.detail)
-                return (f"rope speed {self.value:g} m/s is out of range (limit crossed: {limit:g} m/s; "
+                return (f"rope speed {_fmt(self.value)} m/s is out of range (limit crossed: {limit:g} m/s; "
                         "valid: 0 < v <= max_rope_speed_mps)")
             spec = PARAMS_BY_NAME.get(self.param or "")
             if spec is not None:
-                return (f"{spec.name} = {self.value:g} is outside [{spec.min:g}, {spec.max:g}] {spec.units}"
+                return (f"{spec.name} = {_fmt(self.value)} is outside [{spec.min:g}, {spec.max:g}] {spec.units}"
                         + ("; it must be an integer" if spec.integer else ""))
             return f"a field is out of range (limit crossed: {self.detail}, wire units)"
         if r == NackReason.BAD_STATE:
@@ -134,6 +134,10 @@ def _bad_state_advice(cmd: int, state: State | int) -> str:
     if cmd == MsgId.SPINDOWN:
         return "nothing to spin down"
     return "check the state with `wrangler status`"
+
+
+def _fmt(value: float | None) -> str:
+    return "?" if value is None else f"{value:g}"
 
 
 def _as_enum(enum_cls, value: int):
