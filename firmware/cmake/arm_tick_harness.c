@@ -4,11 +4,11 @@
  * arm-none-eabi-size reports what the core really costs in flash and RAM, and an emulator
  * (bench/bench_tick_instructions.py, unicorn) can run rw_core_tick on the Cortex-M0+ instruction set.
  *
- * The fake HAL is driven through harness_io, a plain global the emulator reads and writes:
- *   - encoder: a wheel turning at wheel_rpm, 64 edges per revolution, edges timed exactly;
- *   - battery: battery_mv;
- *   - link: one datagram in rx[0..rx_len) is delivered by the next recv(); reply() and send() copy the
- *     frame into tx[] and count it (tx_kind tells which of the two).
+ * The fake HAL is driven through plain globals (harness_*) the emulator finds by name and reads/writes:
+ *   - encoder: a wheel turning at harness_wheel_rpm, 64 edges per revolution, edges timed exactly;
+ *   - battery: harness_battery_mv;
+ *   - link: one datagram in harness_rx[0..harness_rx_len) is delivered by the next recv(); reply() and
+ *     send() copy the frame into harness_tx[] and count it (harness_tx_kind tells which of the two).
  * On reset: copy .data, zero .bss, then main() ticks the core every simulated millisecond forever. */
 #include <stddef.h>
 #include <stdint.h>
@@ -20,77 +20,83 @@
 #define HARNESS_TX_REPLY 1u
 #define HARNESS_TX_SEND 2u
 
-typedef struct harness_io {
-    uint32_t wheel_rpm;        /* fake wheel speed, rpm (0 = stopped) */
-    uint16_t battery_mv;       /* fake battery, millivolts */
-    uint16_t rx_len;           /* bytes waiting in rx (0 = none) */
-    uint8_t rx[RW_MAX_FRAME_LEN + 1u];
-    uint8_t tx_kind;           /* HARNESS_TX_REPLY or HARNESS_TX_SEND of the last frame out */
-    uint8_t tx_len;
-    uint8_t tx[RW_MAX_FRAME_LEN];
-    uint32_t tx_count;         /* datagrams out since boot */
-    uint16_t pulse_us;         /* last ESC pulse written */
-    uint32_t now_us;           /* tick clock the fake encoder is timed against */
-    /* fake encoder state */
-    uint32_t enc_counts;
-    uint32_t enc_last_edge_us;
-    uint32_t enc_next_edge_us;
-} harness_io;
-
-harness_io harness_io_block;
+/* The fake HAL's inputs and outputs: one global each, found by name in the ELF symbol table. */
+uint32_t harness_wheel_rpm;                /* in: fake wheel speed, rpm (0 = stopped) */
+uint16_t harness_battery_mv;               /* in: fake battery, millivolts */
+uint32_t harness_rx_len;                   /* in: bytes waiting in harness_rx (0 = none); cleared by recv */
+uint8_t harness_rx[RW_MAX_FRAME_LEN + 1u]; /* in: the next datagram */
+uint32_t harness_tx_kind;                  /* out: HARNESS_TX_REPLY or HARNESS_TX_SEND of the last frame out */
+uint32_t harness_tx_len;                   /* out: its length */
+uint8_t harness_tx[RW_MAX_FRAME_LEN];      /* out: its bytes */
+uint32_t harness_tx_count;                 /* out: datagrams out since init */
+uint32_t harness_pulse_us;                 /* out: last ESC pulse written, microseconds */
 rw_core harness_core;
+
+/* Fake encoder: edges every 60e6 / (rpm * 64) microseconds of the tick clock (the current rpm). */
+static struct {
+    uint32_t now_us;
+    uint32_t counts;
+    uint32_t last_edge_us;
+    uint32_t next_edge_us;
+} fake_wheel;
 
 static rw_encoder_sample fake_encoder_read(void *ctx)
 {
-    harness_io *io = ctx;
-    if (io->wheel_rpm == 0u) {
-        io->enc_next_edge_us = io->now_us;
+    (void)ctx;
+    if (harness_wheel_rpm == 0u) {
+        fake_wheel.next_edge_us = fake_wheel.now_us;
     } else {
-        uint32_t period_us = 60000000u / (io->wheel_rpm * HARNESS_COUNTS_PER_REV);
-        while ((int32_t)(io->now_us - io->enc_next_edge_us) >= 0) {
-            ++io->enc_counts;
-            io->enc_last_edge_us = io->enc_next_edge_us;
-            io->enc_next_edge_us += period_us;
+        uint32_t period_us = 60000000u / (harness_wheel_rpm * HARNESS_COUNTS_PER_REV);
+        if ((int32_t)(fake_wheel.next_edge_us - (fake_wheel.last_edge_us + period_us)) > 0) {
+            fake_wheel.next_edge_us = fake_wheel.last_edge_us + period_us; /* sped up since the last edge */
+        }
+        while ((int32_t)(fake_wheel.now_us - fake_wheel.next_edge_us) >= 0) {
+            ++fake_wheel.counts;
+            fake_wheel.last_edge_us = fake_wheel.next_edge_us;
+            fake_wheel.next_edge_us += period_us;
         }
     }
-    rw_encoder_sample s = { .counts = io->enc_counts, .last_edge_us = io->enc_last_edge_us };
+    rw_encoder_sample s = { .counts = fake_wheel.counts, .last_edge_us = fake_wheel.last_edge_us };
     return s;
 }
 
 static uint16_t fake_battery_read_mv(void *ctx)
 {
-    return ((const harness_io *)ctx)->battery_mv;
+    (void)ctx;
+    return harness_battery_mv;
 }
 
 static void fake_esc_write(void *ctx, uint16_t pulse_us)
 {
-    ((harness_io *)ctx)->pulse_us = pulse_us;
+    (void)ctx;
+    harness_pulse_us = pulse_us;
 }
 
 static size_t fake_link_recv(void *ctx, uint8_t *buf, size_t cap)
 {
-    harness_io *io = ctx;
-    size_t n = io->rx_len;
+    (void)ctx;
+    size_t n = harness_rx_len;
     if (n == 0u) {
         return 0u;
     }
-    io->rx_len = 0u;
-    memcpy(buf, io->rx, n > cap ? cap : n);
+    harness_rx_len = 0u;
+    memcpy(buf, harness_rx, n > cap ? cap : n);
     return n > cap ? cap + 1u : n;
 }
 
-static void fake_link_out(harness_io *io, uint8_t kind, const uint8_t *frame, size_t len)
+static void fake_link_out(uint32_t kind, const uint8_t *frame, size_t len)
 {
-    size_t n = len > sizeof io->tx ? sizeof io->tx : len;
-    memcpy(io->tx, frame, n);
-    io->tx_len = (uint8_t)n;
-    io->tx_kind = kind;
-    ++io->tx_count;
+    size_t n = len > sizeof harness_tx ? sizeof harness_tx : len;
+    memcpy(harness_tx, frame, n);
+    harness_tx_len = (uint32_t)n;
+    harness_tx_kind = kind;
+    ++harness_tx_count;
 }
 
 static void fake_link_reply(void *ctx, const uint8_t *frame, size_t len)
 {
-    fake_link_out(ctx, HARNESS_TX_REPLY, frame, len);
+    (void)ctx;
+    fake_link_out(HARNESS_TX_REPLY, frame, len);
 }
 
 static void fake_link_accept_peer(void *ctx)
@@ -100,7 +106,8 @@ static void fake_link_accept_peer(void *ctx)
 
 static void fake_link_send(void *ctx, const uint8_t *frame, size_t len)
 {
-    fake_link_out(ctx, HARNESS_TX_SEND, frame, len);
+    (void)ctx;
+    fake_link_out(HARNESS_TX_SEND, frame, len);
 }
 
 static uint32_t fake_tick_overruns(void *ctx)
@@ -109,13 +116,11 @@ static uint32_t fake_tick_overruns(void *ctx)
     return 0u;
 }
 
-static const rw_hal_esc_output harness_esc = { &harness_io_block, fake_esc_write };
-static const rw_hal_encoder harness_encoder = { &harness_io_block, fake_encoder_read };
-static const rw_hal_battery harness_battery = { &harness_io_block, fake_battery_read_mv };
-static const rw_hal_link harness_link = {
-    &harness_io_block, fake_link_recv, fake_link_reply, fake_link_accept_peer, fake_link_send,
-};
-static const rw_hal_scheduler harness_scheduler = { &harness_io_block, fake_tick_overruns };
+static const rw_hal_esc_output harness_esc = { NULL, fake_esc_write };
+static const rw_hal_encoder harness_encoder = { NULL, fake_encoder_read };
+static const rw_hal_battery harness_battery = { NULL, fake_battery_read_mv };
+static const rw_hal_link harness_link = { NULL, fake_link_recv, fake_link_reply, fake_link_accept_peer, fake_link_send };
+static const rw_hal_scheduler harness_scheduler = { NULL, fake_tick_overruns };
 const rw_hal harness_hal = {
     .esc = &harness_esc,
     .encoder = &harness_encoder,
@@ -126,19 +131,30 @@ const rw_hal harness_hal = {
 
 /* Entry points for the emulator (called with the AAPCS: arguments in r0.., return in r0). */
 void harness_init(void);
+void harness_set_clock(uint32_t now_us);
 void harness_tick(uint32_t now_us);
 uint8_t harness_state(void);
 
 void harness_init(void)
 {
-    memset(&harness_io_block, 0, sizeof harness_io_block);
-    harness_io_block.battery_mv = 14800u;
+    memset(&fake_wheel, 0, sizeof fake_wheel);
+    harness_wheel_rpm = 0u;
+    harness_battery_mv = 14800u;
+    harness_rx_len = 0u;
+    harness_tx_count = 0u;
     rw_core_init(&harness_core);
+}
+
+/* Advance the fake clock and run one control tick (the emulator may also call rw_core_tick itself
+ * with &harness_core, &harness_hal after harness_set_clock). */
+void harness_set_clock(uint32_t now_us)
+{
+    fake_wheel.now_us = now_us;
 }
 
 void harness_tick(uint32_t now_us)
 {
-    harness_io_block.now_us = now_us;
+    harness_set_clock(now_us);
     rw_core_tick(&harness_core, &harness_hal, now_us);
 }
 

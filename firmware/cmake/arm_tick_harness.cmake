@@ -9,6 +9,8 @@ target_link_libraries(rw_arm_tick_harness PRIVATE rw_core)
 target_compile_options(rw_arm_tick_harness PRIVATE ${RW_WARNINGS})
 target_link_options(rw_arm_tick_harness PRIVATE
     -nostartfiles
+    # entry points only the emulator calls: roots for --gc-sections
+    -Wl,--undefined=harness_state -Wl,--undefined=harness_set_clock -Wl,--undefined=harness_init
     -T${CMAKE_CURRENT_LIST_DIR}/samd21g18a.ld
     -Wl,-Map=${CMAKE_CURRENT_BINARY_DIR}/rw_arm_tick_harness.map
     -Wl,--print-memory-usage)

@@ -1,0 +1,148 @@
+"""The firmware core built for the board's Cortex-M0+ (arm-none-eabi-gcc, -Os, warnings as errors).
+
+Checks that it links bare-metal, pulls in no heap, no printf/dtoa and no double-precision soft-float, fits
+its flash/RAM budget, and behaves like the host build when its Thumb code runs in an emulator (unicorn):
+arming hold, ARM, spin-up to AIRBORNE, ESC pulse never under the minimum.
+
+Skipped only when arm-none-eabi-gcc is missing (CI installs gcc-arm-none-eabi libnewlib-arm-none-eabi).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+_HERE = str(Path(__file__).resolve().parent)
+if _HERE not in sys.path:
+    sys.path.insert(0, _HERE)
+
+import arm_harness_emulator as ah  # noqa: E402
+from robowrangler.protocol import generated as proto  # noqa: E402
+
+# Budget for the core (with the libgcc/newlib routines it needs) on a 256 KB / 32 KB part that also carries
+# the Arduino core, WiFiNINA and Dynamixel2Arduino.
+CORE_FLASH_BUDGET_BYTES = 64 * 1024
+CORE_RAM_BUDGET_BYTES = 8 * 1024
+
+pytestmark = pytest.mark.skipif(
+    not ah.toolchain_available(),
+    reason="arm-none-eabi-gcc not installed (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi); CI has it",
+)
+
+
+@pytest.fixture(scope="module")
+def arm_elf() -> Path:
+    return ah.build_arm()
+
+
+@pytest.fixture(scope="module")
+def symbols(arm_elf: Path) -> dict[str, ah.Symbol]:
+    return ah.read_symbols(arm_elf)
+
+
+def test_core_links_for_cortex_m0plus(arm_elf: Path, symbols: dict[str, ah.Symbol]) -> None:
+    from elftools.elf.elffile import ELFFile
+
+    with open(arm_elf, "rb") as fh:
+        elf = ELFFile(fh)
+        assert elf["e_machine"] == "EM_ARM"
+        attrs = elf.get_section_by_name(".ARM.attributes")
+        assert attrs is not None
+        raw = attrs.data()
+    assert b"6S-M" in raw, "not built for ARMv6-M (the Cortex-M0+ architecture)"
+    for needed in ("rw_core_init", "rw_core_tick", "Reset_Handler"):
+        assert needed in symbols, f"{needed} missing from the ELF"
+
+
+FORBIDDEN_EXACT = {"malloc", "free", "calloc", "realloc", "_malloc_r", "_free_r", "_sbrk", "_sbrk_r",
+                   "_dtoa_r", "printf", "sprintf", "snprintf", "vsnprintf", "_vfprintf_r", "_svfprintf_r",
+                   "_printf_float", "__cxa_allocate_exception"}
+
+
+def test_no_heap_no_printf_no_double(symbols: dict[str, ah.Symbol]) -> None:
+    found = sorted(name for name in symbols if name in FORBIDDEN_EXACT)
+    assert not found, f"heap or printf machinery linked in: {found}"
+    doubles = sorted(name for name in symbols
+                     if name.startswith("__aeabi_d") or name.endswith(("df2", "df3", "dfsi", "sidf", "sfdf2", "dfsf2")))
+    assert not doubles, f"double-precision soft-float linked in (a stray double literal or promotion?): {doubles}"
+
+
+def test_core_fits_its_flash_and_ram_budget(arm_elf: Path) -> None:
+    sys.path.insert(0, str(ah.REPO_ROOT / "bench"))
+    try:
+        import bench_firmware_size as size
+    finally:
+        sys.path.remove(str(ah.REPO_ROOT / "bench"))
+    flash, ram = size.flash_ram(size.section_sizes(arm_elf))
+    assert 1024 < flash <= CORE_FLASH_BUDGET_BYTES, f"core flash {flash} B, budget {CORE_FLASH_BUDGET_BYTES} B"
+    assert 256 < ram <= CORE_RAM_BUDGET_BYTES, f"core RAM {ram} B, budget {CORE_RAM_BUDGET_BYTES} B"
+
+
+def _frames(emu: ah.HarnessEmulator, now_us: int) -> list[proto.Message]:
+    sent, _ = emu.tick(now_us)
+    return [proto.decode_message(raw)[1] for _, raw in sent]
+
+
+def test_arm_build_arms_spins_up_and_flies_in_the_emulator(arm_elf: Path) -> None:
+    emu = ah.HarnessEmulator(arm_elf)
+    emu.reset()
+    now_us, seq = 0, 0
+    out: list[proto.Message] = []
+
+    def tick(message: proto.Message | None = None) -> list[proto.Message]:
+        nonlocal now_us, seq
+        now_us += 1000
+        if message is not None:
+            seq += 1
+            emu.put_datagram(proto.encode_frame(message, seq))
+        got = _frames(emu, now_us)
+        out.extend(got)
+        return got
+
+    # Arming hold: ARM is refused with NOT_READY at first, the ESC sits at its minimum pulse.
+    tick()
+    refused = tick(proto.Arm())
+    assert isinstance(refused[0], proto.Nack) and refused[0].reason == proto.NackReason.NOT_READY
+    hold_ms = round(proto.PARAMS_BY_NAME["arm_hold_s"].default * 1000)
+    for i in range(hold_ms + 10):
+        tick(proto.Heartbeat(host_time_ms=i) if i % 100 == 0 else None)
+        assert emu.pulse_us() == round(proto.PARAMS_BY_NAME["esc_min_us"].default)
+    assert any(isinstance(m, proto.Event) and m.event == proto.EventKind.ARMING_HOLD_DONE for m in out)
+
+    acked = tick(proto.Arm())
+    assert isinstance(acked[0], proto.Ack) and acked[0].state == proto.State.ARMED
+
+    # Spin-up on a toy plant: wheel rpm lags (tau 50 ms) behind throttle x Kv x 14.8 V. The ARM core must
+    # close the loop to AIRBORNE with the ESC pulse above idle and never under the minimum.
+    kv = proto.PARAMS_BY_NAME["motor_kv_rpm_per_v"].default
+    rpm = 0.0
+    assert isinstance(tick(proto.SetRopeSpeed(rope_speed_mmps=5000))[0], proto.Ack)
+    for i in range(3000):
+        throttle = (emu.pulse_us() - 1000) / 1000
+        rpm += (throttle * kv * 14.8 - rpm) * (1e-3 / 0.05)
+        emu.set_wheel_rpm(max(0, round(rpm)))
+        tick(proto.Heartbeat(host_time_ms=i) if i % 100 == 0 else None)
+        assert emu.pulse_us() >= round(proto.PARAMS_BY_NAME["esc_min_us"].default)
+        if emu.state() == proto.State.AIRBORNE and i > 1500:
+            break
+    assert emu.state() == proto.State.AIRBORNE
+    assert emu.pulse_us() > 1050
+    telemetry = [m for m in out if isinstance(m, proto.Telemetry)]
+    assert telemetry, "no telemetry sent"
+    last = [m for m in out if isinstance(m, proto.Telemetry)][-1]
+    assert abs(last.rope_speed_mmps - 5000) < 150, f"measured {last.rope_speed_mmps} mm/s for a 5000 mm/s wheel"
+
+
+def test_tick_profile_counts_instructions(arm_elf: Path) -> None:
+    """The emulator's counter sees the soft-float work of a tick (the bench relies on it)."""
+    emu = ah.HarnessEmulator(arm_elf)
+    emu.reset()
+    emu.tick(1000)
+    _, profile = emu.tick(2000, count=True)
+    assert profile is not None and profile.instructions > 100
+    assert profile.cycles >= profile.instructions
+    assert "rw_core_tick" in profile.per_function
+    assert any(name.startswith("__aeabi_f") or name.endswith("sf2") for name in profile.per_function)
