@@ -199,10 +199,10 @@ bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal)
         return false;
     }
     rw_frame frame;
+    /* A datagram longer than buf arrives truncated to sizeof buf, which is longer than any frame: the
+     * decoder refuses it exactly as it refuses the whole datagram (trailing bytes: BAD_LENGTH; a declared
+     * payload over the maximum: OVERSIZE; a bad header first: BAD_MAGIC/BAD_VERSION/UNSUPPORTED_FLAGS). */
     int result = rw_frame_decode(buf, n > sizeof buf ? sizeof buf : n, &frame);
-    if (result == RW_DECODE_OK && n > RW_MAX_FRAME_LEN) {
-        result = RW_NACK_REASON_OVERSIZE; /* the link truncated a longer datagram */
-    }
     if (result != RW_DECODE_OK) {
         ++core->state.counters.rx_bad;
         send_verdict(core, hal, frame.msg_id, frame.seq, refuse((uint8_t)result, 0));

@@ -12,7 +12,8 @@
 typedef struct rw_hal_link {
     void *ctx;
     /* Copy the next received datagram into buf (at most cap bytes); returns its length, 0 if none.
-     * A longer datagram is truncated to cap and reported as cap + 1 (the core refuses it as OVERSIZE).
+     * A longer datagram is truncated to cap and reported as cap + 1 (the core's cap exceeds the longest
+     * frame, so the decoder refuses it as it would the whole datagram).
      * An empty datagram reads as none (0), as WiFiNINA's parsePacket() reports it on the board. */
     size_t (*recv)(void *ctx, uint8_t *buf, size_t cap);
     /* Send a datagram to the sender of the last received one. */
