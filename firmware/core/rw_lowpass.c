@@ -3,7 +3,17 @@
  */
 #include "rw_lowpass.h"
 
-#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
+ * calls on the Cortex-M0+, this is a few integer instructions. */
+static bool finite_f(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    return (bits & 0x7F800000u) != 0x7F800000u;
+}
 
 void rw_lowpass_init(rw_lowpass *f, const rw_lowpass_config *cfg)
 {
@@ -18,7 +28,7 @@ void rw_lowpass_reset(rw_lowpass *f)
 
 void rw_lowpass_reset_to(rw_lowpass *f, float y)
 {
-    f->state.y = isfinite(y) ? y : 0.0f;
+    f->state.y = finite_f(y) ? y : 0.0f;
 }
 
 float rw_lowpass_output(const rw_lowpass *f)
@@ -28,7 +38,7 @@ float rw_lowpass_output(const rw_lowpass *f)
 
 bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
 {
-    return isfinite(cfg->tau_s) && cfg->tau_s >= 0.0f;
+    return finite_f(cfg->tau_s) && cfg->tau_s >= 0.0f;
 }
 
 /*
@@ -42,17 +52,17 @@ bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
  */
 float rw_lowpass_step(rw_lowpass *f, float x, float dt_s)
 {
-    if (!isfinite(x) || !isfinite(dt_s) || dt_s <= 0.0f) {
+    if (!finite_f(x) || !finite_f(dt_s) || dt_s <= 0.0f) {
         return f->state.y;
     }
     const float tau_s = f->cfg.tau_s;
-    if (!(tau_s > 0.0f) || !isfinite(tau_s)) {
+    if (!(tau_s > 0.0f) || !finite_f(tau_s)) {
         f->state.y = x;
         return f->state.y;
     }
     const float alpha = dt_s / (tau_s + dt_s);
     const float y = f->state.y + alpha * (x - f->state.y);
-    if (isfinite(y)) { /* x - y may overflow for inputs near FLT_MAX */
+    if (finite_f(y)) { /* x - y may overflow for inputs near FLT_MAX */
         f->state.y = y;
     }
     return f->state.y;

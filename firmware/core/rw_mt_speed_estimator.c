@@ -5,7 +5,17 @@
 
 #include "rw_defaults.h"
 
-#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
+ * calls on the Cortex-M0+, this is a few integer instructions. */
+static bool finite_f(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    return (bits & 0x7F800000u) != 0x7F800000u;
+}
 
 #define RW_TWO_PI_F 6.28318530718f
 #define RW_US_PER_S_F 1.0e6f
@@ -39,8 +49,8 @@ void rw_mt_speed_estimator_reset(rw_mt_speed_estimator *e)
 
 bool rw_mt_speed_estimator_config_is_valid(const rw_mt_speed_estimator_config *cfg)
 {
-    return cfg->counts_per_rev > 0u && cfg->timeout_us > 0u && isfinite(cfg->wheel_radius_m) &&
-           cfg->wheel_radius_m > 0.0f && isfinite(cfg->filter_tau_s) && cfg->filter_tau_s >= 0.0f;
+    return cfg->counts_per_rev > 0u && cfg->timeout_us > 0u && finite_f(cfg->wheel_radius_m) &&
+           cfg->wheel_radius_m > 0.0f && finite_f(cfg->filter_tau_s) && cfg->filter_tau_s >= 0.0f;
 }
 
 float rw_mt_speed_estimator_rev_per_s(const rw_mt_speed_estimator *e)
@@ -56,7 +66,7 @@ float rw_mt_speed_estimator_rpm(const rw_mt_speed_estimator *e)
 float rw_mt_speed_estimator_rope_mps(const rw_mt_speed_estimator *e)
 {
     const float r_m = e->cfg.wheel_radius_m;
-    if (!(r_m > 0.0f) || !isfinite(r_m)) {
+    if (!(r_m > 0.0f) || !finite_f(r_m)) {
         return 0.0f;
     }
     return RW_TWO_PI_F * r_m * rw_lowpass_output(&e->state.filter);
@@ -118,7 +128,7 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
     } else if (dn > 0u) {
         const uint32_t dt_edges_us = edge_us - e->state.last_edge_us;
         if (dt_edges_us > 0u && dt_edges_us < RW_HALF_RANGE_U32) {
-            n_rev_per_s = ((float)dn / counts_per_rev) * (RW_US_PER_S_F / (float)dt_edges_us);
+            n_rev_per_s = ((float)dn * RW_US_PER_S_F) / (counts_per_rev * (float)dt_edges_us);
             e->state.last_count = count;
             e->state.last_edge_us = edge_us;
             e->state.stale = false;
@@ -142,7 +152,7 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
         }
     }
 
-    if (!isfinite(n_rev_per_s) || n_rev_per_s < 0.0f) {
+    if (!finite_f(n_rev_per_s) || n_rev_per_s < 0.0f) {
         n_rev_per_s = e->state.raw_rev_per_s;
     }
     e->state.raw_rev_per_s = n_rev_per_s;

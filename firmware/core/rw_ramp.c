@@ -5,7 +5,17 @@
 
 #include "rw_defaults.h"
 
-#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
+ * calls on the Cortex-M0+, this is a few integer instructions. */
+static bool finite_f(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    return (bits & 0x7F800000u) != 0x7F800000u;
+}
 
 void rw_ramp_init(rw_ramp *r, const rw_ramp_config *cfg)
 {
@@ -26,7 +36,7 @@ void rw_ramp_reset(rw_ramp *r)
 
 void rw_ramp_reset_to(rw_ramp *r, float y)
 {
-    r->state.y = isfinite(y) ? y : 0.0f;
+    r->state.y = finite_f(y) ? y : 0.0f;
 }
 
 float rw_ramp_output(const rw_ramp *r)
@@ -37,12 +47,12 @@ float rw_ramp_output(const rw_ramp *r)
 bool rw_ramp_at_target(const rw_ramp *r, float target)
 {
     /* Exact on purpose: the step lands on the target exactly (written so -Wfloat-equal is quiet). */
-    return !(r->state.y < target) && !(r->state.y > target) && isfinite(target);
+    return !(r->state.y < target) && !(r->state.y > target) && finite_f(target);
 }
 
 bool rw_ramp_config_is_valid(const rw_ramp_config *cfg)
 {
-    return isfinite(cfg->rate_up_per_s) && isfinite(cfg->rate_down_per_s);
+    return finite_f(cfg->rate_up_per_s) && finite_f(cfg->rate_down_per_s);
 }
 
 /*
@@ -57,22 +67,22 @@ bool rw_ramp_config_is_valid(const rw_ramp_config *cfg)
  */
 float rw_ramp_step(rw_ramp *r, float target, float dt_s)
 {
-    if (!isfinite(target) || !isfinite(dt_s) || dt_s <= 0.0f) {
+    if (!finite_f(target) || !finite_f(dt_s) || dt_s <= 0.0f) {
         return r->state.y;
     }
     const float y = r->state.y;
     const float d = target - y;
-    if (!isfinite(d)) { /* target and y of opposite sign near FLT_MAX */
+    if (!finite_f(d)) { /* target and y of opposite sign near FLT_MAX */
         return r->state.y;
     }
     if (d > 0.0f) {
         const float rate = r->cfg.rate_up_per_s;
         const float max_step = rate * dt_s;
-        r->state.y = (rate > 0.0f && isfinite(max_step) && d > max_step) ? y + max_step : target;
+        r->state.y = (rate > 0.0f && finite_f(max_step) && d > max_step) ? y + max_step : target;
     } else if (d < 0.0f) {
         const float rate = r->cfg.rate_down_per_s;
         const float max_step = rate * dt_s;
-        r->state.y = (rate > 0.0f && isfinite(max_step) && -d > max_step) ? y - max_step : target;
+        r->state.y = (rate > 0.0f && finite_f(max_step) && -d > max_step) ? y - max_step : target;
     }
     return r->state.y;
 }

@@ -5,7 +5,17 @@
 
 #include "rw_defaults.h"
 
-#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
+ * calls on the Cortex-M0+, this is a few integer instructions. */
+static bool finite_f(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    return (bits & 0x7F800000u) != 0x7F800000u;
+}
 
 #define RW_TWO_PI_F 6.28318530718f
 #define RW_S_PER_MIN_F 60.0f
@@ -25,40 +35,40 @@ void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg)
 
 bool rw_throttle_map_config_is_valid(const rw_throttle_map_config *cfg)
 {
-    return isfinite(cfg->kv_rpm_per_v) && cfg->kv_rpm_per_v > 0.0f && isfinite(cfg->wheel_radius_m) &&
+    return finite_f(cfg->kv_rpm_per_v) && cfg->kv_rpm_per_v > 0.0f && finite_f(cfg->wheel_radius_m) &&
            cfg->wheel_radius_m > 0.0f && cfg->pulse_min_us >= RW_ESC_PULSE_LIMIT_LOW_US &&
            cfg->pulse_min_us < cfg->pulse_max_us && cfg->pulse_max_us <= RW_ESC_PULSE_LIMIT_HIGH_US;
 }
 
-/* Rope speed (m/s) per unit throttle at battery_v, or 0 when it cannot be computed. */
-static float rope_mps_at_full_throttle(const rw_throttle_map *m, float battery_v)
+/* 2 pi r kv V, i.e. 60 x the rope speed (m/s) at full throttle, or 0 when it cannot be computed. */
+static float rope_m_per_min_at_full_throttle(const rw_throttle_map *m, float battery_v)
 {
     const float kv = m->cfg.kv_rpm_per_v;
     const float r_m = m->cfg.wheel_radius_m;
-    if (!isfinite(battery_v) || !(battery_v > 0.0f) || !isfinite(kv) || !(kv > 0.0f) || !isfinite(r_m) ||
+    if (!finite_f(battery_v) || !(battery_v > 0.0f) || !finite_f(kv) || !(kv > 0.0f) || !finite_f(r_m) ||
         !(r_m > 0.0f)) {
         return 0.0f;
     }
-    const float full_mps = RW_TWO_PI_F * r_m * kv * battery_v / RW_S_PER_MIN_F;
-    return isfinite(full_mps) ? full_mps : 0.0f;
+    const float full_m_per_min = RW_TWO_PI_F * r_m * kv * battery_v;
+    return finite_f(full_m_per_min) ? full_m_per_min : 0.0f;
 }
 
 float rw_throttle_map_feed_forward(const rw_throttle_map *m, float rope_mps, float battery_v)
 {
-    const float full_mps = rope_mps_at_full_throttle(m, battery_v);
-    if (!(full_mps > 0.0f) || !isfinite(rope_mps) || !(rope_mps > 0.0f)) {
+    const float full_m_per_min = rope_m_per_min_at_full_throttle(m, battery_v);
+    if (!(full_m_per_min > 0.0f) || !finite_f(rope_mps) || !(rope_mps > 0.0f)) {
         return 0.0f;
     }
-    const float throttle = rope_mps / full_mps;
+    const float throttle = (RW_S_PER_MIN_F * rope_mps) / full_m_per_min; /* one soft-float division */
     return throttle > 1.0f ? 1.0f : throttle;
 }
 
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v)
 {
-    if (!isfinite(throttle) || !(throttle > 0.0f)) {
+    if (!finite_f(throttle) || !(throttle > 0.0f)) {
         return 0.0f;
     }
-    return (throttle > 1.0f ? 1.0f : throttle) * rope_mps_at_full_throttle(m, battery_v);
+    return (throttle > 1.0f ? 1.0f : throttle) * rope_m_per_min_at_full_throttle(m, battery_v) / RW_S_PER_MIN_F;
 }
 
 /* The pulse range actually used: the configured one narrowed into the hard 1000..2000 us limits. */
@@ -87,7 +97,7 @@ uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, float throttle)
     uint16_t lo_us;
     uint16_t hi_us;
     effective_range_us(m, &lo_us, &hi_us);
-    if (!isfinite(throttle) || !(throttle > 0.0f)) { /* NaN, -inf, negative, zero */
+    if (!finite_f(throttle) || !(throttle > 0.0f)) { /* NaN, -inf, negative, zero */
         return lo_us;
     }
     if (throttle >= 1.0f) {

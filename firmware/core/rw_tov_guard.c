@@ -5,7 +5,17 @@
 
 #include "rw_defaults.h"
 
-#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
+ * calls on the Cortex-M0+, this is a few integer instructions. */
+static bool finite_f(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    return (bits & 0x7F800000u) != 0x7F800000u;
+}
 
 void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg)
 {
@@ -28,8 +38,8 @@ void rw_tov_guard_reset(rw_tov_guard *g)
 
 bool rw_tov_guard_config_is_valid(const rw_tov_guard_config *cfg)
 {
-    return isfinite(cfg->tov_mps) && cfg->tov_mps > 0.0f && isfinite(cfg->margin) && cfg->margin >= 1.0f &&
-           isfinite(cfg->collapse_time_s) && cfg->collapse_time_s >= 0.0f;
+    return finite_f(cfg->tov_mps) && cfg->tov_mps > 0.0f && finite_f(cfg->margin) && cfg->margin >= 1.0f &&
+           finite_f(cfg->collapse_time_s) && cfg->collapse_time_s >= 0.0f;
 }
 
 float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g)
@@ -39,7 +49,7 @@ float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g)
 
 bool rw_tov_guard_setpoint_allowed(const rw_tov_guard *g, float setpoint_mps)
 {
-    if (!rw_tov_guard_config_is_valid(&g->cfg) || !isfinite(setpoint_mps)) {
+    if (!rw_tov_guard_config_is_valid(&g->cfg) || !finite_f(setpoint_mps)) {
         return false;
     }
     return setpoint_mps >= rw_tov_guard_min_airborne_mps(g);
@@ -61,7 +71,7 @@ bool rw_tov_guard_is_collapsed(const rw_tov_guard *g)
  */
 bool rw_tov_guard_step(rw_tov_guard *g, float measured_mps, float dt_s)
 {
-    if (!isfinite(measured_mps) || !rw_tov_guard_config_is_valid(&g->cfg)) {
+    if (!finite_f(measured_mps) || !rw_tov_guard_config_is_valid(&g->cfg)) {
         return false;
     }
     if (measured_mps >= g->cfg.tov_mps) {
@@ -69,7 +79,7 @@ bool rw_tov_guard_step(rw_tov_guard *g, float measured_mps, float dt_s)
         g->state.collapsed = false;
         return false;
     }
-    if (isfinite(dt_s) && dt_s > 0.0f && g->state.below_s < g->cfg.collapse_time_s) {
+    if (finite_f(dt_s) && dt_s > 0.0f && g->state.below_s < g->cfg.collapse_time_s) {
         g->state.below_s += dt_s; /* stops counting once past the threshold: no float growth */
     }
     if (!g->state.collapsed && g->state.below_s >= g->cfg.collapse_time_s) {
