@@ -279,10 +279,18 @@ class Client:
         """
         gap_s = self.connect_timeout_s if timeout_s is None else _check_positive("timeout_s", timeout_s)
         self._require_connected()
+        return self._iterate(self._subscribe(), gap_s)
+
+    def _subscribe(self) -> queue.Queue:
         q: queue.Queue = queue.Queue(maxsize=TELEMETRY_QUEUE_LEN)
         with self._lock:
             self._subscribers.append(q)
-        return self._iterate(q, gap_s)
+        return q
+
+    def _unsubscribe(self, q: queue.Queue) -> None:
+        with self._lock:
+            if q in self._subscribers:
+                self._subscribers.remove(q)
 
     def _iterate(self, q: queue.Queue, gap_s: float) -> Iterator[TelemetrySample]:
         try:
@@ -296,15 +304,13 @@ class Client:
                     return
                 yield item
         finally:
-            with self._lock:
-                if q in self._subscribers:
-                    self._subscribers.remove(q)
+            self._unsubscribe(q)
 
     def wait_for_state(self, state: State | Iterable[State], *, timeout_s: float) -> TelemetrySample:
         """Wait for a TELEMETRY sample received after this call whose state is `state` (or one of them).
 
-        Returns that sample. StateTimeout if telemetry arrives but not that state within timeout_s;
-        LinkTimeout if telemetry stops for connect_timeout_s.
+        Returns that sample. StateTimeout (naming the last state seen) if that state does not come
+        within timeout_s; LinkTimeout if no telemetry arrives for connect_timeout_s.
         """
         wanted = (state,) if isinstance(state, (State, int)) else tuple(state)
         try:
@@ -314,27 +320,30 @@ class Client:
         if not wanted:
             raise InvalidArgument("state", "at least one State", state)
         limit_s = _check_positive("timeout_s", timeout_s)
+        self._require_connected()
         deadline = time.monotonic() + limit_s
-        stream = self.telemetry(timeout_s=min(self.connect_timeout_s, limit_s + RECV_POLL_S))
+        last_sample_s = time.monotonic()
         last: TelemetrySample | None = None
+        q = self._subscribe()
         try:
-            while True:
+            while (remaining_s := deadline - time.monotonic()) > 0:
+                gap_left_s = last_sample_s + self.connect_timeout_s - time.monotonic()
+                if gap_left_s <= 0:
+                    raise LinkTimeout(f"telemetry from {self.url} stopped: no sample for "
+                                      f"{self.connect_timeout_s:g} s", url=self.url, waited_s=self.connect_timeout_s)
                 try:
-                    sample = next(stream)
-                except LinkTimeout:
-                    if time.monotonic() >= deadline and last is not None:
-                        break
-                    raise
-                except StopIteration:
-                    raise NotConnected("the client was closed while waiting for a state") from None
-                if sample.state in wanted:
-                    return sample
-                last = sample
-                if time.monotonic() >= deadline:
-                    break
+                    item = q.get(timeout=min(remaining_s, gap_left_s))
+                except queue.Empty:
+                    continue
+                if item is _CLOSED:
+                    raise NotConnected("the client was closed while waiting for a state")
+                last_sample_s, last = time.monotonic(), item
+                if item.state in wanted:
+                    return item
         finally:
-            stream.close()
-        raise StateTimeout(expected=wanted, actual=last.state if last else None, waited_s=limit_s)
+            self._unsubscribe(q)
+        latest = last or self._latest
+        raise StateTimeout(expected=wanted, actual=latest.state if latest else None, waited_s=limit_s)
 
     # ----------------------------------------------------------------- internals: sending
 

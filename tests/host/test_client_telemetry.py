@@ -99,3 +99,15 @@ def test_bad_datagrams_are_counted_never_raised(device: ScriptedDevice) -> None:
         stats = rw.stats
     assert stats.decode_errors == 5
     assert stats.decode_errors_by_reason == {"TRUNCATED": 2, "BAD_MAGIC": 1, "BAD_CHECKSUM": 1, "BAD_LENGTH": 1}
+
+
+def test_wait_for_state_tells_a_silent_link_from_a_slow_state(device: ScriptedDevice) -> None:
+    with Client(device.url, **{**FAST, "connect_timeout_s": 0.3}) as rw:
+        device.halt()
+        with pytest.raises(StateTimeout) as slow:  # shorter than a telemetry gap: just not there yet
+            rw.wait_for_state(State.ARMED, timeout_s=0.1)
+        start = time.monotonic()
+        with pytest.raises(LinkTimeout):  # longer: the link is gone
+            rw.wait_for_state(State.ARMED, timeout_s=5.0)
+        assert time.monotonic() - start < 0.6
+    assert slow.value.actual == State.DISARMED
