@@ -97,11 +97,14 @@ bool rw_mt_speed_estimator_is_stale(const rw_mt_speed_estimator *e)
  *       n_max = 1 / (counts_per_rev * s * 1e-6),      n[k] = min(n[k-1], n_max)
  *     (the estimate decays as 1/s when the wheel stops, rather than holding the last value).
  *   s > timeout_us: n[k] = 0, the filter is reset to 0 and the estimate is flagged stale.
+ *   Edges arrived but dT > timeout_us (first edge after a stop): n[k] = 0, stale, the reference
+ *     is re-latched; the speed is measured from the next edge on. Stale is cleared only by a
+ *     measured interval (dn > 0, 0 < dT <= timeout_us).
  *   Filter: y[k] = rw_lowpass(n[k], dt_s) (pass-through when filter_tau_s == 0).
  *   Outputs: rev/s = y, rpm = 60 y, rope m/s = 2 pi wheel_radius_m y.
- * Inconsistent input (dn >= 2^31 i.e. the count went backwards, dT == 0 or dT >= 2^31 with edges,
- * now_us before the last edge, invalid config) changes nothing except that a backward count
- * re-latches the reference. No NaN or infinity ever leaves the step.
+ * Inconsistent input (dn >= 2^31 i.e. the count went backwards, dT == 0 with edges, now_us before
+ * the last edge, invalid config) changes nothing except that a backward count re-latches the
+ * reference. No NaN or infinity ever leaves the step.
  */
 float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint32_t edge_us,
                                  uint32_t now_us, float dt_s)
@@ -127,13 +130,23 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
         e->state.last_edge_us = edge_us;
     } else if (dn > 0u) {
         const uint32_t dt_edges_us = edge_us - e->state.last_edge_us;
-        if (dt_edges_us > 0u && dt_edges_us < RW_HALF_RANGE_U32) {
+        if (dt_edges_us > e->cfg.timeout_us) {
+            /* First edge after a silence longer than the timeout (possibly longer than 2^31 us): no
+             * speed can be measured across it. Re-latch; the next edge measures. */
+            e->state.last_count = count;
+            e->state.last_edge_us = edge_us;
+            e->state.raw_rev_per_s = 0.0f;
+            e->state.stale = true;
+            rw_lowpass_reset(&e->state.filter);
+            return 0.0f;
+        }
+        if (dt_edges_us > 0u) {
             n_rev_per_s = ((float)dn * RW_US_PER_S_F) / (counts_per_rev * (float)dt_edges_us);
             e->state.last_count = count;
             e->state.last_edge_us = edge_us;
             e->state.stale = false;
         }
-        /* else: count and timestamp disagree (not latched together); wait for a consistent pair. */
+        /* else: count moved, timestamp did not (not latched together); wait for a consistent pair. */
     } else {
         const uint32_t silence_us = now_us - e->state.last_edge_us;
         if (silence_us < RW_HALF_RANGE_U32) { /* now_us not before the last edge */

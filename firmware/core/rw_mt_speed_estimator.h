@@ -5,8 +5,8 @@
  *   count    cumulative number of encoder edges (one direction, wraps),
  *   edge_us  capture timestamp of the most recent of those edges, microseconds (wraps),
  *   now_us   time of this step on the same microsecond clock (wraps).
- * count and edge_us must be latched together (the same edge). Intervals must stay below 2^31 us
- * (about 35 minutes); the estimator is reset or stepped far more often than that.
+ * count and edge_us must be latched together (the same edge). Step at least every 2^31 us (about
+ * 35 minutes; the firmware steps every tick); edge intervals (stops) of any length are handled.
  * Outputs: wheel rev/s, rpm and rope surface speed in m/s (2 pi r rev/s), optionally low-pass
  * filtered, and a "stale" flag.
  * Portable core module: no Arduino header, no heap, reads no clock (times come in).

@@ -145,6 +145,28 @@ def test_restart_after_stale_clears_the_flag_and_recovers(rw_core):
     assert np.max(np.abs(raw[times > 0.26] * 60.0 / rpm - 1.0)) < 0.01
 
 
+def test_restart_after_a_stop_longer_than_half_the_clock_range(rw_core):
+    """Wheel still for 40 min (> 2^31 us) while the firmware keeps stepping, then it turns again:
+    the first edge re-latches (speed 0, stale), the next ones measure."""
+    est = make(rw_core, filter_tau_s=0.0)
+    est.step(0, 1000, 1000, TICK_S)
+    est.step(8, 2000, 2010, TICK_S)
+    assert est.raw_rev_per_s == pytest.approx(125.0, rel=1e-6)
+    step_us = 50_000
+    now_us = 2010
+    while now_us < 2000 + 40 * 60 * 1_000_000:
+        now_us += step_us
+        est.step(8, 2000, now_us, step_us * 1e-6)
+    assert est.stale and est.raw_rev_per_s == 0.0
+    # 3000 rpm again: one edge every 312.5 us
+    first_edge_us = now_us + 100
+    est.step(9, first_edge_us, first_edge_us + 50, TICK_S)
+    assert est.stale and est.raw_rev_per_s == 0.0
+    est.step(9 + 3, first_edge_us + 938, first_edge_us + 1000, TICK_S)  # 3 edges in 937.5 us
+    assert not est.stale
+    assert est.rpm == pytest.approx(3000.0, rel=0.01)
+
+
 def test_first_step_latches_only_then_measures(rw_core):
     est = make(rw_core, filter_tau_s=0.0)
     assert est.step(1000, 5000, 5100, TICK_S) == 0.0

@@ -132,6 +132,27 @@ static void test_stop_decays_then_zero_and_stale_after_timeout(void)
     TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_mt_speed_estimator_rope_mps(&est));
 }
 
+static void test_restart_after_stop_longer_than_half_the_clock_range(void)
+{
+    est.cfg.filter_tau_s = 0.0f;
+    rw_mt_speed_estimator_step(&est, 0u, 1000u, 1000u, 0.001f);
+    rw_mt_speed_estimator_step(&est, 8u, 2000u, 2010u, 0.001f);
+    /* still for 40 minutes (> 2^31 us), stepped every 50 ms */
+    uint32_t now_us = 2010u;
+    for (uint32_t k = 0; k < 48000u; ++k) {
+        now_us += 50000u;
+        rw_mt_speed_estimator_step(&est, 8u, 2000u, now_us, 0.05f);
+    }
+    TEST_ASSERT_TRUE(rw_mt_speed_estimator_is_stale(&est));
+    /* turns again at 3000 rpm (an edge every 312.5 us): the first edge only re-latches */
+    const uint32_t first_edge_us = now_us + 100u;
+    rw_mt_speed_estimator_step(&est, 9u, first_edge_us, first_edge_us + 50u, 0.001f);
+    TEST_ASSERT_TRUE(rw_mt_speed_estimator_is_stale(&est));
+    rw_mt_speed_estimator_step(&est, 12u, first_edge_us + 938u, first_edge_us + 1000u, 0.001f);
+    TEST_ASSERT_FALSE(rw_mt_speed_estimator_is_stale(&est));
+    TEST_ASSERT_FLOAT_WITHIN(30.0f, 3000.0f, rw_mt_speed_estimator_rpm(&est));
+}
+
 static void test_first_step_only_latches(void)
 {
     TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_mt_speed_estimator_step(&est, 1000u, 5000u, 5100u, 0.001f));
@@ -163,6 +184,7 @@ int main(void)
     RUN_TEST(test_wrap_between_two_steps_exact);
     RUN_TEST(test_rpm_and_rope_speed_units);
     RUN_TEST(test_stop_decays_then_zero_and_stale_after_timeout);
+    RUN_TEST(test_restart_after_stop_longer_than_half_the_clock_range);
     RUN_TEST(test_first_step_only_latches);
     RUN_TEST(test_backward_count_keeps_estimate);
     RUN_TEST(test_invalid_config_reads_zero);
