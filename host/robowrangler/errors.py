@@ -54,6 +54,17 @@ class LinkTimeout(RoboWranglerError, TimeoutError):
         self.waited_s = waited_s
 
 
+class LinkError(RoboWranglerError, OSError):
+    """The link cannot be opened (serial port missing or busy, host name not resolvable)."""
+
+    def __init__(self, message: str, *, url: str) -> None:
+        super().__init__(message)
+        self.url = url
+
+    def __str__(self) -> str:  # OSError would format (errno, strerror) pairs
+        return self.args[0]
+
+
 class StateTimeout(RoboWranglerError, TimeoutError):
     """Telemetry kept arriving but the device did not reach the awaited state in time."""
 

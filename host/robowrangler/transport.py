@@ -12,7 +12,7 @@ import abc
 from dataclasses import dataclass
 from urllib.parse import parse_qsl
 
-from robowrangler.errors import InvalidArgument
+from robowrangler.errors import InvalidArgument, LinkError
 
 DEFAULT_URL = "udp://127.0.0.1:14550"
 DEFAULT_BAUD = 115200
@@ -93,12 +93,15 @@ def _parse_serial(url: str) -> SerialUrl:
 
 
 def open_transport(url: str) -> Transport:
-    """Open the transport a URL names (UDP socket or serial port)."""
+    """Open the transport a URL names (UDP socket or serial port); LinkError if it cannot be opened."""
     parsed = parse_url(url)
-    if isinstance(parsed, UdpUrl):
-        from robowrangler.transport_udp import UdpTransport
+    try:
+        if isinstance(parsed, UdpUrl):
+            from robowrangler.transport_udp import UdpTransport
 
-        return UdpTransport(parsed.host, parsed.port, url=url)
-    from robowrangler.transport_serial import SerialTransport
+            return UdpTransport(parsed.host, parsed.port, url=url)
+        from robowrangler.transport_serial import SerialTransport
 
-    return SerialTransport(parsed.port, baud=parsed.baud, url=url)
+        return SerialTransport(parsed.port, baud=parsed.baud, url=url)
+    except OSError as err:  # serial.SerialException and socket.gaierror are OSErrors
+        raise LinkError(f"cannot open {url}: {err}", url=url) from err

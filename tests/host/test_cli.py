@@ -203,3 +203,9 @@ def test_a_reader_that_stops_reading_ends_the_stream_quietly(device: ScriptedDev
     env = Environment(stdout=ClosedAfterOneLine(), stderr=io.StringIO(), environ={})
     assert main(["--url", device.url, "--json", "watch"], env) == ExitStatus.OK
     assert env.stderr.getvalue() == "" and len(env.stdout.getvalue().splitlines()) == 1
+
+
+def test_a_link_that_cannot_be_opened_exits_1_with_the_reason() -> None:
+    run = wrangler("--json", "--url", "serial:///dev/robowrangler-does-not-exist", "status")
+    assert run.status == ExitStatus.ERROR and run.json["error"] == "LinkError"
+    assert run.stderr.startswith("wrangler: cannot open serial:///dev/robowrangler-does-not-exist: ")

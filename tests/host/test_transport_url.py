@@ -54,3 +54,13 @@ def test_client_options_are_validated(option: str, value: object) -> None:
     with pytest.raises(InvalidArgument) as info:
         Client("udp://127.0.0.1:14550", **{option: value})
     assert info.value.argument == option
+
+
+def test_a_missing_serial_port_is_a_link_error_naming_the_url() -> None:
+    from robowrangler.errors import LinkError
+    from robowrangler.transport import open_transport
+
+    with pytest.raises(LinkError) as info:
+        open_transport("serial:///dev/robowrangler-does-not-exist?baud=115200")
+    assert str(info.value).startswith("cannot open serial:///dev/robowrangler-does-not-exist?baud=115200: ")
+    assert isinstance(info.value, OSError)
