@@ -30,8 +30,8 @@ from .contact import sdf_one
 # indices into the scalar parameter vector ``prm``
 P_LAMBDA, P_EA, P_ETA, P_B, P_RHO, P_CF, P_CN, P_D = 0, 1, 2, 3, 4, 5, 6, 7
 P_G, P_WX, P_WY, P_WZ, P_DS, P_GRIP, P_FMAX, P_KC = 8, 9, 10, 11, 12, 13, 14, 15
-P_CC, P_RCONTACT, P_VREG, P_COMPRESSION, P_ETAB = 16, 17, 18, 19, 20
-N_PRM = 21
+P_CC, P_RCONTACT, P_VREG, P_COMPRESSION, P_ETAB, P_DT = 16, 17, 18, 19, 20, 21
+N_PRM = 22
 
 # indices into the scalar state vector ``sc``
 S_N, S_REST_RET, S_REST_EXIT, S_U, S_EXIT_LABEL, S_T_EXIT, S_T_RET, S_TRACTION, S_TIME = 0, 1, 2, 3, 4, 5, 6, 7, 8
@@ -205,6 +205,8 @@ def _forces(n, pos, vel, rest, sc, prm, E, vE, R, vR, e1, dR, u_exit_rate, u_ret
                 tvx, tvy, tvz = V[j, 0] - vn * nrm[0], V[j, 1] - vn * nrm[1], V[j, 2] - vn * nrm[2]
                 tv = np.sqrt(tvx * tvx + tvy * tvy + tvz * tvz)
                 ff = obstacles[o, 1] * fn / max(tv, prm[P_VREG])
+                # regularised Coulomb friction, capped so that one explicit step cannot reverse v_t
+                ff = min(ff, 0.5 * mj / prm[P_DT])
                 F[j, 0] += fn * nrm[0] - ff * tvx
                 F[j, 1] += fn * nrm[1] - ff * tvy
                 F[j, 2] += fn * nrm[2] - ff * tvz

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import kernel as K
-from .contact import pack_obstacles
+from .contact import pack_obstacles, sdf_one
 from .motion import ModuleMotion
 from .params import ShooterParams, StringShooterParamError
 
@@ -135,7 +135,7 @@ class StringShooter:
         params: rope, air, nip, geometry, numerics.
         loop_length_m: rope length outside the eyelet at start (the loop), metres, 0.1 .. 20.
         motion: wheel speed and module pose over time.
-        obstacles: Sphere / Cylinder / Box / HalfSpace objects (contact.py).
+        obstacles: Sphere / Cylinder / Box / HalfSpace objects (contact.py), static, outside the initial loop.
         initial_shape: "circle" (standing loop), "hanging" (two strands down) or "straight" (the line from
             exit to return, stretched or compressed to the loop length; for the span test rig).
         initial_rope_speed_mps: rope speed at t = 0 (None: the wheel speed at t = 0).
@@ -182,6 +182,7 @@ class StringShooter:
         self.prm[K.P_RCONTACT] = 0.5 * rope.diameter_m
         self.prm[K.P_VREG] = 0.01
         self.prm[K.P_COMPRESSION] = rope.compression_stiffness_ratio
+        self.prm[K.P_DT] = self.dt_s
 
         self.pos = np.zeros((cap, 3))
         self.vel = np.zeros((cap, 3))
@@ -212,6 +213,14 @@ class StringShooter:
         self.vel[:n] = -u0 * tang
         self.rest[: n - 1] = ds
         self.label[:n] = -s_nodes
+        for i, row in enumerate(self.obstacles):
+            normal = np.zeros(3)
+            depth = min(sdf_one(row, x, normal) for x in self.pos[:n])
+            if depth < 0.0:
+                raise StringShooterParamError(
+                    f"obstacles[{i}]: expected outside the initial loop, it cuts {-depth * 1e3:.1f} mm into it "
+                    f"(move it or choose another initial_shape)"
+                )
         self.sc[K.S_N] = n
         self.sc[K.S_REST_RET] = rest_b
         self.sc[K.S_REST_EXIT] = rest_b

@@ -30,8 +30,8 @@ def steady_contour_xz_m(params: ShooterParams, *, phi_deg: float, rope_speed_mps
                         n_points: int, settle_s: float = 6.0, average_s: float = 1.0) -> np.ndarray:
     """Time-averaged steady contour, shape (n_points, 2), loop frame, equally spaced in arc length.
 
-    Each sampled frame is resampled to n_points first, so the average is taken point by point at equal
-    arc-length fractions.
+    Each sampled frame is resampled finely (10 x n_points) first, so the average is taken point by point
+    at equal arc-length fractions; the mean is then resampled to n_points.
     """
     motion = ModuleMotion(wheel_speed_mps=rope_speed_mps, phi_rad=np.radians(phi_deg))
     sim = StringShooter(params, loop_length_m=loop_length_m, motion=motion, initial_shape="circle")
@@ -39,7 +39,7 @@ def steady_contour_xz_m(params: ShooterParams, *, phi_deg: float, rope_speed_mps
     samples = []
     for _ in range(10):
         sim.step_for(average_s / 10)
-        samples.append(resample_by_arc_length(sim.frame().loop_plane_xz_m(), n_points))
+        samples.append(resample_by_arc_length(sim.frame().loop_plane_xz_m(), 10 * n_points))
     return resample_by_arc_length(np.mean(samples, axis=0), n_points)
 
 

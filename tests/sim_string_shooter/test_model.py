@@ -1,0 +1,127 @@
+"""The simulator as a mechanism: material transport, rope-length bookkeeping, nip slip, module motion,
+contact, determinism, typed errors."""
+
+import numpy as np
+import pytest
+
+from robowrangler_sim.string_shooter import (Cylinder, HalfSpace, ModuleGeometry, ModuleMotion, NipParams,
+                                             RopeParams, ShooterParams, Sphere, StringShooter,
+                                             StringShooterParamError)
+from robowrangler_sim.string_shooter.contact import Box, signed_distance_m
+
+
+def _sim(**kw):
+    kw.setdefault("loop_length_m", 1.0)
+    return StringShooter(ShooterParams(), **kw)
+
+
+def test_same_inputs_give_identical_runs():
+    runs = []
+    for _ in range(2):
+        sim = _sim(motion=ModuleMotion(wheel_speed_mps=4.0, phi_rad=lambda t: 0.3 * np.sin(2 * t)))
+        rec = sim.run(1.0, frame_interval_s=0.1)
+        runs.append(np.concatenate([f.points_m.ravel() for f in rec.frames]))
+    assert np.array_equal(runs[0], runs[1])
+
+
+def test_material_travels_round_the_loop_at_the_rope_speed():
+    sim = _sim(motion=ModuleMotion(wheel_speed_mps=5.0))
+    sim.step_for(1.0)
+    labels0 = sim.frame().labels_m
+    sim.step_for(0.2)
+    labels1 = sim.frame().labels_m
+    # newest material first, each label paid out earlier than the one before it
+    assert np.all(np.diff(labels1) < 0)
+    # one metre of rope left the eyelet in 0.2 s at 5 m/s
+    assert labels1[0] - labels0[0] == pytest.approx(1.0, abs=0.03)
+    # material that was in the air has gone back in: the oldest label now is newer than 1 s ago's
+    assert labels1[-1] > labels0[-1] + 0.9
+
+
+def test_rope_length_is_conserved_and_guide_travel_reels_it_in():
+    travel = lambda t: np.clip(0.05 * t, 0.0, 0.1)  # 10 cm of guide travel in 2 s
+    sim = _sim(loop_length_m=1.5, motion=ModuleMotion(wheel_speed_mps=4.0, guide_travel_m=travel))
+    sim.step_for(0.5)
+    assert sim.loop_length_m() == pytest.approx(1.5 - 2 * 0.025, abs=2e-3)
+    sim.step_for(2.5)
+    assert sim.loop_length_m() == pytest.approx(1.5 - 2 * 0.1, abs=2e-3)
+
+
+def test_the_nip_imposes_the_wheel_speed_and_slips_past_its_friction_limit():
+    step = lambda t: np.where(t > 0.1, 6.0, 3.0)
+    grip = _sim(motion=ModuleMotion(wheel_speed_mps=step))
+    slip = StringShooter(ShooterParams(nip=NipParams(max_traction_n=2e-4)), loop_length_m=1.0,
+                         motion=ModuleMotion(wheel_speed_mps=step))
+    for sim in (grip, slip):
+        sim.step_for(0.15)
+    assert grip.rope_speed_mps == pytest.approx(6.0, abs=0.05)
+    assert slip.rope_speed_mps < 5.0  # 0.2 mN cannot accelerate the loop by 3 m/s in 50 ms
+    assert abs(slip.frame().traction_n) == pytest.approx(2e-4, rel=1e-6)
+
+
+def test_module_yaw_and_translation_move_the_loop_with_the_module():
+    yawed = _sim(motion=ModuleMotion(wheel_speed_mps=5.0, yaw_rad=np.pi / 2, base_position_m=(1.0, 2.0, 1.5)))
+    yawed.step_for(1.0)
+    pts = yawed.frame().points_m
+    assert np.allclose(pts[:, 0], 1.0, atol=1e-6)  # the loop lies in the plane x = 1 (launch along +y)
+    assert pts[:, 1].max() > 2.0 + 0.3
+    assert pts[0] == pytest.approx([1.0, 2.0 + ModuleGeometry().guide_base_m, 1.5 + ModuleGeometry().exit_offset_m])
+
+
+def test_a_loop_hanging_onto_the_ground_rests_on_it():
+    ground = HalfSpace(point_m=(0.0, 0.0, -0.3))
+    sim = _sim(motion=ModuleMotion(wheel_speed_mps=0.5), obstacles=[ground])  # starts as a standing circle
+    sim.step_for(1.5)
+    z = sim.frame().points_m[:, 2]
+    assert z.min() > -0.3 - 1e-3  # no deeper than 1 mm into the ground
+    assert z.min() < -0.3 + 0.01  # and lying on it
+
+
+def test_a_loop_falling_onto_a_sphere_drapes_over_it():
+    ball = Sphere(center_m=(0.1, 0.0, -0.3), radius_m=0.08)
+    sim = _sim(motion=ModuleMotion(wheel_speed_mps=0.5), obstacles=[ball])
+    sim.step_for(1.0)
+    d = signed_distance_m(ball, sim.frame().points_m)
+    assert d.min() > -1e-3  # no deeper than 1 mm into the ball
+    assert d.min() < 0.005  # and touching it
+
+
+def test_an_obstacle_inside_the_initial_loop_is_refused():
+    with pytest.raises(StringShooterParamError, match="obstacles"):
+        _sim(obstacles=[HalfSpace(point_m=(0.0, 0.0, -0.3))], initial_shape="hanging")
+
+
+@pytest.mark.parametrize("obstacle, point, expected", [
+    (Sphere(center_m=(0, 0, 0), radius_m=1.0), (2.0, 0, 0), 1.0),
+    (Cylinder(end_a_m=(0, 0, 0), end_b_m=(1, 0, 0), radius_m=0.1), (0.5, 0, 0.3), 0.2),
+    (Box(center_m=(0, 0, 0), half_extents_m=(1, 2, 3)), (0, 0, 2.5), -0.5),
+    (HalfSpace(point_m=(0, 0, 1)), (5, 5, 0.5), -0.5),
+])
+def test_obstacle_signed_distances(obstacle, point, expected):
+    assert signed_distance_m(obstacle, np.array([point]))[0] == pytest.approx(expected)
+
+
+def test_tap_gives_the_rope_the_impulse_asked_for():
+    sim = _sim(motion=ModuleMotion(wheel_speed_mps=5.0))
+    sim.step_for(0.5)
+    n = sim.n_nodes
+    before = sim.vel[:n].copy()
+    label = float(np.median(sim.label[:n]))
+    sim.tap(label_m=label, impulse_n_s=1e-5, direction=(0, 1, 0), width_m=0.1)
+    dp = (sim.vel[:n] - before)[:, 1].sum() * sim.params.rope.linear_density_kg_per_m * sim.params.numerics.segment_length_m
+    assert dp == pytest.approx(1e-5, rel=0.05)
+
+
+@pytest.mark.parametrize("make, name", [
+    (lambda: RopeParams(diameter_m=-1.0), "diameter_m"),
+    (lambda: RopeParams(skin_friction_coeff=float("nan")), "skin_friction_coeff"),
+    (lambda: StringShooter(loop_length_m=0.0), "loop_length_m"),
+    (lambda: StringShooter(initial_shape="square"), "initial_shape"),
+    (lambda: StringShooter(motion=ModuleMotion(guide_travel_m=0.5)), "guide_travel_m"),
+    (lambda: StringShooter(obstacles=["wall"]), "obstacles[0]"),
+    (lambda: Sphere(center_m=(0, 0), radius_m=1.0).row(), "center_m"),
+    (lambda: StringShooter(loop_length_m=1.0).run(1.0, frame_interval_s=0.0), "frame_interval_s"),
+])
+def test_bad_input_raises_a_typed_error_naming_the_argument(make, name):
+    with pytest.raises(StringShooterParamError, match=name.replace("[", r"\[").replace("]", r"\]")):
+        make()
