@@ -897,16 +897,32 @@ def gen_doc(spec: Spec) -> str:
     return "\n".join(o) + "\n"
 
 
-def outputs(spec: Spec) -> dict[Path, str]:
-    out = {
+def codec_outputs(spec: Spec) -> dict[Path, str]:
+    """The codecs and the document: what depends on the spec alone."""
+    return {
         OUT_C_HEADER: gen_c_header(spec),
         OUT_C_SOURCE: gen_c_source(spec),
         OUT_PYTHON: gen_python(spec),
         OUT_DOC: gen_doc(spec),
     }
-    if VECTORS_PATH.exists():
-        out[OUT_C_VECTORS] = gen_c_vectors(spec, json.loads(VECTORS_PATH.read_text())["vectors"])
-    return out
+
+
+def vector_outputs(spec: Spec) -> dict[Path, str]:
+    """The C form of the golden vectors; SpecError if they were made for another schema."""
+    if not VECTORS_PATH.exists():
+        return {}
+    vectors = json.loads(VECTORS_PATH.read_text())
+    if vectors.get("schema_hash") != spec.schema_hash:
+        raise SpecError(f"{VECTORS_PATH.relative_to(ROOT)} was made for schema 0x{vectors.get('schema_hash', 0):04X}, "
+                        f"the spec is now 0x{spec.schema_hash:04X}: if the change is on purpose, run "
+                        "`uv run python protocol/make_vectors.py` and generate again")
+    return {OUT_C_VECTORS: gen_c_vectors(spec, vectors["vectors"])}
+
+
+def _write(outputs: dict[Path, str]) -> None:
+    for path, text in outputs.items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -918,14 +934,18 @@ def main(argv: list[str] | None = None) -> int:
     except SpecError as exc:
         print(f"generate: {exc}", file=sys.stderr)
         return 2
-    stale = []
-    for path, text in outputs(spec).items():
-        if args.check:
-            if not path.exists() or path.read_text() != text:
-                stale.append(path.relative_to(ROOT))
-        else:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(text)
+    generated = codec_outputs(spec)
+    try:
+        generated.update(vector_outputs(spec))
+    except SpecError as exc:
+        if not args.check:
+            _write(generated)  # make_vectors.py needs the new Python module
+        print(f"generate: {exc}", file=sys.stderr)
+        return 1
+    if not args.check:
+        _write(generated)
+        return 0
+    stale = [p.relative_to(ROOT) for p, text in generated.items() if not p.exists() or p.read_text() != text]
     if stale:
         print("generate: stale generated files (run `uv run python protocol/generate.py`):", file=sys.stderr)
         for p in stale:

@@ -26,7 +26,7 @@ def _raw_verdict(host: ScriptedHost, data: bytes) -> gen.Nack:
         (gen.encode_frame(gen.SetRopeSpeed(4000), 3) + b"\x00", gen.NackReason.BAD_LENGTH),
         (bytes(b ^ (0x10 if i == 8 else 0) for i, b in enumerate(gen.encode_frame(gen.SetRopeSpeed(4000), 3))),
          gen.NackReason.BAD_CHECKSUM),
-        (gen.encode_frame(gen.Telemetry(*([0] * 16)), 4), gen.NackReason.NOT_A_COMMAND),
+        (gen.encode_frame(gen.Telemetry(*([0] * len(gen.Telemetry.FIELDS))), 4), gen.NackReason.NOT_A_COMMAND),
     ],
     ids=["one_byte", "garbage", "huge", "truncated", "trailing", "corrupted", "wrong_direction"],
 )

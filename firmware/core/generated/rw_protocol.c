@@ -25,7 +25,7 @@ static const rw_msg_info msg_infos[] = {
     { 0u, RW_MSG_KIND_HEARTBEAT, 4u, 0xAEABu, "HEARTBEAT" },
     { 1u, RW_MSG_KIND_REPLY, 4u, 0x2620u, "ACK" },
     { 2u, RW_MSG_KIND_REPLY, 9u, 0x9533u, "NACK" },
-    { 3u, RW_MSG_KIND_TELEMETRY, 33u, 0x2030u, "TELEMETRY" },
+    { 3u, RW_MSG_KIND_TELEMETRY, 46u, 0xF8B0u, "TELEMETRY" },
     { 4u, RW_MSG_KIND_EVENT, 13u, 0x69CAu, "EVENT" },
     { 5u, RW_MSG_KIND_REPLY, 6u, 0xDBDCu, "PARAM_VALUE" },
     { 10u, RW_MSG_KIND_COMMAND, 0u, 0xF3B4u, "ARM" },
@@ -35,8 +35,14 @@ static const rw_msg_info msg_infos[] = {
     { 14u, RW_MSG_KIND_COMMAND, 0u, 0x786Au, "ESTOP" },
     { 15u, RW_MSG_KIND_COMMAND, 1u, 0xA56Cu, "PARAM_GET" },
     { 16u, RW_MSG_KIND_COMMAND, 5u, 0x5862u, "PARAM_SET" },
-    { 100u, RW_MSG_KIND_SIL, 18u, 0x25A9u, "SIL_SENSORS" },
-    { 101u, RW_MSG_KIND_SIL, 6u, 0x5250u, "SIL_ACTUATORS" },
+    { 17u, RW_MSG_KIND_COMMAND, 4u, 0xC69Au, "SET_LOOP" },
+    { 18u, RW_MSG_KIND_COMMAND, 0u, 0x6FBCu, "RELAX" },
+    { 19u, RW_MSG_KIND_COMMAND, 0u, 0x4CFFu, "RETRACT" },
+    { 20u, RW_MSG_KIND_COMMAND, 0u, 0xC89Bu, "GRASP" },
+    { 21u, RW_MSG_KIND_COMMAND, 0u, 0x4B96u, "RELEASE" },
+    { 22u, RW_MSG_KIND_COMMAND, 0u, 0x319Cu, "HOME" },
+    { 100u, RW_MSG_KIND_SIL, 26u, 0x06DBu, "SIL_SENSORS" },
+    { 101u, RW_MSG_KIND_SIL, 8u, 0x01BFu, "SIL_ACTUATORS" },
 };
 
 const rw_msg_info *rw_msg_info_find(uint8_t msg_id)
@@ -208,6 +214,11 @@ void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload)
     put_u16(payload + 27, (uint16_t)msg->nacks);
     put_u16(payload + 29, (uint16_t)msg->events);
     put_u16(payload + 31, (uint16_t)msg->tick_overruns);
+    put_u32(payload + 33, (uint32_t)msg->guide_position_um);
+    put_u32(payload + 37, (uint32_t)msg->guide_target_um);
+    put_u16(payload + 41, (uint16_t)msg->spindle_load_permille);
+    payload[43] = (uint8_t)msg->spindle_flags;
+    put_u16(payload + 44, (uint16_t)msg->spindle_rejected);
 }
 
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
@@ -228,6 +239,11 @@ void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
     msg->nacks = (uint16_t)get_u16(payload + 27);
     msg->events = (uint16_t)get_u16(payload + 29);
     msg->tick_overruns = (uint16_t)get_u16(payload + 31);
+    msg->guide_position_um = (int32_t)get_u32(payload + 33);
+    msg->guide_target_um = (int32_t)get_u32(payload + 37);
+    msg->spindle_load_permille = (int16_t)get_u16(payload + 41);
+    msg->spindle_flags = (uint8_t)payload[43];
+    msg->spindle_rejected = (uint16_t)get_u16(payload + 44);
 }
 
 size_t rw_msg_telemetry_encode(const rw_msg_telemetry *msg, uint16_t seq, uint8_t *out, size_t out_cap)
@@ -414,6 +430,118 @@ size_t rw_msg_param_set_encode(const rw_msg_param_set *msg, uint16_t seq, uint8_
     return rw_frame_encode(RW_MSG_ID_PARAM_SET, seq, payload, RW_MSG_PARAM_SET_LEN, out, out_cap);
 }
 
+void rw_msg_set_loop_pack(const rw_msg_set_loop *msg, uint8_t *payload)
+{
+    put_u32(payload + 0, (uint32_t)msg->guide_position_um);
+}
+
+void rw_msg_set_loop_unpack(rw_msg_set_loop *msg, const uint8_t *payload)
+{
+    msg->guide_position_um = (int32_t)get_u32(payload + 0);
+}
+
+size_t rw_msg_set_loop_encode(const rw_msg_set_loop *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_SET_LOOP_LEN + 1u] = { 0u };
+    rw_msg_set_loop_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_SET_LOOP, seq, payload, RW_MSG_SET_LOOP_LEN, out, out_cap);
+}
+
+void rw_msg_relax_pack(const rw_msg_relax *msg, uint8_t *payload)
+{
+    (void)msg;
+    (void)payload;
+}
+
+void rw_msg_relax_unpack(rw_msg_relax *msg, const uint8_t *payload)
+{
+    msg->unused_ = 0u;
+    (void)payload;
+}
+
+size_t rw_msg_relax_encode(const rw_msg_relax *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_RELAX_LEN + 1u] = { 0u };
+    rw_msg_relax_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_RELAX, seq, payload, RW_MSG_RELAX_LEN, out, out_cap);
+}
+
+void rw_msg_retract_pack(const rw_msg_retract *msg, uint8_t *payload)
+{
+    (void)msg;
+    (void)payload;
+}
+
+void rw_msg_retract_unpack(rw_msg_retract *msg, const uint8_t *payload)
+{
+    msg->unused_ = 0u;
+    (void)payload;
+}
+
+size_t rw_msg_retract_encode(const rw_msg_retract *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_RETRACT_LEN + 1u] = { 0u };
+    rw_msg_retract_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_RETRACT, seq, payload, RW_MSG_RETRACT_LEN, out, out_cap);
+}
+
+void rw_msg_grasp_pack(const rw_msg_grasp *msg, uint8_t *payload)
+{
+    (void)msg;
+    (void)payload;
+}
+
+void rw_msg_grasp_unpack(rw_msg_grasp *msg, const uint8_t *payload)
+{
+    msg->unused_ = 0u;
+    (void)payload;
+}
+
+size_t rw_msg_grasp_encode(const rw_msg_grasp *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_GRASP_LEN + 1u] = { 0u };
+    rw_msg_grasp_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_GRASP, seq, payload, RW_MSG_GRASP_LEN, out, out_cap);
+}
+
+void rw_msg_release_pack(const rw_msg_release *msg, uint8_t *payload)
+{
+    (void)msg;
+    (void)payload;
+}
+
+void rw_msg_release_unpack(rw_msg_release *msg, const uint8_t *payload)
+{
+    msg->unused_ = 0u;
+    (void)payload;
+}
+
+size_t rw_msg_release_encode(const rw_msg_release *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_RELEASE_LEN + 1u] = { 0u };
+    rw_msg_release_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_RELEASE, seq, payload, RW_MSG_RELEASE_LEN, out, out_cap);
+}
+
+void rw_msg_home_pack(const rw_msg_home *msg, uint8_t *payload)
+{
+    (void)msg;
+    (void)payload;
+}
+
+void rw_msg_home_unpack(rw_msg_home *msg, const uint8_t *payload)
+{
+    msg->unused_ = 0u;
+    (void)payload;
+}
+
+size_t rw_msg_home_encode(const rw_msg_home *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_HOME_LEN + 1u] = { 0u };
+    rw_msg_home_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_HOME, seq, payload, RW_MSG_HOME_LEN, out, out_cap);
+}
+
 void rw_msg_sil_sensors_pack(const rw_msg_sil_sensors *msg, uint8_t *payload)
 {
     put_u32(payload + 0, (uint32_t)msg->time_us);
@@ -421,6 +549,11 @@ void rw_msg_sil_sensors_pack(const rw_msg_sil_sensors *msg, uint8_t *payload)
     put_u32(payload + 8, (uint32_t)msg->encoder_last_edge_us);
     put_u16(payload + 12, (uint16_t)msg->battery_mv);
     put_u32(payload + 14, (uint32_t)msg->host_frames_sent);
+    put_u16(payload + 18, (uint16_t)msg->spindle_position_raw);
+    put_u16(payload + 20, (uint16_t)msg->spindle_speed_raw);
+    put_u16(payload + 22, (uint16_t)msg->spindle_load_raw);
+    payload[24] = (uint8_t)msg->spindle_answered;
+    payload[25] = (uint8_t)msg->limit_switch;
 }
 
 void rw_msg_sil_sensors_unpack(rw_msg_sil_sensors *msg, const uint8_t *payload)
@@ -430,6 +563,11 @@ void rw_msg_sil_sensors_unpack(rw_msg_sil_sensors *msg, const uint8_t *payload)
     msg->encoder_last_edge_us = (uint32_t)get_u32(payload + 8);
     msg->battery_mv = (uint16_t)get_u16(payload + 12);
     msg->host_frames_sent = (uint32_t)get_u32(payload + 14);
+    msg->spindle_position_raw = (uint16_t)get_u16(payload + 18);
+    msg->spindle_speed_raw = (uint16_t)get_u16(payload + 20);
+    msg->spindle_load_raw = (uint16_t)get_u16(payload + 22);
+    msg->spindle_answered = (uint8_t)payload[24];
+    msg->limit_switch = (uint8_t)payload[25];
 }
 
 size_t rw_msg_sil_sensors_encode(const rw_msg_sil_sensors *msg, uint16_t seq, uint8_t *out, size_t out_cap)
@@ -443,12 +581,14 @@ void rw_msg_sil_actuators_pack(const rw_msg_sil_actuators *msg, uint8_t *payload
 {
     put_u32(payload + 0, (uint32_t)msg->time_us);
     put_u16(payload + 4, (uint16_t)msg->esc_pulse_us);
+    put_u16(payload + 6, (uint16_t)msg->spindle_moving_speed_raw);
 }
 
 void rw_msg_sil_actuators_unpack(rw_msg_sil_actuators *msg, const uint8_t *payload)
 {
     msg->time_us = (uint32_t)get_u32(payload + 0);
     msg->esc_pulse_us = (uint16_t)get_u16(payload + 4);
+    msg->spindle_moving_speed_raw = (uint16_t)get_u16(payload + 6);
 }
 
 size_t rw_msg_sil_actuators_encode(const rw_msg_sil_actuators *msg, uint16_t seq, uint8_t *out, size_t out_cap)
@@ -480,4 +620,20 @@ const rw_param_info rw_param_table[RW_PARAM_COUNT] = {
     { "telemetry_rate_hz", 1.0f, 100.0f, 50.0f, 0u },
     { "arm_hold_s", 0.2f, 5.0f, 0.5f, RW_PARAM_FLAG_LOCKED },
     { "encoder_timeout_s", 0.02f, 2.0f, 0.25f, 0u },
+    { "lead_mm_per_rev", 0.5f, 20.0f, 8.0f, RW_PARAM_FLAG_LOCKED },
+    { "guide_min_mm", 0.0f, 180.0f, 0.0f, 0u },
+    { "guide_max_mm", 1.0f, 180.0f, 180.0f, 0u },
+    { "spindle_kp_per_s", 0.1f, 50.0f, 4.0f, 0u },
+    { "spindle_max_speed_mmps", 0.5f, 15.0f, 6.0f, 0u },
+    { "spindle_tolerance_mm", 0.05f, 5.0f, 0.5f, 0u },
+    { "homing_speed_mmps", 0.5f, 15.0f, 3.0f, 0u },
+    { "homing_load_pct", 5.0f, 100.0f, 50.0f, 0u },
+    { "spindle_stall_load_pct", 5.0f, 100.0f, 80.0f, 0u },
+    { "spindle_stall_time_s", 0.05f, 5.0f, 0.3f, 0u },
+    { "grasp_secure_load_pct", 5.0f, 100.0f, 35.0f, 0u },
+    { "release_mm", 1.0f, 180.0f, 20.0f, 0u },
+    { "retract_speed_mmps", 0.5f, 15.0f, 5.0f, 0u },
+    { "battery_cutoff_v", 6.0f, 13.0f, 9.9f, 0u },
+    { "battery_cutoff_time_s", 0.05f, 10.0f, 1.0f, 0u },
+    { "spindle_timeout_s", 0.02f, 2.0f, 0.2f, 0u },
 };

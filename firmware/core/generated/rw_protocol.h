@@ -11,7 +11,7 @@ extern "C" {
 
 #define RW_PROTOCOL_VERSION 1u
 #define RW_PROTOCOL_MAGIC 0xB7u
-#define RW_PROTOCOL_SCHEMA_HASH 0x8BE3u
+#define RW_PROTOCOL_SCHEMA_HASH 0xDD3Au
 #define RW_FRAME_HEADER_LEN 7u
 #define RW_FRAME_CHECKSUM_LEN 2u
 #define RW_MAX_PAYLOAD_LEN 64u
@@ -27,8 +27,11 @@ typedef enum {
     RW_STATE_SPINDOWN = 4, /* Controlled ramp to zero (commanded, heartbeat lost, or battery low). */
     RW_STATE_FAULT = 5, /* A fault holds the ESC at its minimum; DISARM clears it once the rope has stopped. */
     RW_STATE_ESTOP = 6, /* Emergency stop: ESC at its minimum at once, latched until DISARM. */
+    RW_STATE_RELAX = 7, /* Grasp, step 1: the rope slows to a stop so the loop settles onto the object (the ToV guard is lifted). */
+    RW_STATE_RETRACT = 8, /* Grasp, step 2: the spindle reels the loop in until the spindle load says the object is secured (or the stroke ends). */
+    RW_STATE_HOLD = 9, /* Grasp, step 3: the object is secured; the spindle holds its position. */
 } rw_state;
-#define RW_STATE_COUNT 7u
+#define RW_STATE_COUNT 10u
 
 /* Why the device refused a frame or a command (NACK.reason). */
 typedef enum {
@@ -47,8 +50,10 @@ typedef enum {
     RW_NACK_REASON_BELOW_TOV_GUARD = 13, /* Speed setpoint under ToV x margin while airborne; command SPINDOWN to land. NACK.detail = guard speed, mm/s. */
     RW_NACK_REASON_PARAM_LOCKED = 14, /* Parameter can only be set while DISARMED. */
     RW_NACK_REASON_NOT_A_COMMAND = 15, /* A device-to-host message (ACK, TELEMETRY, ...) was sent to the device. */
+    RW_NACK_REASON_NOT_HOMED = 16, /* The spindle has not been homed since boot: command HOME first. */
+    RW_NACK_REASON_SPINDLE_UNAVAILABLE = 17, /* The spindle servo does not answer or is in fault; NACK.detail = fault bits. */
 } rw_nack_reason;
-#define RW_NACK_REASON_COUNT 16u
+#define RW_NACK_REASON_COUNT 18u
 
 /* Event kinds (EVENT.event). */
 typedef enum {
@@ -59,8 +64,11 @@ typedef enum {
     RW_EVENT_KIND_FAULT_RAISED = 4, /* arg = the fault bit that was raised. */
     RW_EVENT_KIND_PARAM_CHANGED = 5, /* arg = parameter id. */
     RW_EVENT_KIND_ARMING_HOLD_DONE = 6, /* The ESC has seen its minimum pulse for arm_hold_s: ARM is now accepted. */
+    RW_EVENT_KIND_SPINDLE_HOMED = 7, /* Homing found the end of the stroke; guide position 0 set. arg = 1 by stall, 2 by limit switch. */
+    RW_EVENT_KIND_SPINDLE_TARGET_REACHED = 8, /* The guide reached its target within spindle_tolerance_mm; arg = position, um. */
+    RW_EVENT_KIND_FAULT_CLEARED = 9, /* arg = the fault bits cleared (by DISARM). */
 } rw_event_kind;
-#define RW_EVENT_KIND_COUNT 7u
+#define RW_EVENT_KIND_COUNT 10u
 
 /* Why a state changed (EVENT.arg of STATE_CHANGED). */
 typedef enum {
@@ -69,14 +77,28 @@ typedef enum {
     RW_CAUSE_HEARTBEAT_LOST = 2, /* Host silent for heartbeat_timeout_s. */
     RW_CAUSE_LOOP_COLLAPSED = 3, /* The loop fell: speed under ToV for collapse_time_s. */
     RW_CAUSE_FAULT = 4, /* A fault (see fault_bits). */
+    RW_CAUSE_BATTERY_LOW = 5, /* Battery under battery_cutoff_v for battery_cutoff_time_s. */
+    RW_CAUSE_LOAD_SECURED = 6, /* Spindle load reached grasp_secure_load_pct while retracting: the object is held. */
+    RW_CAUSE_STROKE_END = 7, /* Retracting reached the end of the guide stroke without securing a load. */
 } rw_cause;
-#define RW_CAUSE_COUNT 5u
+#define RW_CAUSE_COUNT 8u
+
+/* Spindle status bits (TELEMETRY.spindle_flags). */
+typedef enum {
+    RW_SPINDLE_FLAG_HOMED = 1, /* Homed since boot: guide positions are valid. */
+    RW_SPINDLE_FLAG_ANSWERING = 2, /* The AX-12A answered its last read. */
+    RW_SPINDLE_FLAG_DEAD_ZONE = 4, /* The servo angle is in the 60 degree dead zone of its position sensor: position dead-reckoned. */
+    RW_SPINDLE_FLAG_MOVING = 8, /* A non-zero moving speed is commanded. */
+    RW_SPINDLE_FLAG_HOMING = 16, /* Homing in progress. */
+} rw_spindle_flag;
 
 /* Fault bits (TELEMETRY.fault_bits). */
 typedef enum {
     RW_FAULT_ENCODER_SILENT = 1, /* No encoder edge while the throttle is above idle. */
     RW_FAULT_BATTERY_LOW = 2, /* Battery under its cutoff voltage. */
     RW_FAULT_TICK_OVERRUN = 4, /* Control tick overran its period repeatedly. */
+    RW_FAULT_SPINDLE_STALL = 8, /* Spindle commanded to move, load high and no motion for spindle_stall_time_s (outside a grasp). */
+    RW_FAULT_SPINDLE_NO_ANSWER = 16, /* The AX-12A did not answer for spindle_timeout_s. */
 } rw_fault;
 
 /* Result of rw_frame_decode: RW_DECODE_OK or an rw_nack_reason. */
@@ -96,6 +118,12 @@ typedef enum {
     RW_MSG_ID_ESTOP = 14,
     RW_MSG_ID_PARAM_GET = 15,
     RW_MSG_ID_PARAM_SET = 16,
+    RW_MSG_ID_SET_LOOP = 17,
+    RW_MSG_ID_RELAX = 18,
+    RW_MSG_ID_RETRACT = 19,
+    RW_MSG_ID_GRASP = 20,
+    RW_MSG_ID_RELEASE = 21,
+    RW_MSG_ID_HOME = 22,
     RW_MSG_ID_SIL_SENSORS = 100,
     RW_MSG_ID_SIL_ACTUATORS = 101,
 } rw_msg_id;
@@ -146,8 +174,8 @@ void rw_msg_nack_unpack(rw_msg_nack *msg, const uint8_t *payload);
 size_t rw_msg_nack_encode(const rw_msg_nack *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
 /* TELEMETRY (id 3, telemetry): Device state at telemetry_rate_hz, unicast to the host that last sent a valid frame. */
-#define RW_MSG_TELEMETRY_LEN 33u
-#define RW_MSG_TELEMETRY_CRC_EXTRA 0x2030u
+#define RW_MSG_TELEMETRY_LEN 46u
+#define RW_MSG_TELEMETRY_CRC_EXTRA 0xF8B0u
 typedef struct {
     uint32_t time_ms; /* [ms] Device time since boot. */
     uint8_t state; /* (rw_state) State machine state. */
@@ -165,6 +193,11 @@ typedef struct {
     uint16_t nacks; /* NACKs sent (wraps). */
     uint16_t events; /* Events emitted since boot (wraps): a gap means an EVENT was lost. */
     uint16_t tick_overruns; /* Control ticks that overran their period (wraps). */
+    int32_t guide_position_um; /* [um] Rope guide position along the lead screw from home (0 = largest loop); valid when spindle_flags has HOMED. */
+    int32_t guide_target_um; /* [um] Guide position the spindle loop is moving to. */
+    int16_t spindle_load_permille; /* [permille] AX-12A present load, per mille of its maximum torque, + = resisting retraction (rope tension). */
+    uint8_t spindle_flags; /* (rw_spindle_flag) Spindle status. */
+    uint16_t spindle_rejected; /* Spindle position readings rejected as impossible jumps (wraps). */
 } rw_msg_telemetry;
 void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload);
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload);
@@ -268,26 +301,92 @@ void rw_msg_param_set_pack(const rw_msg_param_set *msg, uint8_t *payload);
 void rw_msg_param_set_unpack(rw_msg_param_set *msg, const uint8_t *payload);
 size_t rw_msg_param_set_encode(const rw_msg_param_set *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
+/* SET_LOOP (id 17, command): Move the rope guide (loop size). ARMED, SPINUP or AIRBORNE; needs a homed spindle (NOT_HOMED); guide_min_mm..guide_max_mm (OUT_OF_RANGE, detail = limit um). */
+#define RW_MSG_SET_LOOP_LEN 4u
+#define RW_MSG_SET_LOOP_CRC_EXTRA 0xC69Au
+typedef struct {
+    int32_t guide_position_um; /* [um] Guide target from home; larger keeps more rope inside = smaller loop. */
+} rw_msg_set_loop;
+void rw_msg_set_loop_pack(const rw_msg_set_loop *msg, uint8_t *payload);
+void rw_msg_set_loop_unpack(rw_msg_set_loop *msg, const uint8_t *payload);
+size_t rw_msg_set_loop_encode(const rw_msg_set_loop *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* RELAX (id 18, command): SPINUP or AIRBORNE -> RELAX: the rope ramps to a stop so the loop settles onto what it surrounds (commanded landing: the ToV guard is lifted). */
+#define RW_MSG_RELAX_LEN 0u
+#define RW_MSG_RELAX_CRC_EXTRA 0x6FBCu
+typedef struct {
+    uint8_t unused_; /* no fields */
+} rw_msg_relax;
+void rw_msg_relax_pack(const rw_msg_relax *msg, uint8_t *payload);
+void rw_msg_relax_unpack(rw_msg_relax *msg, const uint8_t *payload);
+size_t rw_msg_relax_encode(const rw_msg_relax *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* RETRACT (id 19, command): RELAX (rope stopped) or ARMED -> RETRACT: reel the loop in until the load secures the object (-> HOLD) or the stroke ends (-> ARMED). Needs a homed spindle. */
+#define RW_MSG_RETRACT_LEN 0u
+#define RW_MSG_RETRACT_CRC_EXTRA 0x4CFFu
+typedef struct {
+    uint8_t unused_; /* no fields */
+} rw_msg_retract;
+void rw_msg_retract_pack(const rw_msg_retract *msg, uint8_t *payload);
+void rw_msg_retract_unpack(rw_msg_retract *msg, const uint8_t *payload);
+size_t rw_msg_retract_encode(const rw_msg_retract *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* GRASP (id 20, command): AIRBORNE -> RELAX -> RETRACT -> HOLD in one command: relax onto the object, retract until the load says it is secured, hold. */
+#define RW_MSG_GRASP_LEN 0u
+#define RW_MSG_GRASP_CRC_EXTRA 0xC89Bu
+typedef struct {
+    uint8_t unused_; /* no fields */
+} rw_msg_grasp;
+void rw_msg_grasp_pack(const rw_msg_grasp *msg, uint8_t *payload);
+void rw_msg_grasp_unpack(rw_msg_grasp *msg, const uint8_t *payload);
+size_t rw_msg_grasp_encode(const rw_msg_grasp *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* RELEASE (id 21, command): HOLD -> extend the guide by release_mm to let the object go -> ARMED. */
+#define RW_MSG_RELEASE_LEN 0u
+#define RW_MSG_RELEASE_CRC_EXTRA 0x4B96u
+typedef struct {
+    uint8_t unused_; /* no fields */
+} rw_msg_release;
+void rw_msg_release_pack(const rw_msg_release *msg, uint8_t *payload);
+void rw_msg_release_unpack(rw_msg_release *msg, const uint8_t *payload);
+size_t rw_msg_release_encode(const rw_msg_release *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* HOME (id 22, command): DISARMED or ARMED (rope stopped): drive the guide to the home end until the servo stalls (present load) or the limit switch closes; position 0 there. */
+#define RW_MSG_HOME_LEN 0u
+#define RW_MSG_HOME_CRC_EXTRA 0x319Cu
+typedef struct {
+    uint8_t unused_; /* no fields */
+} rw_msg_home;
+void rw_msg_home_pack(const rw_msg_home *msg, uint8_t *payload);
+void rw_msg_home_unpack(rw_msg_home *msg, const uint8_t *payload);
+size_t rw_msg_home_encode(const rw_msg_home *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
 /* SIL_SENSORS (id 100, sil): Plant -> SIL firmware, once per control tick: the plant's clock and the sensor values the board's HAL would read. */
-#define RW_MSG_SIL_SENSORS_LEN 18u
-#define RW_MSG_SIL_SENSORS_CRC_EXTRA 0x25A9u
+#define RW_MSG_SIL_SENSORS_LEN 26u
+#define RW_MSG_SIL_SENSORS_CRC_EXTRA 0x06DBu
 typedef struct {
     uint32_t time_us; /* [us] Plant clock (wraps like micros()). */
     uint32_t encoder_counts; /* Cumulative encoder edges (wraps). */
     uint32_t encoder_last_edge_us; /* [us] Plant time of the latest edge (timer capture). */
     uint16_t battery_mv; /* [mV] Battery voltage at the ADC, after the divider is undone. */
     uint32_t host_frames_sent; /* Frames the lockstep scenario host has sent to the command port so far; the SIL link waits until it has received as many (determinism). 0 when an interactive host drives. */
+    uint16_t spindle_position_raw; /* AX-12A present position register (0-1023 over 300 degrees; meaningless in the dead zone). */
+    uint16_t spindle_speed_raw; /* AX-12A present speed register (0-1023, bit 10 = direction). */
+    uint16_t spindle_load_raw; /* AX-12A present load register (0-1023 in 0.1 %, bit 10 = direction). */
+    uint8_t spindle_answered; /* 1 if the servo answered this tick's read, else 0. */
+    uint8_t limit_switch; /* 1 while the home limit switch is closed. */
 } rw_msg_sil_sensors;
 void rw_msg_sil_sensors_pack(const rw_msg_sil_sensors *msg, uint8_t *payload);
 void rw_msg_sil_sensors_unpack(rw_msg_sil_sensors *msg, const uint8_t *payload);
 size_t rw_msg_sil_sensors_encode(const rw_msg_sil_sensors *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
 /* SIL_ACTUATORS (id 101, sil): SIL firmware -> plant, once per control tick: the outputs the board would drive. */
-#define RW_MSG_SIL_ACTUATORS_LEN 6u
-#define RW_MSG_SIL_ACTUATORS_CRC_EXTRA 0x5250u
+#define RW_MSG_SIL_ACTUATORS_LEN 8u
+#define RW_MSG_SIL_ACTUATORS_CRC_EXTRA 0x01BFu
 typedef struct {
     uint32_t time_us; /* [us] Echo of the SIL_SENSORS time this answers. */
     uint16_t esc_pulse_us; /* [us] Pulse width for both ESCs. */
+    uint16_t spindle_moving_speed_raw; /* AX-12A moving speed register written this tick (wheel mode: 0-1023, bit 10 = direction). */
 } rw_msg_sil_actuators;
 void rw_msg_sil_actuators_pack(const rw_msg_sil_actuators *msg, uint8_t *payload);
 void rw_msg_sil_actuators_unpack(rw_msg_sil_actuators *msg, const uint8_t *payload);
@@ -323,7 +422,7 @@ size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uin
                        uint8_t *out, size_t out_cap);
 
 /* Parameters (SI units, float32 on the wire). */
-#define RW_PARAM_COUNT 17u
+#define RW_PARAM_COUNT 33u
 #define RW_PARAM_FLAG_LOCKED 0x01u  /* settable only while DISARMED */
 #define RW_PARAM_FLAG_INTEGER 0x02u /* value must be a whole number */
 typedef enum {
@@ -344,6 +443,22 @@ typedef enum {
     RW_PARAM_TELEMETRY_RATE_HZ = 14, /* [Hz] TELEMETRY rate. */
     RW_PARAM_ARM_HOLD_S = 15, /* [s] After boot the ESC gets its minimum pulse this long before ARM is accepted (BLHeli arms after ~0.2 s). */
     RW_PARAM_ENCODER_TIMEOUT_S = 16, /* [s] No encoder edge for this long with the throttle above idle -> ENCODER_SILENT fault. */
+    RW_PARAM_LEAD_MM_PER_REV = 17, /* [mm/rev] Lead screw lead: guide travel per spindle revolution. */
+    RW_PARAM_GUIDE_MIN_MM = 18, /* [mm] Soft limit at the home end (largest loop). */
+    RW_PARAM_GUIDE_MAX_MM = 19, /* [mm] Soft limit at the retracted end (smallest loop). */
+    RW_PARAM_SPINDLE_KP_PER_S = 20, /* [1/s] Guide position loop: commanded guide speed (mm/s) per mm of position error. */
+    RW_PARAM_SPINDLE_MAX_SPEED_MMPS = 21, /* [mm/s] Fastest commanded guide speed. */
+    RW_PARAM_SPINDLE_TOLERANCE_MM = 22, /* [mm] Guide position counted as reached within this distance of the target. */
+    RW_PARAM_HOMING_SPEED_MMPS = 23, /* [mm/s] Guide speed towards the home end while homing. */
+    RW_PARAM_HOMING_LOAD_PCT = 24, /* [%] Homing ends (home found) when the present load stays over this for spindle_stall_time_s with no motion. */
+    RW_PARAM_SPINDLE_STALL_LOAD_PCT = 25, /* [%] Outside homing and grasping, load over this with no motion for spindle_stall_time_s is a stall fault. */
+    RW_PARAM_SPINDLE_STALL_TIME_S = 26, /* [s] How long a stall (or a homing stop) must last. */
+    RW_PARAM_GRASP_SECURE_LOAD_PCT = 27, /* [%] Retracting stops and holds (HOLD) when the load resisting retraction reaches this. */
+    RW_PARAM_RELEASE_MM = 28, /* [mm] RELEASE extends the guide by this much. */
+    RW_PARAM_RETRACT_SPEED_MMPS = 29, /* [mm/s] Guide speed while retracting a grasp. */
+    RW_PARAM_BATTERY_CUTOFF_V = 30, /* [V] Battery under this (3S: 3.3 V a cell) for battery_cutoff_time_s: BATTERY_LOW fault, spin-down. */
+    RW_PARAM_BATTERY_CUTOFF_TIME_S = 31, /* [s] How long the battery must stay under the cutoff (load sags are brief). */
+    RW_PARAM_SPINDLE_TIMEOUT_S = 32, /* [s] No answer from the AX-12A for this long: SPINDLE_NO_ANSWER fault, spindle stopped. */
 } rw_param_id;
 typedef struct {
     const char *name;

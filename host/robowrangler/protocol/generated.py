@@ -14,7 +14,7 @@ from typing import ClassVar
 
 PROTOCOL_VERSION = 1
 MAGIC = 0xB7
-SCHEMA_HASH = 0x8BE3
+SCHEMA_HASH = 0xDD3A
 HEADER_LEN = 7
 CHECKSUM_LEN = 2
 MAX_PAYLOAD_LEN = 64
@@ -39,6 +39,12 @@ class State(IntEnum):
     """A fault holds the ESC at its minimum; DISARM clears it once the rope has stopped."""
     ESTOP = 6
     """Emergency stop: ESC at its minimum at once, latched until DISARM."""
+    RELAX = 7
+    """Grasp, step 1: the rope slows to a stop so the loop settles onto the object (the ToV guard is lifted)."""
+    RETRACT = 8
+    """Grasp, step 2: the spindle reels the loop in until the spindle load says the object is secured (or the stroke ends)."""
+    HOLD = 9
+    """Grasp, step 3: the object is secured; the spindle holds its position."""
 
 
 class NackReason(IntEnum):
@@ -74,6 +80,10 @@ class NackReason(IntEnum):
     """Parameter can only be set while DISARMED."""
     NOT_A_COMMAND = 15
     """A device-to-host message (ACK, TELEMETRY, ...) was sent to the device."""
+    NOT_HOMED = 16
+    """The spindle has not been homed since boot: command HOME first."""
+    SPINDLE_UNAVAILABLE = 17
+    """The spindle servo does not answer or is in fault; NACK.detail = fault bits."""
 
 
 class EventKind(IntEnum):
@@ -93,6 +103,12 @@ class EventKind(IntEnum):
     """arg = parameter id."""
     ARMING_HOLD_DONE = 6
     """The ESC has seen its minimum pulse for arm_hold_s: ARM is now accepted."""
+    SPINDLE_HOMED = 7
+    """Homing found the end of the stroke; guide position 0 set. arg = 1 by stall, 2 by limit switch."""
+    SPINDLE_TARGET_REACHED = 8
+    """The guide reached its target within spindle_tolerance_mm; arg = position, um."""
+    FAULT_CLEARED = 9
+    """arg = the fault bits cleared (by DISARM)."""
 
 
 class Cause(IntEnum):
@@ -108,6 +124,27 @@ class Cause(IntEnum):
     """The loop fell: speed under ToV for collapse_time_s."""
     FAULT = 4
     """A fault (see fault_bits)."""
+    BATTERY_LOW = 5
+    """Battery under battery_cutoff_v for battery_cutoff_time_s."""
+    LOAD_SECURED = 6
+    """Spindle load reached grasp_secure_load_pct while retracting: the object is held."""
+    STROKE_END = 7
+    """Retracting reached the end of the guide stroke without securing a load."""
+
+
+class SpindleFlag(IntFlag):
+    """Spindle status bits (TELEMETRY.spindle_flags)."""
+
+    HOMED = 1
+    """Homed since boot: guide positions are valid."""
+    ANSWERING = 2
+    """The AX-12A answered its last read."""
+    DEAD_ZONE = 4
+    """The servo angle is in the 60 degree dead zone of its position sensor: position dead-reckoned."""
+    MOVING = 8
+    """A non-zero moving speed is commanded."""
+    HOMING = 16
+    """Homing in progress."""
 
 
 class Fault(IntFlag):
@@ -119,6 +156,10 @@ class Fault(IntFlag):
     """Battery under its cutoff voltage."""
     TICK_OVERRUN = 4
     """Control tick overran its period repeatedly."""
+    SPINDLE_STALL = 8
+    """Spindle commanded to move, load high and no motion for spindle_stall_time_s (outside a grasp)."""
+    SPINDLE_NO_ANSWER = 16
+    """The AX-12A did not answer for spindle_timeout_s."""
 
 
 class MsgKind(IntEnum):
@@ -144,6 +185,12 @@ class MsgId(IntEnum):
     ESTOP = 14
     PARAM_GET = 15
     PARAM_SET = 16
+    SET_LOOP = 17
+    RELAX = 18
+    RETRACT = 19
+    GRASP = 20
+    RELEASE = 21
+    HOME = 22
     SIL_SENSORS = 100
     SIL_ACTUATORS = 101
 
@@ -299,15 +346,20 @@ class Telemetry(Message):
         nacks: uint16 NACKs sent (wraps).
         events: uint16 Events emitted since boot (wraps): a gap means an EVENT was lost.
         tick_overruns: uint16 Control ticks that overran their period (wraps).
+        guide_position_um: int32 [um] Rope guide position along the lead screw from home (0 = largest loop); valid when spindle_flags has HOMED.
+        guide_target_um: int32 [um] Guide position the spindle loop is moving to.
+        spindle_load_permille: int16 [permille] AX-12A present load, per mille of its maximum torque, + = resisting retraction (rope tension).
+        spindle_flags: uint8 (spindle_flag) Spindle status.
+        spindle_rejected: uint16 Spindle position readings rejected as impossible jumps (wraps).
     """
 
     MSG_ID: ClassVar[int] = 3
     NAME: ClassVar[str] = "TELEMETRY"
     KIND: ClassVar[MsgKind] = MsgKind.TELEMETRY
-    CRC_EXTRA: ClassVar[int] = 0x2030
-    PAYLOAD_LEN: ClassVar[int] = 33
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IBHHHHHHHHHHHHHH")
-    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ((0, 4294967295), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535))
+    CRC_EXTRA: ClassVar[int] = 0xF8B0
+    PAYLOAD_LEN: ClassVar[int] = 46
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IBHHHHHHHHHHHHHHiihBH")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ((0, 4294967295), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (-2147483648, 2147483647), (-2147483648, 2147483647), (-32768, 32767), (0, 255), (0, 65535))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time_ms', 'uint32', 'ms', '', 'Device time since boot.'),
         FieldSpec('state', 'uint8', '', 'state', 'State machine state.'),
@@ -325,6 +377,11 @@ class Telemetry(Message):
         FieldSpec('nacks', 'uint16', '', '', 'NACKs sent (wraps).'),
         FieldSpec('events', 'uint16', '', '', 'Events emitted since boot (wraps): a gap means an EVENT was lost.'),
         FieldSpec('tick_overruns', 'uint16', '', '', 'Control ticks that overran their period (wraps).'),
+        FieldSpec('guide_position_um', 'int32', 'um', '', 'Rope guide position along the lead screw from home (0 = largest loop); valid when spindle_flags has HOMED.'),
+        FieldSpec('guide_target_um', 'int32', 'um', '', 'Guide position the spindle loop is moving to.'),
+        FieldSpec('spindle_load_permille', 'int16', 'permille', '', 'AX-12A present load, per mille of its maximum torque, + = resisting retraction (rope tension).'),
+        FieldSpec('spindle_flags', 'uint8', '', 'spindle_flag', 'Spindle status.'),
+        FieldSpec('spindle_rejected', 'uint16', '', '', 'Spindle position readings rejected as impossible jumps (wraps).'),
     )
 
     time_ms: int
@@ -343,6 +400,11 @@ class Telemetry(Message):
     nacks: int
     events: int
     tick_overruns: int
+    guide_position_um: int
+    guide_target_um: int
+    spindle_load_permille: int
+    spindle_flags: int
+    spindle_rejected: int
 
 
 @dataclass(frozen=True)
@@ -540,6 +602,103 @@ class ParamSet(Message):
 
 
 @dataclass(frozen=True)
+class SetLoop(Message):
+    """SET_LOOP (id 17, command): Move the rope guide (loop size). ARMED, SPINUP or AIRBORNE; needs a homed spindle (NOT_HOMED); guide_min_mm..guide_max_mm (OUT_OF_RANGE, detail = limit um).
+
+    Fields:
+        guide_position_um: int32 [um] Guide target from home; larger keeps more rope inside = smaller loop.
+    """
+
+    MSG_ID: ClassVar[int] = 17
+    NAME: ClassVar[str] = "SET_LOOP"
+    KIND: ClassVar[MsgKind] = MsgKind.COMMAND
+    CRC_EXTRA: ClassVar[int] = 0xC69A
+    PAYLOAD_LEN: ClassVar[int] = 4
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<i")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ((-2147483648, 2147483647),)
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('guide_position_um', 'int32', 'um', '', 'Guide target from home; larger keeps more rope inside = smaller loop.'),
+    )
+
+    guide_position_um: int
+
+
+@dataclass(frozen=True)
+class Relax(Message):
+    """RELAX (id 18, command): SPINUP or AIRBORNE -> RELAX: the rope ramps to a stop so the loop settles onto what it surrounds (commanded landing: the ToV guard is lifted).
+    """
+
+    MSG_ID: ClassVar[int] = 18
+    NAME: ClassVar[str] = "RELAX"
+    KIND: ClassVar[MsgKind] = MsgKind.COMMAND
+    CRC_EXTRA: ClassVar[int] = 0x6FBC
+    PAYLOAD_LEN: ClassVar[int] = 0
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ()
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()
+
+
+@dataclass(frozen=True)
+class Retract(Message):
+    """RETRACT (id 19, command): RELAX (rope stopped) or ARMED -> RETRACT: reel the loop in until the load secures the object (-> HOLD) or the stroke ends (-> ARMED). Needs a homed spindle.
+    """
+
+    MSG_ID: ClassVar[int] = 19
+    NAME: ClassVar[str] = "RETRACT"
+    KIND: ClassVar[MsgKind] = MsgKind.COMMAND
+    CRC_EXTRA: ClassVar[int] = 0x4CFF
+    PAYLOAD_LEN: ClassVar[int] = 0
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ()
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()
+
+
+@dataclass(frozen=True)
+class Grasp(Message):
+    """GRASP (id 20, command): AIRBORNE -> RELAX -> RETRACT -> HOLD in one command: relax onto the object, retract until the load says it is secured, hold.
+    """
+
+    MSG_ID: ClassVar[int] = 20
+    NAME: ClassVar[str] = "GRASP"
+    KIND: ClassVar[MsgKind] = MsgKind.COMMAND
+    CRC_EXTRA: ClassVar[int] = 0xC89B
+    PAYLOAD_LEN: ClassVar[int] = 0
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ()
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()
+
+
+@dataclass(frozen=True)
+class Release(Message):
+    """RELEASE (id 21, command): HOLD -> extend the guide by release_mm to let the object go -> ARMED.
+    """
+
+    MSG_ID: ClassVar[int] = 21
+    NAME: ClassVar[str] = "RELEASE"
+    KIND: ClassVar[MsgKind] = MsgKind.COMMAND
+    CRC_EXTRA: ClassVar[int] = 0x4B96
+    PAYLOAD_LEN: ClassVar[int] = 0
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ()
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()
+
+
+@dataclass(frozen=True)
+class Home(Message):
+    """HOME (id 22, command): DISARMED or ARMED (rope stopped): drive the guide to the home end until the servo stalls (present load) or the limit switch closes; position 0 there.
+    """
+
+    MSG_ID: ClassVar[int] = 22
+    NAME: ClassVar[str] = "HOME"
+    KIND: ClassVar[MsgKind] = MsgKind.COMMAND
+    CRC_EXTRA: ClassVar[int] = 0x319C
+    PAYLOAD_LEN: ClassVar[int] = 0
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ()
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()
+
+
+@dataclass(frozen=True)
 class SilSensors(Message):
     """SIL_SENSORS (id 100, sil): Plant -> SIL firmware, once per control tick: the plant's clock and the sensor values the board's HAL would read.
 
@@ -549,21 +708,31 @@ class SilSensors(Message):
         encoder_last_edge_us: uint32 [us] Plant time of the latest edge (timer capture).
         battery_mv: uint16 [mV] Battery voltage at the ADC, after the divider is undone.
         host_frames_sent: uint32 Frames the lockstep scenario host has sent to the command port so far; the SIL link waits until it has received as many (determinism). 0 when an interactive host drives.
+        spindle_position_raw: uint16 AX-12A present position register (0-1023 over 300 degrees; meaningless in the dead zone).
+        spindle_speed_raw: uint16 AX-12A present speed register (0-1023, bit 10 = direction).
+        spindle_load_raw: uint16 AX-12A present load register (0-1023 in 0.1 %, bit 10 = direction).
+        spindle_answered: uint8 1 if the servo answered this tick's read, else 0.
+        limit_switch: uint8 1 while the home limit switch is closed.
     """
 
     MSG_ID: ClassVar[int] = 100
     NAME: ClassVar[str] = "SIL_SENSORS"
     KIND: ClassVar[MsgKind] = MsgKind.SIL
-    CRC_EXTRA: ClassVar[int] = 0x25A9
-    PAYLOAD_LEN: ClassVar[int] = 18
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IIIHI")
-    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ((0, 4294967295), (0, 4294967295), (0, 4294967295), (0, 65535), (0, 4294967295))
+    CRC_EXTRA: ClassVar[int] = 0x06DB
+    PAYLOAD_LEN: ClassVar[int] = 26
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IIIHIHHHBB")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ((0, 4294967295), (0, 4294967295), (0, 4294967295), (0, 65535), (0, 4294967295), (0, 65535), (0, 65535), (0, 65535), (0, 255), (0, 255))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time_us', 'uint32', 'us', '', 'Plant clock (wraps like micros()).'),
         FieldSpec('encoder_counts', 'uint32', '', '', 'Cumulative encoder edges (wraps).'),
         FieldSpec('encoder_last_edge_us', 'uint32', 'us', '', 'Plant time of the latest edge (timer capture).'),
         FieldSpec('battery_mv', 'uint16', 'mV', '', 'Battery voltage at the ADC, after the divider is undone.'),
         FieldSpec('host_frames_sent', 'uint32', '', '', 'Frames the lockstep scenario host has sent to the command port so far; the SIL link waits until it has received as many (determinism). 0 when an interactive host drives.'),
+        FieldSpec('spindle_position_raw', 'uint16', '', '', 'AX-12A present position register (0-1023 over 300 degrees; meaningless in the dead zone).'),
+        FieldSpec('spindle_speed_raw', 'uint16', '', '', 'AX-12A present speed register (0-1023, bit 10 = direction).'),
+        FieldSpec('spindle_load_raw', 'uint16', '', '', 'AX-12A present load register (0-1023 in 0.1 %, bit 10 = direction).'),
+        FieldSpec('spindle_answered', 'uint8', '', '', "1 if the servo answered this tick's read, else 0."),
+        FieldSpec('limit_switch', 'uint8', '', '', '1 while the home limit switch is closed.'),
     )
 
     time_us: int
@@ -571,6 +740,11 @@ class SilSensors(Message):
     encoder_last_edge_us: int
     battery_mv: int
     host_frames_sent: int
+    spindle_position_raw: int
+    spindle_speed_raw: int
+    spindle_load_raw: int
+    spindle_answered: int
+    limit_switch: int
 
 
 @dataclass(frozen=True)
@@ -580,22 +754,25 @@ class SilActuators(Message):
     Fields:
         time_us: uint32 [us] Echo of the SIL_SENSORS time this answers.
         esc_pulse_us: uint16 [us] Pulse width for both ESCs.
+        spindle_moving_speed_raw: uint16 AX-12A moving speed register written this tick (wheel mode: 0-1023, bit 10 = direction).
     """
 
     MSG_ID: ClassVar[int] = 101
     NAME: ClassVar[str] = "SIL_ACTUATORS"
     KIND: ClassVar[MsgKind] = MsgKind.SIL
-    CRC_EXTRA: ClassVar[int] = 0x5250
-    PAYLOAD_LEN: ClassVar[int] = 6
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IH")
-    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ((0, 4294967295), (0, 65535))
+    CRC_EXTRA: ClassVar[int] = 0x01BF
+    PAYLOAD_LEN: ClassVar[int] = 8
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IHH")
+    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ((0, 4294967295), (0, 65535), (0, 65535))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time_us', 'uint32', 'us', '', 'Echo of the SIL_SENSORS time this answers.'),
         FieldSpec('esc_pulse_us', 'uint16', 'us', '', 'Pulse width for both ESCs.'),
+        FieldSpec('spindle_moving_speed_raw', 'uint16', '', '', 'AX-12A moving speed register written this tick (wheel mode: 0-1023, bit 10 = direction).'),
     )
 
     time_us: int
     esc_pulse_us: int
+    spindle_moving_speed_raw: int
 
 
 MESSAGES: dict[int, type[Message]] = {
@@ -612,6 +789,12 @@ MESSAGES: dict[int, type[Message]] = {
     14: Estop,
     15: ParamGet,
     16: ParamSet,
+    17: SetLoop,
+    18: Relax,
+    19: Retract,
+    20: Grasp,
+    21: Release,
+    22: Home,
     100: SilSensors,
     101: SilActuators,
 }
@@ -716,5 +899,21 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(14, 'telemetry_rate_hz', 'Hz', 1.0, 100.0, 50.0, False, False, 'TELEMETRY rate.'),
     ParamSpec(15, 'arm_hold_s', 's', 0.2, 5.0, 0.5, True, False, 'After boot the ESC gets its minimum pulse this long before ARM is accepted (BLHeli arms after ~0.2 s).'),
     ParamSpec(16, 'encoder_timeout_s', 's', 0.02, 2.0, 0.25, False, False, 'No encoder edge for this long with the throttle above idle -> ENCODER_SILENT fault.'),
+    ParamSpec(17, 'lead_mm_per_rev', 'mm/rev', 0.5, 20.0, 8.0, True, False, 'Lead screw lead: guide travel per spindle revolution.'),
+    ParamSpec(18, 'guide_min_mm', 'mm', 0.0, 180.0, 0.0, False, False, 'Soft limit at the home end (largest loop).'),
+    ParamSpec(19, 'guide_max_mm', 'mm', 1.0, 180.0, 180.0, False, False, 'Soft limit at the retracted end (smallest loop).'),
+    ParamSpec(20, 'spindle_kp_per_s', '1/s', 0.1, 50.0, 4.0, False, False, 'Guide position loop: commanded guide speed (mm/s) per mm of position error.'),
+    ParamSpec(21, 'spindle_max_speed_mmps', 'mm/s', 0.5, 15.0, 6.0, False, False, 'Fastest commanded guide speed.'),
+    ParamSpec(22, 'spindle_tolerance_mm', 'mm', 0.05, 5.0, 0.5, False, False, 'Guide position counted as reached within this distance of the target.'),
+    ParamSpec(23, 'homing_speed_mmps', 'mm/s', 0.5, 15.0, 3.0, False, False, 'Guide speed towards the home end while homing.'),
+    ParamSpec(24, 'homing_load_pct', '%', 5.0, 100.0, 50.0, False, False, 'Homing ends (home found) when the present load stays over this for spindle_stall_time_s with no motion.'),
+    ParamSpec(25, 'spindle_stall_load_pct', '%', 5.0, 100.0, 80.0, False, False, 'Outside homing and grasping, load over this with no motion for spindle_stall_time_s is a stall fault.'),
+    ParamSpec(26, 'spindle_stall_time_s', 's', 0.05, 5.0, 0.3, False, False, 'How long a stall (or a homing stop) must last.'),
+    ParamSpec(27, 'grasp_secure_load_pct', '%', 5.0, 100.0, 35.0, False, False, 'Retracting stops and holds (HOLD) when the load resisting retraction reaches this.'),
+    ParamSpec(28, 'release_mm', 'mm', 1.0, 180.0, 20.0, False, False, 'RELEASE extends the guide by this much.'),
+    ParamSpec(29, 'retract_speed_mmps', 'mm/s', 0.5, 15.0, 5.0, False, False, 'Guide speed while retracting a grasp.'),
+    ParamSpec(30, 'battery_cutoff_v', 'V', 6.0, 13.0, 9.9, False, False, 'Battery under this (3S: 3.3 V a cell) for battery_cutoff_time_s: BATTERY_LOW fault, spin-down.'),
+    ParamSpec(31, 'battery_cutoff_time_s', 's', 0.05, 10.0, 1.0, False, False, 'How long the battery must stay under the cutoff (load sags are brief).'),
+    ParamSpec(32, 'spindle_timeout_s', 's', 0.02, 2.0, 0.2, False, False, 'No answer from the AX-12A for this long: SPINDLE_NO_ANSWER fault, spindle stopped.'),
 )
 PARAMS_BY_NAME: dict[str, ParamSpec] = {p.name: p for p in PARAMS}

@@ -22,10 +22,16 @@ class LockstepLink:
         self.bad_replies = 0
 
     def exchange(self, *, time_us: int, encoder_counts: int, encoder_last_edge_us: int, battery_mv: int,
-                 host_frames_sent: int) -> gen.SilActuators:
-        """Send this tick's sensors; return the firmware's outputs for it. Raises SilTimeout if it does not answer."""
+                 host_frames_sent: int, spindle_position_raw: int = 0, spindle_speed_raw: int = 0,
+                 spindle_load_raw: int = 0, spindle_answered: bool = False,
+                 limit_switch: bool = False) -> gen.SilActuators:
+        """Send this tick's sensors; return the firmware's outputs for it. Raises SilTimeout if it does not answer.
+
+        Spindle registers are the AX-12A's raw register values (see the SIL_SENSORS message)."""
         msg = gen.SilSensors(time_us & _U32, encoder_counts & _U32, encoder_last_edge_us & _U32,
-                             max(0, min(int(battery_mv), 0xFFFF)), host_frames_sent & _U32)
+                             max(0, min(int(battery_mv), 0xFFFF)), host_frames_sent & _U32,
+                             spindle_position_raw, spindle_speed_raw, spindle_load_raw, int(spindle_answered),
+                             int(limit_switch))
         self._sock.send(gen.encode_frame(msg, self._seq))
         self._seq = (self._seq + 1) & 0xFFFF
         while True:
