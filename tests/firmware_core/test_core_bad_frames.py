@@ -40,19 +40,25 @@ CASES = [
     ("checksum", _patched(GOOD, 8, GOOD[8] ^ 0x01), NackReason.BAD_CHECKSUM, (SPEED_ID, SEQ)),
     ("other_schema", raw_frame(SPEED_ID, SEQ, GOOD[7:11], crc_extra=0x1111), NackReason.BAD_CHECKSUM, (SPEED_ID, SEQ)),
     ("unknown_message", raw_frame(99, SEQ, b"\x01\x02"), NackReason.UNKNOWN_MESSAGE, (99, SEQ)),
-    ("telemetry_sent_to_device", proto.encode_frame(proto.Telemetry(*([0] * 16)), SEQ), NackReason.NOT_A_COMMAND,
+    ("telemetry_sent_to_device", proto.encode_frame(proto.Telemetry(*([0] * len(proto.Telemetry.FIELDS))), SEQ), NackReason.NOT_A_COMMAND,
      (proto.MsgId.TELEMETRY, SEQ)),
     ("ack_sent_to_device", proto.encode_frame(proto.Ack(12, 1, 2), SEQ), NackReason.NOT_A_COMMAND,
      (proto.MsgId.ACK, SEQ)),
-    ("sil_sensors_sent_to_device", proto.encode_frame(proto.SilSensors(0, 0, 0, 0, 0), SEQ), NackReason.NOT_A_COMMAND,
+    ("sil_sensors_sent_to_device", proto.encode_frame(proto.SilSensors(*([0] * len(proto.SilSensors.FIELDS))), SEQ), NackReason.NOT_A_COMMAND,
      (proto.MsgId.SIL_SENSORS, SEQ)),
 ]
 
-# A datagram longer than the longest frame: the link truncates it to RW_MAX_FRAME_LEN + 1 bytes and
-# reports cap + 1; firmware/hal/rw_hal_link.h says "the core refuses it as OVERSIZE".
+# Datagrams longer than the longest frame: the link truncates them to RW_MAX_FRAME_LEN + 1 bytes and
+# reports cap + 1; the core refuses them as the decoder refuses the whole datagram (rw_hal_link.h).
+_LONG_HEADER = bytes([proto.MAGIC, 1, 0, SPEED_ID]) + SEQ.to_bytes(2, "little")
 LONG_CASES = [
-    ("max_frame_plus_one", GOOD + bytes(proto.MAX_FRAME_LEN + 1 - len(GOOD)), NackReason.OVERSIZE, (SPEED_ID, SEQ)),
-    ("two_hundred_bytes", GOOD + bytes(200 - len(GOOD)), NackReason.OVERSIZE, (SPEED_ID, SEQ)),
+    ("max_frame_plus_one_trailing", GOOD + bytes(proto.MAX_FRAME_LEN + 1 - len(GOOD)), NackReason.BAD_LENGTH,
+     (SPEED_ID, SEQ)),
+    ("two_hundred_bytes_trailing", GOOD + bytes(200 - len(GOOD)), NackReason.BAD_LENGTH, (SPEED_ID, SEQ)),
+    ("two_hundred_bytes_declared", _LONG_HEADER + bytes([191]) + bytes(193), NackReason.OVERSIZE, (SPEED_ID, SEQ)),
+    ("max_plus_one_declared", _LONG_HEADER + bytes([proto.MAX_PAYLOAD_LEN + 1]) + bytes(proto.MAX_PAYLOAD_LEN + 3),
+     NackReason.OVERSIZE, (SPEED_ID, SEQ)),
+    ("long_garbage", bytes(range(100)), NackReason.BAD_MAGIC, UNREAD),
 ]
 
 
@@ -101,27 +107,10 @@ def test_malformed_datagram_gets_its_nack_reason_and_changes_nothing(rw_core, da
     _check_refused_and_harmless(rw_core, data, reason, ids)
 
 
-@pytest.mark.xfail(strict=True, reason="core bug: a datagram longer than RW_MAX_FRAME_LEN is NACKed BAD_LENGTH, "
-                   "not OVERSIZE (rw_core_commands.c: the OVERSIZE override only runs when decode returned OK, "
-                   "which it never does for cap + 1 bytes)")
 @pytest.mark.parametrize("data, reason, ids", [c[1:] for c in LONG_CASES], ids=[c[0] for c in LONG_CASES])
-def test_datagram_longer_than_the_max_frame_is_refused_oversize(rw_core, data, reason, ids):
+def test_datagram_longer_than_the_max_frame_is_refused_as_the_decoder_would(rw_core, data, reason, ids):
+    assert len(data) > proto.MAX_FRAME_LEN
     _check_refused_and_harmless(rw_core, data, reason, ids)
-
-
-@pytest.mark.parametrize("data", [c[1] for c in LONG_CASES], ids=[c[0] for c in LONG_CASES])
-def test_datagram_longer_than_the_max_frame_is_refused_and_harmless(rw_core, data):
-    """Whatever the reason code, an over-long datagram is refused without effect."""
-    a, b = _airborne_twins(rw_core)
-    i0 = len(a.hal.out)
-    a.queue(data)
-    for h in (a, b):
-        h.run_ms(60)
-    (reply,) = a.replies(since=i0)
-    assert isinstance(reply.msg, proto.Nack)
-    assert a.hal.pulses_us == b.hal.pulses_us
-    assert a.telemetry()[-1].rx_bad == b.telemetry()[-1].rx_bad + 1
-    assert a.telemetry()[-1].rope_speed_target_mmps == 4000
 
 
 def test_every_frame_level_reason_in_a_row_counts_each_one(rw_core):

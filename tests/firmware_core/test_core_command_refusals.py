@@ -101,7 +101,7 @@ def test_set_rope_speed_while_disarmed_is_bad_state(rw_core):
     assert h.telemetry()[-1].rope_speed_target_mmps == 0
 
 
-@pytest.mark.parametrize("msg", [ParamGet(proto.PARAMS[-1].id + 1), ParamGet(255), ParamSet(17, 1.0),
+@pytest.mark.parametrize("msg", [ParamGet(len(proto.PARAMS)), ParamGet(255), ParamSet(len(proto.PARAMS), 1.0),
                                  ParamSet(200, 0.0)])
 def test_unknown_parameter_is_refused_with_its_id(rw_core, msg):
     a, b = _airborne_twins(rw_core)
