@@ -462,7 +462,10 @@ class Client:
                 continue
             if data is None:
                 continue
-            self._handle_datagram(data, time.monotonic())
+            try:
+                self._handle_datagram(data, time.monotonic())
+            except Exception:  # noqa: BLE001 - a bug in dispatch must not silence the link; counted
+                self._count_decode_error("DISPATCH")
 
     def _handle_datagram(self, data: bytes, received_s: float) -> None:
         try:

@@ -24,6 +24,14 @@ EV_STATE_CHANGED, EV_PARAM_CHANGED, EV_ARMING_HOLD_DONE = 1, 5, 6
 CAUSE_COMMAND, CAUSE_SPEED_REACHED = 0, 1
 
 
+def make(cls: type[gen.Message], **fields: float) -> gen.Message:
+    """A message with the given fields and every other field 0: stays valid when the schema grows."""
+    unknown = set(fields) - {f.name for f in cls.FIELDS}
+    if unknown:
+        raise TypeError(f"{cls.NAME} has no field(s) {sorted(unknown)}")
+    return cls(**{f.name: fields.get(f.name, 0) for f in cls.FIELDS})
+
+
 def _f32(x: float) -> float:
     return struct.unpack("<f", struct.pack("<f", x))[0]
 
@@ -189,7 +197,8 @@ class ScriptedDevice:
         self._event_seq = (seq + 1) & 0xFFFF
         if seq in self.drop_event_seqs:
             return []
-        return [self._send(EVENT_MSG(self._time_ms(), seq, kind, old, new, arg))]
+        return [self._send(make(EVENT_MSG, time_ms=self._time_ms(), event_seq=seq, event=kind, state_from=old,
+                                state_to=new, arg=arg))]
 
     def _time_ms(self) -> int:
         return int((time.monotonic() - self._start_s) * 1000) & 0xFFFFFFFF
@@ -264,9 +273,11 @@ class ScriptedDevice:
             out += self._set_state(State.ARMED, CAUSE_SPEED_REACHED)
         age_ms = 65535 if self._last_host_frame_s is None else int((time.monotonic() - self._last_host_frame_s) * 1000)
         mmps = round(self.setpoint_mps * 1000)
-        out.append(self._send(gen.Telemetry(
-            self._time_ms(), self.state, 0, round(self.target_mps * 1000), mmps, mmps,
-            round(self.setpoint_mps / (2 * math.pi * 0.015) * 60), 1000 + min(1000, mmps // 20), 12600,
-            min(age_ms, 65535), len(self.received) & 0xFFFF, self.bad_frames & 0xFFFF, self.duplicates & 0xFFFF,
-            self.nacks_sent & 0xFFFF, self._event_seq & 0xFFFF, 0)))
+        out.append(self._send(make(
+            gen.Telemetry, time_ms=self._time_ms(), state=self.state, rope_speed_target_mmps=round(self.target_mps * 1000),
+            rope_speed_setpoint_mmps=mmps, rope_speed_mmps=mmps,
+            motor_rpm=round(self.setpoint_mps / (2 * math.pi * 0.015) * 60), esc_pulse_us=1000 + min(1000, mmps // 20),
+            battery_mv=12600, heartbeat_age_ms=min(age_ms, 65535), rx_ok=len(self.received) & 0xFFFF,
+            rx_bad=self.bad_frames & 0xFFFF, rx_duplicates=self.duplicates & 0xFFFF, nacks=self.nacks_sent & 0xFFFF,
+            events=self._event_seq & 0xFFFF)))
         self._emit(out)

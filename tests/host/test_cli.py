@@ -13,7 +13,7 @@ from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.cli.main import main
 from robowrangler.client import Client
-from robowrangler.protocol.generated import MsgId, State
+from robowrangler.protocol.generated import PARAMS, MsgId, State
 from scripted_device import ScriptedDevice
 
 
@@ -179,7 +179,7 @@ def test_unexpected_exceptions_become_one_line_and_exit_1(device: ScriptedDevice
 
 def test_param_list_get_set(device: ScriptedDevice) -> None:
     listing = wrangler("--url", device.url, "--json", "param", "list").json
-    assert [p["name"] for p in listing["params"]][:2] == ["tov_mps", "tov_margin"] and len(listing["params"]) == 17
+    assert [p["name"] for p in listing["params"]][:2] == ["tov_mps", "tov_margin"] and len(listing["params"]) == len(PARAMS)
     assert wrangler("--url", device.url, "param", "get", "tov_mps").stdout == "tov_mps = 2.6 m/s\n"
     held = wrangler("--url", device.url, "--json", "param", "set", "tov_margin", "1.3").json
     assert held["value"] == 1.3 and held["units"] == "1"

@@ -11,7 +11,7 @@ import pytest
 from conftest import FAST
 from robowrangler.client import Client
 from robowrangler.errors import CommandRefused, InvalidArgument, LinkTimeout, NotConnected, UnknownParameter
-from robowrangler.protocol.generated import MsgId, NackReason, State
+from robowrangler.protocol.generated import PARAMS, MsgId, NackReason, State
 from scripted_device import ScriptedDevice
 
 
@@ -157,7 +157,7 @@ def test_params_get_set_and_list(device: ScriptedDevice) -> None:
         rw.arm()
         with pytest.raises(CommandRefused) as locked:
             rw.set_param("wheel_radius_m", 0.02)
-    assert values["tov_margin"] == 1.25 and values["encoder_counts_per_rev"] == 64.0 and len(values) == 17
+    assert values["tov_margin"] == 1.25 and values["encoder_counts_per_rev"] == 64.0 and len(values) == len(PARAMS)
     assert locked.value.reason == NackReason.PARAM_LOCKED and "disarm first" in str(locked.value)
 
 

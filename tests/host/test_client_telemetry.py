@@ -11,7 +11,7 @@ from robowrangler.client import Client
 from robowrangler.errors import LinkTimeout, StateTimeout
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import EventKind, Fault, MsgId, State
-from scripted_device import ScriptedDevice
+from scripted_device import ScriptedDevice, make
 
 
 def test_telemetry_samples_are_si_and_in_order(device: ScriptedDevice) -> None:
@@ -90,7 +90,7 @@ def test_events_arrive_in_si_and_lost_ones_are_counted(device: ScriptedDevice) -
 
 def test_bad_datagrams_are_counted_never_raised(device: ScriptedDevice) -> None:
     with Client(device.url, **FAST) as rw:
-        good = gen.encode_frame(gen.Telemetry(*([0] * 16)), 7)
+        good = gen.encode_frame(make(gen.Telemetry), 7)
         corrupted = good[:-1] + bytes([good[-1] ^ 0xFF])
         for junk in (b"", b"\x00" * 3, b"hello world", corrupted, good + b"\x00"):
             device.send_raw(junk)
@@ -111,3 +111,18 @@ def test_wait_for_state_tells_a_silent_link_from_a_slow_state(device: ScriptedDe
             rw.wait_for_state(State.ARMED, timeout_s=5.0)
         assert time.monotonic() - start < 0.6
     assert slow.value.actual == State.DISARMED
+
+
+def test_values_from_a_newer_firmware_are_kept_not_fatal(device: ScriptedDevice) -> None:
+    with Client(device.url, **FAST) as rw:
+        stream = rw.telemetry()  # subscribed from here on
+        future = make(gen.Telemetry, time_ms=987654, state=99, fault_bits=0x80, esc_pulse_us=1000, battery_mv=12000)
+        device.send_raw(gen.encode_frame(future, 1))
+        device.send_raw(gen.encode_frame(make(gen.Event, time_ms=987654, event=77, state_from=1, state_to=1), 2))
+        odd = next(s for s in stream if s.time_s == 987.654)
+        time.sleep(0.05)
+        assert rw.arm() == State.ARMED
+        events, stats = rw.events, rw.stats
+    assert odd.state == 99 and int(odd.fault_bits) == 0x80
+    assert events[0].kind == 77 and events[0].describe() == "77 ARMED -> ARMED"
+    assert stats.decode_errors == 0

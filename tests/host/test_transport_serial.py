@@ -16,6 +16,7 @@ from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import MsgId, State
 from robowrangler.transport import open_transport
 from robowrangler.transport_serial import SerialTransport, encode_serial_frame
+from scripted_device import make
 
 
 @pytest.fixture
@@ -27,7 +28,7 @@ def loop():
 
 def test_frames_with_zero_bytes_survive_the_loop(loop: SerialTransport) -> None:
     frames = [gen.encode_frame(gen.Ack(10, 0, 0), 0), gen.encode_frame(gen.SetRopeSpeed(0), 256),
-              gen.encode_frame(gen.Telemetry(*([0] * 16)), 0)]
+              gen.encode_frame(make(gen.Telemetry), 0)]
     assert all(0 in f for f in frames)
     for f in frames:
         loop.send(f)
@@ -113,7 +114,7 @@ class PtyDevice:
                         if frame.msg_id == MsgId.ARM:
                             self.state = State.ARMED
                         self._send(gen.Ack(frame.msg_id, frame.seq, self.state))
-            self._send(gen.Telemetry(1000, self.state, 0, 0, 0, 0, 0, 1000, 12000, 0, 0, 0, 0, 0, 0, 0))
+            self._send(make(gen.Telemetry, time_ms=1000, state=self.state, esc_pulse_us=1000, battery_mv=12000))
 
 
 def test_client_commands_a_device_over_a_real_serial_port() -> None:
