@@ -336,6 +336,9 @@ def gen_c_header(spec: Spec) -> str:
     for p in spec.params:
         w(f"    RW_PARAM_{p.name.upper()} = {p.id}, /* [{p.units}] {_c_comment(p.description)} */")
     w("} rw_param_id;")
+    w("/* Parameter defaults, for code that needs one as a constant (firmware/core/rw_defaults.h). */")
+    for p in spec.params:
+        w(f"#define RW_PARAM_DEFAULT_{p.name.upper()} {_c_float(p.default)}")
     w("typedef struct {")
     w("    const char *name;")
     w("    float min_value;")

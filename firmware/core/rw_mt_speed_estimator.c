@@ -130,9 +130,10 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
         e->state.last_edge_us = edge_us;
     } else if (dn > 0u) {
         const uint32_t dt_edges_us = edge_us - e->state.last_edge_us;
-        if (dt_edges_us > e->cfg.timeout_us) {
+        if (dt_edges_us > e->cfg.timeout_us && (dn == 1u || dt_edges_us >= RW_HALF_RANGE_U32)) {
             /* First edge after a silence longer than the timeout (possibly longer than 2^31 us): no
-             * speed can be measured across it. Re-latch; the next edge measures. */
+             * speed can be measured across it. Re-latch; the next edge measures. Several edges over a
+             * long interval (the caller missed ticks while the wheel turned) do measure: the mean. */
             e->state.last_count = count;
             e->state.last_edge_us = edge_us;
             e->state.raw_rev_per_s = 0.0f;

@@ -43,13 +43,15 @@ SOURCES = ("board", "sil", "simulator", "other")
 TIME_BASES = ("unix", "simulation")
 UNKNOWN_ENUM_PATTERN = "^UNKNOWN_[0-9]+$"
 
-# wire unit -> (wire name suffix, recording name suffix, scale from wire to recording value, SI unit text)
+# wire unit -> (wire name suffix, recording name suffix, divisor: recording value = wire value / divisor, unit text)
 UNIT_CONVERSIONS = {
-    "ms": ("_ms", "_s", 1e-3, "s"),
-    "mm/s": ("_mmps", "_mps", 1e-3, "m/s"),
-    "mV": ("_mv", "_v", 1e-3, "V"),
+    "ms": ("_ms", "_s", 1000, "s"),
+    "mm/s": ("_mmps", "_mps", 1000, "m/s"),
+    "mV": ("_mv", "_v", 1000, "V"),
     "us": ("_us", "_us", 1, "us (microseconds; pulse widths keep the ESC's unit)"),
     "rpm": ("_rpm", "_rpm", 1, "rev/min"),
+    "um": ("_um", "_m", 1000000, "m"),
+    "permille": ("_permille", "_permille", 1, "per mille (1/1000 of the full scale the description names)"),
 }
 # the unit suffixes an extra /sim/plant_truth value may carry
 SI_SUFFIXES = ("s", "mps", "mps2", "m", "mm", "rad", "rad_s", "n", "nm", "v", "a", "w", "kg", "hz", "us", "rpm", "j")
@@ -65,16 +67,16 @@ class SchemaGenError(ValueError):
 
 
 def _convert(msg: generate.Message, f: generate.Field) -> tuple[str, float]:
-    """(recording name, scale) of a wire field."""
+    """(recording name, divisor) of a wire field."""
     if not f.units:
         return f.name, 1
     if f.units not in UNIT_CONVERSIONS:
         raise SchemaGenError(f"{msg.name}.{f.name}: no SI conversion for unit {f.units!r} "
                              f"(known: {sorted(UNIT_CONVERSIONS)}); add it to UNIT_CONVERSIONS")
-    wire_suffix, si_suffix, scale, _ = UNIT_CONVERSIONS[f.units]
+    wire_suffix, si_suffix, divisor, _ = UNIT_CONVERSIONS[f.units]
     if not f.name.endswith(wire_suffix):
         raise SchemaGenError(f"{msg.name}.{f.name}: unit {f.units!r} but the name does not end in {wire_suffix!r}")
-    return f.name[: -len(wire_suffix)] + si_suffix, scale
+    return f.name[: -len(wire_suffix)] + si_suffix, divisor
 
 
 def _enum_schema(e: generate.Enum, description: str) -> dict:
@@ -90,29 +92,29 @@ def _enum_schema(e: generate.Enum, description: str) -> dict:
 
 def _field_schema(spec: generate.Spec, msg: generate.Message, f: generate.Field) -> tuple[str, dict, dict]:
     """(recording name, JSON Schema, conversion entry) of one wire field."""
-    name, scale = _convert(msg, f)
+    name, divisor = _convert(msg, f)
     enums = {e.name: e for e in spec.enums}
     desc = f.description
     if f.enum:
         e = enums[f.enum]
         kind = "bitmask" if e.bitmask else "enum"
-        return name, _enum_schema(e, desc), {"name": name, "wire": f.name, "kind": kind, "scale": 1,
+        return name, _enum_schema(e, desc), {"name": name, "wire": f.name, "kind": kind, "divisor": 1,
                                             "enum": e.py_name}
     lo, hi = generate.TYPES[f.type][3], generate.TYPES[f.type][4]
     if f.type == "float":
         return name, {"type": "number", "description": desc}, {"name": name, "wire": f.name, "kind": "number",
-                                                               "scale": 1, "enum": ""}
-    if scale == 1:
+                                                               "divisor": 1, "enum": ""}
+    if divisor == 1:
         schema = {"type": "integer", "minimum": lo, "maximum": hi}
         if f.units:
             schema["description"] = f"{desc} [{UNIT_CONVERSIONS[f.units][3]}]"
         else:
             schema["description"] = desc
-        return name, schema, {"name": name, "wire": f.name, "kind": "integer", "scale": 1, "enum": ""}
+        return name, schema, {"name": name, "wire": f.name, "kind": "integer", "divisor": 1, "enum": ""}
     si_unit = UNIT_CONVERSIONS[f.units][3]
-    schema = {"type": "number", "minimum": lo * scale, "maximum": hi * scale,
+    schema = {"type": "number", "minimum": lo / divisor, "maximum": hi / divisor,
               "description": f"{desc} [{si_unit}; on the wire {f.name} in {f.units}]"}
-    return name, schema, {"name": name, "wire": f.name, "kind": "scaled", "scale": scale, "enum": ""}
+    return name, schema, {"name": name, "wire": f.name, "kind": "scaled", "divisor": divisor, "enum": ""}
 
 
 def _object(title: str, description: str, properties: dict, required: list[str], **extra) -> dict:
@@ -271,8 +273,8 @@ def meta_schema(spec: generate.Spec) -> dict:
         "schema_hash": s("Protocol schema hash the channel schemas derive from (generated.SCHEMA_HASH), "
                          "0x + 4 upper-case hex digits.", pattern="^0x[0-9A-F]{4}$"),
         "protocol_version": s("Wire protocol version (decimal).", pattern="^[0-9]+$"),
-        "units": s("Units convention: SI values, names end in their unit (_s _mps _v _n _m _rad); _us and "
-                   "_rpm are the exceptions and say so.", const=UNITS_CONVENTION),
+        "units": s("Units convention: SI values, names end in their unit (_s _mps _v _n _m _rad); _us, _rpm "
+                   "and _permille are the exceptions and say so.", const=UNITS_CONVENTION),
         "time_base": s("What log_time/publish_time count: 'unix' = ns since 1970-01-01 UTC (host clock, "
                        "monotonic within the file), 'simulation' = ns of simulated time.", enum=list(TIME_BASES)),
         "seed": s("Random seed of a SIL/simulator run (decimal), '' if none.", pattern="^(-?[0-9]+)?$"),
@@ -352,7 +354,7 @@ def python_module(spec, texts, meta_text, tele_conv, event_conv, cmd_conv) -> st
     w("}")
     w(f"META_SCHEMA = {meta_text!r}")
     w("")
-    w("# conversion entries: recording name, wire field, kind (integer/scaled/number/enum/bitmask), scale, enum class")
+    w("# conversion entries: recording name, wire field, kind (integer/scaled/number/enum/bitmask), divisor, enum class")
     w(f"TELEMETRY_FIELDS: tuple[dict, ...] = {tuple(tele_conv)!r}")
     w(f"EVENT_FIELDS: tuple[dict, ...] = {tuple(event_conv)!r}")
     w(f"COMMAND_FIELDS: dict[str, tuple[dict, ...]] = {{k: tuple(v) for k, v in {cmd_conv!r}.items()}}")

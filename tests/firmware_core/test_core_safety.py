@@ -8,7 +8,7 @@ import pytest
 
 from core_harness import CoreHarness
 from robowrangler.protocol.generated import (
-    PARAMS_BY_NAME, Ack, Cause, Disarm, Estop, EventKind, Fault, ParamSet, SetRopeSpeed, Spindown, State,
+    PARAMS_BY_NAME, Ack, Cause, NackReason, Disarm, Estop, EventKind, Fault, ParamSet, SetRopeSpeed, Spindown, State,
 )
 
 S = State
@@ -175,13 +175,14 @@ def test_esc_pulse_never_under_esc_min_through_a_whole_cycle(rw_core, esc_min_us
     assert max(pulses) <= 2000
 
 
-@pytest.mark.parametrize("esc_min_us", [
-    1000.0, 1100.0,
-    pytest.param(900.0, marks=pytest.mark.xfail(strict=True, reason=(
-        "core bug: esc_min_us may be 900..1200 but rw_throttle_map clamps the pulse range to "
-        "RW_ESC_PULSE_LIMIT_LOW_US = 1000, so zero throttle while driving is 1000 us, 100 us over the "
-        "ESC's idle"))),
-])
+def test_esc_min_under_the_esc_protocol_floor_is_refused(rw_core):
+    """esc_min_us below 1000 us (the bottom of the ESC protocol) is refused, not clamped."""
+    h = CoreHarness(rw_core)
+    verdict = h.command(ParamSet(PARAMS_BY_NAME["esc_min_us"].id, 900.0))
+    assert verdict.reason == NackReason.OUT_OF_RANGE
+
+
+@pytest.mark.parametrize("esc_min_us", [1000.0, 1100.0, 1200.0])
 def test_zero_throttle_while_driving_is_the_esc_idle_pulse(rw_core, esc_min_us):
     """SPINUP with the rope faster than the target: the PI goes to zero throttle = esc_min_us."""
     h = CoreHarness(rw_core, params={"esc_min_us": esc_min_us})

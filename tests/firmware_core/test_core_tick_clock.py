@@ -71,10 +71,6 @@ def test_ten_second_pause_moves_the_ramp_by_one_short_step_and_sends_one_telemet
     assert tel[-1].rope_speed_target_mmps == 8000 and tel[-1].state == S.AIRBORNE
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug (rw_mt_speed_estimator.c, since ad26299): dn > 0 with dT > timeout_us re-latches and reports "
-    "0 m/s even when dn edges arrived over dT (a long tick gap, the rope running), so the PI sees a false "
-    "4 m/s error: the ESC jumps ~255 us and the integral winds up"))
 def test_ten_second_pause_does_not_jump_the_esc_pulse(rw_core):
     h = _airborne_loaded(rw_core)
     h.drain(25)

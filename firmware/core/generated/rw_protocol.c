@@ -615,7 +615,7 @@ const rw_param_info rw_param_table[RW_PARAM_COUNT] = {
     { "heartbeat_timeout_s", 0.1f, 10.0f, 0.5f, 0u },
     { "max_rope_speed_mps", 1.0f, 25.0f, 20.0f, 0u },
     { "motor_kv_rpm_per_v", 100.0f, 5000.0f, 1250.0f, 0u },
-    { "esc_min_us", 900.0f, 1200.0f, 1000.0f, RW_PARAM_FLAG_LOCKED },
+    { "esc_min_us", 1000.0f, 1200.0f, 1000.0f, RW_PARAM_FLAG_LOCKED },
     { "speed_filter_tau_s", 0.0f, 0.2f, 0.01f, 0u },
     { "telemetry_rate_hz", 1.0f, 100.0f, 50.0f, 0u },
     { "arm_hold_s", 0.2f, 5.0f, 0.5f, RW_PARAM_FLAG_LOCKED },

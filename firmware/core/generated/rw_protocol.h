@@ -438,7 +438,7 @@ typedef enum {
     RW_PARAM_HEARTBEAT_TIMEOUT_S = 9, /* [s] Host silence after which the device spins the rope down. */
     RW_PARAM_MAX_ROPE_SPEED_MPS = 10, /* [m/s] Largest accepted SET_ROPE_SPEED. */
     RW_PARAM_MOTOR_KV_RPM_PER_V = 11, /* [rpm/V] Motor velocity constant, for the feed-forward throttle map. */
-    RW_PARAM_ESC_MIN_US = 12, /* [us] ESC minimum (idle) pulse; the output never goes under it. */
+    RW_PARAM_ESC_MIN_US = 12, /* [us] ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher). */
     RW_PARAM_SPEED_FILTER_TAU_S = 13, /* [s] Time constant of the low-pass on the measured speed (0 = off). */
     RW_PARAM_TELEMETRY_RATE_HZ = 14, /* [Hz] TELEMETRY rate. */
     RW_PARAM_ARM_HOLD_S = 15, /* [s] After boot the ESC gets its minimum pulse this long before ARM is accepted (BLHeli arms after ~0.2 s). */
@@ -460,6 +460,40 @@ typedef enum {
     RW_PARAM_BATTERY_CUTOFF_TIME_S = 31, /* [s] How long the battery must stay under the cutoff (load sags are brief). */
     RW_PARAM_SPINDLE_TIMEOUT_S = 32, /* [s] No answer from the AX-12A for this long: SPINDLE_NO_ANSWER fault, spindle stopped. */
 } rw_param_id;
+/* Parameter defaults, for code that needs one as a constant (firmware/core/rw_defaults.h). */
+#define RW_PARAM_DEFAULT_TOV_MPS 2.6f
+#define RW_PARAM_DEFAULT_TOV_MARGIN 1.15f
+#define RW_PARAM_DEFAULT_COLLAPSE_TIME_S 0.3f
+#define RW_PARAM_DEFAULT_SPEED_KP 0.04f
+#define RW_PARAM_DEFAULT_SPEED_KI 0.4f
+#define RW_PARAM_DEFAULT_RAMP_UP_MPS2 20.0f
+#define RW_PARAM_DEFAULT_RAMP_DOWN_MPS2 10.0f
+#define RW_PARAM_DEFAULT_WHEEL_RADIUS_M 0.015f
+#define RW_PARAM_DEFAULT_ENCODER_COUNTS_PER_REV 64.0f
+#define RW_PARAM_DEFAULT_HEARTBEAT_TIMEOUT_S 0.5f
+#define RW_PARAM_DEFAULT_MAX_ROPE_SPEED_MPS 20.0f
+#define RW_PARAM_DEFAULT_MOTOR_KV_RPM_PER_V 1250.0f
+#define RW_PARAM_DEFAULT_ESC_MIN_US 1000.0f
+#define RW_PARAM_DEFAULT_SPEED_FILTER_TAU_S 0.01f
+#define RW_PARAM_DEFAULT_TELEMETRY_RATE_HZ 50.0f
+#define RW_PARAM_DEFAULT_ARM_HOLD_S 0.5f
+#define RW_PARAM_DEFAULT_ENCODER_TIMEOUT_S 0.25f
+#define RW_PARAM_DEFAULT_LEAD_MM_PER_REV 8.0f
+#define RW_PARAM_DEFAULT_GUIDE_MIN_MM 0.0f
+#define RW_PARAM_DEFAULT_GUIDE_MAX_MM 180.0f
+#define RW_PARAM_DEFAULT_SPINDLE_KP_PER_S 4.0f
+#define RW_PARAM_DEFAULT_SPINDLE_MAX_SPEED_MMPS 6.0f
+#define RW_PARAM_DEFAULT_SPINDLE_TOLERANCE_MM 0.5f
+#define RW_PARAM_DEFAULT_HOMING_SPEED_MMPS 3.0f
+#define RW_PARAM_DEFAULT_HOMING_LOAD_PCT 50.0f
+#define RW_PARAM_DEFAULT_SPINDLE_STALL_LOAD_PCT 80.0f
+#define RW_PARAM_DEFAULT_SPINDLE_STALL_TIME_S 0.3f
+#define RW_PARAM_DEFAULT_GRASP_SECURE_LOAD_PCT 35.0f
+#define RW_PARAM_DEFAULT_RELEASE_MM 20.0f
+#define RW_PARAM_DEFAULT_RETRACT_SPEED_MMPS 5.0f
+#define RW_PARAM_DEFAULT_BATTERY_CUTOFF_V 9.9f
+#define RW_PARAM_DEFAULT_BATTERY_CUTOFF_TIME_S 1.0f
+#define RW_PARAM_DEFAULT_SPINDLE_TIMEOUT_S 0.2f
 typedef struct {
     const char *name;
     float min_value;

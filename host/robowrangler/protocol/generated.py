@@ -894,7 +894,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(9, 'heartbeat_timeout_s', 's', 0.1, 10.0, 0.5, False, False, 'Host silence after which the device spins the rope down.'),
     ParamSpec(10, 'max_rope_speed_mps', 'm/s', 1.0, 25.0, 20.0, False, False, 'Largest accepted SET_ROPE_SPEED.'),
     ParamSpec(11, 'motor_kv_rpm_per_v', 'rpm/V', 100.0, 5000.0, 1250.0, False, False, 'Motor velocity constant, for the feed-forward throttle map.'),
-    ParamSpec(12, 'esc_min_us', 'us', 900.0, 1200.0, 1000.0, True, False, 'ESC minimum (idle) pulse; the output never goes under it.'),
+    ParamSpec(12, 'esc_min_us', 'us', 1000.0, 1200.0, 1000.0, True, False, 'ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher).'),
     ParamSpec(13, 'speed_filter_tau_s', 's', 0.0, 0.2, 0.01, False, False, 'Time constant of the low-pass on the measured speed (0 = off).'),
     ParamSpec(14, 'telemetry_rate_hz', 'Hz', 1.0, 100.0, 50.0, False, False, 'TELEMETRY rate.'),
     ParamSpec(15, 'arm_hold_s', 's', 0.2, 5.0, 0.5, True, False, 'After boot the ESC gets its minimum pulse this long before ARM is accepted (BLHeli arms after ~0.2 s).'),
