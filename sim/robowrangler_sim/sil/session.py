@@ -34,6 +34,22 @@ class PlantSample:
     loop_airborne: bool
 
 
+@dataclass(frozen=True)
+class SensorValues:
+    """The sensor values the plant hands the firmware at one tick (the SIL_SENSORS fields but the barrier)."""
+
+    time_us: int
+    encoder_counts: int
+    encoder_last_edge_us: int
+    battery_mv: int
+
+
+SensorFilter = Callable[[SensorValues], "SensorValues | None"]
+"""Per tick, before the exchange: returns the values the firmware sees, or None = the firmware misses this tick."""
+ActuatorFilter = Callable[[int], int]
+"""Per tick, after the exchange: maps the ESC pulse the firmware drives (us) to the pulse the plant's ESC gets."""
+
+
 class SilSession:
     """Firmware + drive plant in lockstep. Use as a context manager, or start()/stop().
 
@@ -44,6 +60,13 @@ class SilSession:
         speedup: pacing factor for run_for/background running; None = unpaced.
         cmd_port: UDP port of the firmware's command link on 127.0.0.1 (0 = a free port).
         trace_every: keep a PlantSample every this many ticks (0 = none).
+
+    Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
+    ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
+    SensorValues and returns the (possibly altered) values the firmware sees, or None: then no
+    SIL_SENSORS is sent, the firmware misses the tick and the plant runs on with the last ESC pulse (a
+    stalled control loop). An actuator filter maps the ESC pulse the firmware drives to the pulse the
+    plant's ESC receives (applied on missed ticks too). Change the lists between steps or in at().
     """
 
     def __init__(self, *, drive_params: DriveParams | None = None, seed: int = 0, tick_us: int = 1000,
@@ -60,6 +83,8 @@ class SilSession:
         self.trace: list[PlantSample] = []
         self.ticks = 0
         self.last_esc_pulse_us = 0
+        self.sensor_filters: list[SensorFilter] = []
+        self.actuator_filters: list[ActuatorFilter] = []
         self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s)
         self._link: LockstepLink | None = None
         self._actions: list[tuple[int, int, Callable[[], None]]] = []
@@ -130,22 +155,32 @@ class SilSession:
             while self._actions and self._actions[0][0] <= plant.time_us:
                 _, _, action = heapq.heappop(self._actions)
                 action()
-        try:
-            out = self._link.exchange(
-                time_us=plant.time_us, encoder_counts=plant.encoder_counts,
-                encoder_last_edge_us=plant.encoder_last_edge_us,
-                battery_mv=round(plant.battery_adc_v * 1000.0), host_frames_sent=host_frames_sent,
-            )
-        except SilError:
-            code = self._firmware.poll()
-            if code is not None:
-                raise SilFirmwareError(f"SIL firmware exited with code {code}: {self._firmware.stderr_text()}") from None
-            raise
-        self.last_esc_pulse_us = out.esc_pulse_us
-        plant.step_us(esc_pulse_us=float(out.esc_pulse_us), dt_us=self.tick_us)
+        sensors: SensorValues | None = SensorValues(plant.time_us, plant.encoder_counts, plant.encoder_last_edge_us,
+                                                    round(plant.battery_adc_v * 1000.0))
+        for sensor_filter in self.sensor_filters:
+            sensors = sensor_filter(sensors)
+            if sensors is None:
+                break
+        if sensors is not None:
+            try:
+                out = self._link.exchange(
+                    time_us=sensors.time_us, encoder_counts=sensors.encoder_counts,
+                    encoder_last_edge_us=sensors.encoder_last_edge_us, battery_mv=sensors.battery_mv,
+                    host_frames_sent=host_frames_sent,
+                )
+            except SilError:
+                code = self._firmware.poll()
+                if code is not None:
+                    raise SilFirmwareError(f"SIL firmware exited with code {code}: {self._firmware.stderr_text()}") from None
+                raise
+            self.last_esc_pulse_us = out.esc_pulse_us
+        plant_pulse_us = self.last_esc_pulse_us
+        for actuator_filter in self.actuator_filters:
+            plant_pulse_us = actuator_filter(plant_pulse_us)
+        plant.step_us(esc_pulse_us=float(plant_pulse_us), dt_us=self.tick_us)
         self.ticks += 1
         if self.trace_every and self.ticks % self.trace_every == 0:
-            self.trace.append(PlantSample(plant.time_us * 1e-6, plant.rope_speed_mps, out.esc_pulse_us,
+            self.trace.append(PlantSample(plant.time_us * 1e-6, plant.rope_speed_mps, self.last_esc_pulse_us,
                                           plant.battery_v, plant.external_rope_load_n, plant.loop_airborne))
         self._pace()
 

@@ -1,0 +1,43 @@
+"""Fixtures for the network-impairment and plant-fault suites: SIL sessions behind an ImpairmentProxy."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack
+from pathlib import Path
+
+import pytest
+
+from robowrangler_sim.sil import SilSession
+from robowrangler_sim.sil.impairment import ImpairedLockstep, ImpairmentConfig, ImpairmentProxy
+from robowrangler_sim.sil.scripted_host import ScriptedHost
+
+
+@pytest.fixture
+def lossy_host(native_build_dir: Path) -> Iterator[Callable[..., ScriptedHost]]:
+    """Factory: a ScriptedHost talking through an ImpairmentProxy (lockstep, deterministic) to an unpaced SIL.
+
+    lossy_host(config, seed=0, warmup_s=0.6) -> host; host.sil.proxy is the proxy (logging on), host.sil.sil
+    the SilSession. The impairment starts after the warm-up (past the ESC arming hold), with a clean link
+    before it.
+    """
+    with ExitStack() as stack:
+        def make(config: ImpairmentConfig, *, seed: int = 0, warmup_s: float = 0.6) -> ScriptedHost:
+            sil = stack.enter_context(SilSession(speedup=None, seed=seed))
+            proxy = stack.enter_context(ImpairmentProxy(device_port=sil.cmd_port, seed=seed, keep_log=True))
+            host = ScriptedHost(ImpairedLockstep(sil, proxy))
+            stack.callback(host.close)
+            host.run_for(warmup_s)
+            proxy.config = config
+            return host
+        yield make
+
+
+@pytest.fixture
+def plain_host(native_build_dir: Path) -> Iterator[ScriptedHost]:
+    """A scripted host on an unpaced SIL without a proxy, past the ESC arming hold (0.6 s simulated)."""
+    with SilSession(speedup=None) as sil:
+        host = ScriptedHost(sil)
+        host.run_for(0.6)
+        yield host
+        host.close()
