@@ -68,8 +68,12 @@ class _HalScheduler(ctypes.Structure):
 
 
 class _Hal(ctypes.Structure):
+    # spindle: NULL, no spindle fitted (the rope core is tested here). Interfaces added to rw_hal later
+    # must be appended here too; the trailing NULL pointers keep an older mirror from handing the core
+    # garbage in the meantime.
     _fields_ = [("esc", POINTER(_HalEsc)), ("encoder", POINTER(_HalEncoder)), ("battery", POINTER(_HalBattery)),
-                ("link", POINTER(_HalLink)), ("scheduler", POINTER(_HalScheduler))]
+                ("link", POINTER(_HalLink)), ("scheduler", POINTER(_HalScheduler)), ("spindle", c_void_p),
+                ("_reserved_null", c_void_p * 4)]
 
 
 def declare_core(lib: ctypes.CDLL) -> ctypes.CDLL:

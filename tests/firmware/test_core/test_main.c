@@ -1,0 +1,673 @@
+/*
+ * Unity tests of the firmware core top level (rw_core): state transitions and their STATE_CHANGED
+ * events, the arming hold, ESTOP, NACK reasons (frame and command level), retransmissions, outbox
+ * priority, one datagram in and out per tick, heartbeat loss, encoder silence, tick-clock wrap.
+ *
+ * A fake HAL in C: the encoder is a wheel at a set rope speed (edge times in integer nanoseconds,
+ * 64 edges/rev, 15 mm wheel), the battery reads a set voltage, the link delivers queued datagrams
+ * and records every reply and sent frame. One tick = 1 ms. Run with `pio test -e native`.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+#include <unity.h>
+
+#include "rw_core.h"
+
+#define TICK_US 1000u
+#define MAX_OUT 4096u
+#define MAX_IN 8u
+#define TWO_PI 6.283185307179586
+
+/* ---- fake HAL ------------------------------------------------------------------------------------ */
+
+typedef struct {
+    uint8_t bytes[RW_MAX_FRAME_LEN];
+    uint8_t len;
+    bool reply; /* true: reply() to the sender, false: send() to the peer */
+    uint32_t tick;
+} out_frame;
+
+static struct {
+    /* inputs */
+    uint64_t t_ns;
+    uint32_t clock_offset_us;
+    uint32_t counts;
+    uint32_t last_edge_us;
+    uint64_t period_ns; /* 0: wheel stopped */
+    uint64_t next_edge_ns;
+    uint16_t battery_mv;
+    uint8_t inbox[MAX_IN][128];
+    size_t inbox_len[MAX_IN];
+    unsigned in_head;
+    unsigned in_count;
+    /* outputs */
+    uint16_t pulse_us;
+    uint32_t ticks;
+    out_frame out[MAX_OUT];
+    unsigned n_out;
+    unsigned accept_peer_calls;
+    unsigned out_this_tick_max;
+    unsigned out_this_tick;
+} fake;
+
+static rw_core core;
+static uint16_t host_seq;
+
+static rw_encoder_sample encoder_read(void *ctx)
+{
+    (void)ctx;
+    rw_encoder_sample s = { fake.counts, fake.last_edge_us };
+    return s;
+}
+
+static uint16_t battery_read_mv(void *ctx)
+{
+    (void)ctx;
+    return fake.battery_mv;
+}
+
+static void esc_write_pulse_us(void *ctx, uint16_t pulse_us)
+{
+    (void)ctx;
+    fake.pulse_us = pulse_us;
+}
+
+static size_t link_recv(void *ctx, uint8_t *buf, size_t cap)
+{
+    (void)ctx;
+    if (fake.in_count == 0u) {
+        return 0u;
+    }
+    unsigned i = fake.in_head;
+    fake.in_head = (fake.in_head + 1u) % MAX_IN;
+    --fake.in_count;
+    size_t n = fake.inbox_len[i];
+    memcpy(buf, fake.inbox[i], n < cap ? n : cap);
+    return n <= cap ? n : cap + 1u;
+}
+
+static void record(const uint8_t *frame, size_t len, bool reply)
+{
+    TEST_ASSERT_TRUE_MESSAGE(len > 0u && len <= RW_MAX_FRAME_LEN, "the core emits whole frames");
+    TEST_ASSERT_TRUE(fake.n_out < MAX_OUT);
+    out_frame *o = &fake.out[fake.n_out++];
+    memcpy(o->bytes, frame, len);
+    o->len = (uint8_t)len;
+    o->reply = reply;
+    o->tick = fake.ticks;
+    ++fake.out_this_tick;
+}
+
+static void link_reply(void *ctx, const uint8_t *frame, size_t len)
+{
+    (void)ctx;
+    record(frame, len, true);
+}
+
+static void link_send(void *ctx, const uint8_t *frame, size_t len)
+{
+    (void)ctx;
+    record(frame, len, false);
+}
+
+static void link_accept_peer(void *ctx)
+{
+    (void)ctx;
+    ++fake.accept_peer_calls;
+}
+
+static uint32_t tick_overruns(void *ctx)
+{
+    (void)ctx;
+    return 0u;
+}
+
+static const rw_hal_esc_output hal_esc = { NULL, esc_write_pulse_us };
+static const rw_hal_encoder hal_encoder = { NULL, encoder_read };
+static const rw_hal_battery hal_battery = { NULL, battery_read_mv };
+static const rw_hal_link hal_link = { NULL, link_recv, link_reply, link_accept_peer, link_send };
+static const rw_hal_scheduler hal_scheduler = { NULL, tick_overruns };
+/* Designated: interfaces this suite does not use (the spindle) stay NULL = not fitted. */
+static const rw_hal hal = {
+    .esc = &hal_esc, .encoder = &hal_encoder, .battery = &hal_battery, .link = &hal_link, .scheduler = &hal_scheduler,
+};
+
+/* ---- driving the core ---------------------------------------------------------------------------- */
+
+static void set_rope_speed_mps(double v_mps)
+{
+    if (v_mps <= 0.0) {
+        fake.period_ns = 0u;
+        return;
+    }
+    double counts_per_s = v_mps / (TWO_PI * 0.015) * 64.0;
+    bool was_stopped = fake.period_ns == 0u;
+    fake.period_ns = (uint64_t)(1.0e9 / counts_per_s + 0.5);
+    if (was_stopped) {
+        fake.next_edge_ns = fake.t_ns + fake.period_ns;
+    }
+}
+
+static void tick(void)
+{
+    if (fake.ticks > 0u) {
+        fake.t_ns += (uint64_t)TICK_US * 1000u;
+    }
+    while (fake.period_ns != 0u && fake.next_edge_ns <= fake.t_ns) {
+        ++fake.counts;
+        fake.last_edge_us = (uint32_t)(fake.clock_offset_us + (uint32_t)(fake.next_edge_ns / 1000u));
+        fake.next_edge_ns += fake.period_ns;
+    }
+    fake.out_this_tick = 0u;
+    rw_core_tick(&core, &hal, (uint32_t)(fake.clock_offset_us + (uint32_t)(fake.t_ns / 1000u)));
+    if (fake.out_this_tick > fake.out_this_tick_max) {
+        fake.out_this_tick_max = fake.out_this_tick;
+    }
+    ++fake.ticks;
+}
+
+static uint32_t now_ms(void)
+{
+    return (uint32_t)(fake.t_ns / 1000000u);
+}
+
+static void run_ms(uint32_t ms)
+{
+    for (uint32_t i = 0u; i < ms; ++i) {
+        tick();
+    }
+}
+
+static void queue_bytes(const uint8_t *data, size_t len)
+{
+    TEST_ASSERT_TRUE(fake.in_count < MAX_IN && len <= sizeof fake.inbox[0]);
+    unsigned i = (fake.in_head + fake.in_count) % MAX_IN;
+    memcpy(fake.inbox[i], data, len);
+    fake.inbox_len[i] = len;
+    ++fake.in_count;
+}
+
+/* Frame builders (the generated encoders); each returns the frame length. */
+static size_t frame_arm(uint8_t *buf, uint16_t seq)
+{
+    rw_msg_arm m = { 0u };
+    return rw_msg_arm_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+static size_t frame_disarm(uint8_t *buf, uint16_t seq)
+{
+    rw_msg_disarm m = { 0u };
+    return rw_msg_disarm_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+static size_t frame_speed(uint8_t *buf, uint16_t seq, int32_t mmps)
+{
+    rw_msg_set_rope_speed m = { mmps };
+    return rw_msg_set_rope_speed_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+static size_t frame_spindown(uint8_t *buf, uint16_t seq)
+{
+    rw_msg_spindown m = { 0u };
+    return rw_msg_spindown_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+static size_t frame_estop(uint8_t *buf, uint16_t seq)
+{
+    rw_msg_estop m = { 0u };
+    return rw_msg_estop_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+static size_t frame_param_set(uint8_t *buf, uint16_t seq, uint8_t id, float value)
+{
+    rw_msg_param_set m = { id, value };
+    return rw_msg_param_set_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+static size_t frame_param_get(uint8_t *buf, uint16_t seq, uint8_t id)
+{
+    rw_msg_param_get m = { id };
+    return rw_msg_param_get_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+static void heartbeat(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    rw_msg_heartbeat m = { now_ms() };
+    queue_bytes(buf, rw_msg_heartbeat_encode(&m, ++host_seq, buf, sizeof buf));
+}
+
+/* The verdict the core replied in the last tick. */
+typedef struct {
+    bool ack;
+    uint8_t cmd_msg_id;
+    uint16_t cmd_seq;
+    uint8_t reason; /* 0 for an ACK */
+    uint8_t state;
+    int32_t detail;
+} verdict;
+
+static verdict last_reply(void)
+{
+    verdict v = { false, 0u, 0u, 0u, 0u, 0 };
+    TEST_ASSERT_TRUE(fake.n_out > 0u);
+    const out_frame *o = &fake.out[fake.n_out - 1u];
+    TEST_ASSERT_TRUE_MESSAGE(o->reply && o->tick == fake.ticks - 1u, "a reply in the last tick");
+    rw_frame f;
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_frame_decode(o->bytes, o->len, &f));
+    if (f.msg_id == RW_MSG_ID_ACK) {
+        rw_msg_ack a;
+        rw_msg_ack_unpack(&a, f.payload);
+        v.ack = true;
+        v.cmd_msg_id = a.cmd_msg_id;
+        v.cmd_seq = a.cmd_seq;
+        v.state = a.state;
+    } else {
+        TEST_ASSERT_EQUAL_UINT8(RW_MSG_ID_NACK, f.msg_id);
+        rw_msg_nack n;
+        rw_msg_nack_unpack(&n, f.payload);
+        v.cmd_msg_id = n.cmd_msg_id;
+        v.cmd_seq = n.cmd_seq;
+        v.reason = n.reason;
+        v.state = n.state;
+        v.detail = n.detail;
+    }
+    return v;
+}
+
+/* Queues a frame, runs one tick, returns the verdict. */
+static verdict command(const uint8_t *buf, size_t len)
+{
+    queue_bytes(buf, len);
+    tick();
+    return last_reply();
+}
+
+static uint8_t sent_msg_id(unsigned i, rw_frame *f)
+{
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_frame_decode(fake.out[i].bytes, fake.out[i].len, f));
+    return f->msg_id;
+}
+
+/* Events sent (not replies) from index `from` on, of one kind; copies up to cap of them. */
+static unsigned events_of_kind(unsigned from, uint8_t kind, rw_msg_event *events, unsigned cap)
+{
+    unsigned n = 0u;
+    for (unsigned i = from; i < fake.n_out; ++i) {
+        rw_frame f;
+        if (fake.out[i].reply || sent_msg_id(i, &f) != RW_MSG_ID_EVENT) {
+            continue;
+        }
+        rw_msg_event e;
+        rw_msg_event_unpack(&e, f.payload);
+        if (e.event == kind) {
+            if (n < cap) {
+                events[n] = e;
+            }
+            ++n;
+        }
+    }
+    return n;
+}
+
+static void boot_and_arm(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    tick();
+    run_ms(501);
+    verdict v = command(buf, frame_arm(buf, ++host_seq));
+    TEST_ASSERT_TRUE(v.ack);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_ARMED, rw_core_state(&core));
+}
+
+/* The rope follows the core's ramped setpoint (a perfect plant) with a heartbeat every 100 ms, until
+ * the state is `state` or max_ms pass. */
+static void follow_setpoint_until(uint8_t state, uint32_t max_ms)
+{
+    for (uint32_t i = 0u; i < max_ms && rw_core_state(&core) != state; ++i) {
+        set_rope_speed_mps((double)core.state.setpoint_mps);
+        if (now_ms() % 100u == 0u) {
+            heartbeat();
+        }
+        tick();
+    }
+    TEST_ASSERT_EQUAL_UINT8(state, rw_core_state(&core));
+}
+
+static void to_airborne(int32_t mmps)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    boot_and_arm();
+    TEST_ASSERT_TRUE(command(buf, frame_speed(buf, ++host_seq, mmps)).ack);
+    follow_setpoint_until(RW_STATE_AIRBORNE, 2000u);
+}
+
+void setUp(void)
+{
+    memset(&fake, 0, sizeof fake);
+    fake.battery_mv = 14800u;
+    host_seq = 0u;
+    rw_core_init(&core);
+}
+
+void tearDown(void) {}
+
+/* ---- tests ---------------------------------------------------------------------------------------- */
+
+static void test_arm_refused_not_ready_during_hold_then_accepted(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    tick();
+    run_ms(400);
+    verdict v = command(buf, frame_arm(buf, ++host_seq));
+    TEST_ASSERT_FALSE(v.ack);
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_NOT_READY, v.reason);
+    TEST_ASSERT_EQUAL_INT32(500, v.detail);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_DISARMED, rw_core_state(&core));
+    run_ms(110);
+    rw_msg_event done;
+    TEST_ASSERT_EQUAL_UINT(1u, events_of_kind(0u, RW_EVENT_KIND_ARMING_HOLD_DONE, &done, 1u));
+    TEST_ASSERT_EQUAL_UINT32(500u, done.time_ms);
+    v = command(buf, frame_arm(buf, ++host_seq));
+    TEST_ASSERT_TRUE(v.ack);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_ARMED, v.state);
+}
+
+static void test_full_cycle_transitions_and_causes(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    to_airborne(4000);
+    TEST_ASSERT_TRUE(command(buf, frame_spindown(buf, ++host_seq)).ack);
+    follow_setpoint_until(RW_STATE_ARMED, 2000u);
+    set_rope_speed_mps(0.0);
+    run_ms(20);
+    TEST_ASSERT_TRUE(command(buf, frame_disarm(buf, ++host_seq)).ack);
+    run_ms(30);
+    rw_msg_event ev[8];
+    TEST_ASSERT_EQUAL_UINT(6u, events_of_kind(0u, RW_EVENT_KIND_STATE_CHANGED, ev, 8u));
+    const uint8_t expect[6][3] = {
+        { RW_STATE_DISARMED, RW_STATE_ARMED, RW_CAUSE_COMMAND },
+        { RW_STATE_ARMED, RW_STATE_SPINUP, RW_CAUSE_COMMAND },
+        { RW_STATE_SPINUP, RW_STATE_AIRBORNE, RW_CAUSE_SPEED_REACHED },
+        { RW_STATE_AIRBORNE, RW_STATE_SPINDOWN, RW_CAUSE_COMMAND },
+        { RW_STATE_SPINDOWN, RW_STATE_ARMED, RW_CAUSE_SPEED_REACHED },
+        { RW_STATE_ARMED, RW_STATE_DISARMED, RW_CAUSE_COMMAND },
+    };
+    for (unsigned i = 0u; i < 6u; ++i) {
+        TEST_ASSERT_EQUAL_UINT8(expect[i][0], ev[i].state_from);
+        TEST_ASSERT_EQUAL_UINT8(expect[i][1], ev[i].state_to);
+        TEST_ASSERT_EQUAL_INT32(expect[i][2], ev[i].arg);
+    }
+    TEST_ASSERT_EQUAL_UINT16(1000u, fake.pulse_us);
+}
+
+static void test_estop_cuts_the_esc_in_the_same_tick_and_latches(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    to_airborne(5000);
+    run_ms(50);
+    TEST_ASSERT_TRUE(fake.pulse_us > 1100u);
+    verdict v = command(buf, frame_estop(buf, ++host_seq));
+    TEST_ASSERT_TRUE(v.ack);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_ESTOP, v.state);
+    TEST_ASSERT_EQUAL_UINT16(1000u, fake.pulse_us);
+    v = command(buf, frame_speed(buf, ++host_seq, 4000));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_BAD_STATE, v.reason);
+    v = command(buf, frame_disarm(buf, ++host_seq)); /* the rope still runs */
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_BAD_STATE, v.reason);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_ESTOP, rw_core_state(&core));
+    set_rope_speed_mps(0.0);
+    run_ms(300);
+    TEST_ASSERT_TRUE(command(buf, frame_disarm(buf, ++host_seq)).ack);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_DISARMED, rw_core_state(&core));
+}
+
+/* Frame-level refusals: one bad datagram each while AIRBORNE; nothing changes but the counters. */
+static void test_frame_level_nack_reasons_are_counted_and_harmless(void)
+{
+    uint8_t good[RW_MAX_FRAME_LEN];
+    const size_t n = frame_speed(good, 0x0505u, 6000);
+    to_airborne(4000);
+    set_rope_speed_mps(4.0);
+    heartbeat();
+    run_ms(30);
+
+    struct {
+        int index; /* byte to patch, -1: none */
+        uint8_t value;
+        int len_delta; /* bytes removed (<0) or zero bytes appended (>0) */
+        uint8_t reason;
+    } cases[] = {
+        { -1, 0u, -(int)n + 6, RW_NACK_REASON_TRUNCATED },
+        { -1, 0u, -1, RW_NACK_REASON_TRUNCATED },
+        { 0, 0x7Bu, 0, RW_NACK_REASON_BAD_MAGIC },
+        { 1, 2u, 0, RW_NACK_REASON_BAD_VERSION },
+        { 2, 1u, 0, RW_NACK_REASON_UNSUPPORTED_FLAGS },
+        { 6, RW_MAX_PAYLOAD_LEN + 1u, 0, RW_NACK_REASON_OVERSIZE },
+        { -1, 0u, 1, RW_NACK_REASON_BAD_LENGTH },
+        { -1, 0u, 100, RW_NACK_REASON_BAD_LENGTH }, /* longer than any frame */
+        { 8, 0x55u, 0, RW_NACK_REASON_BAD_CHECKSUM },
+        { 3, 99u, 0, RW_NACK_REASON_UNKNOWN_MESSAGE },
+    };
+    for (unsigned c = 0u; c < sizeof cases / sizeof cases[0]; ++c) {
+        uint8_t data[128];
+        memset(data, 0, sizeof data);
+        memcpy(data, good, n);
+        if (cases[c].index >= 0) {
+            data[cases[c].index] = cases[c].value;
+        }
+        size_t len = (size_t)((int)n + cases[c].len_delta);
+        uint16_t rx_bad = core.state.counters.rx_bad;
+        uint16_t nacks = core.state.counters.nacks;
+        unsigned peers = fake.accept_peer_calls;
+        verdict v = command(data, len);
+        TEST_ASSERT_FALSE(v.ack);
+        TEST_ASSERT_EQUAL_UINT8_MESSAGE(cases[c].reason, v.reason, "NACK reason");
+        TEST_ASSERT_EQUAL_UINT16(rx_bad + 1u, core.state.counters.rx_bad);
+        TEST_ASSERT_EQUAL_UINT16(nacks + 1u, core.state.counters.nacks);
+        TEST_ASSERT_EQUAL_UINT_MESSAGE(peers, fake.accept_peer_calls, "a bad datagram never becomes the peer");
+        TEST_ASSERT_EQUAL_UINT8(RW_STATE_AIRBORNE, rw_core_state(&core));
+        TEST_ASSERT_EQUAL_FLOAT(4.0f, core.state.target_mps);
+    }
+    /* A device-to-host message sent to the device. */
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    rw_msg_ack ack = { RW_MSG_ID_ARM, 1u, 1u };
+    verdict v = command(buf, rw_msg_ack_encode(&ack, 9u, buf, sizeof buf));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_NOT_A_COMMAND, v.reason);
+    TEST_ASSERT_EQUAL_UINT8(RW_MSG_ID_ACK, v.cmd_msg_id);
+}
+
+static void test_command_refusals_carry_their_detail(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    to_airborne(4000);
+    set_rope_speed_mps(4.0);
+    verdict v = command(buf, frame_speed(buf, ++host_seq, 20001));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_OUT_OF_RANGE, v.reason);
+    TEST_ASSERT_EQUAL_INT32(20000, v.detail);
+    v = command(buf, frame_speed(buf, ++host_seq, 0));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_OUT_OF_RANGE, v.reason);
+    TEST_ASSERT_EQUAL_INT32(1, v.detail);
+    v = command(buf, frame_speed(buf, ++host_seq, 2989));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_BELOW_TOV_GUARD, v.reason);
+    TEST_ASSERT_EQUAL_INT32(2990, v.detail);
+    v = command(buf, frame_arm(buf, ++host_seq));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_BAD_STATE, v.reason);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_AIRBORNE, v.state);
+    v = command(buf, frame_param_get(buf, ++host_seq, (uint8_t)RW_PARAM_COUNT));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_UNKNOWN_PARAM, v.reason);
+    v = command(buf, frame_param_set(buf, ++host_seq, RW_PARAM_ESC_MIN_US, 1100.0f));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_PARAM_LOCKED, v.reason);
+    v = command(buf, frame_param_set(buf, ++host_seq, RW_PARAM_TOV_MPS, NAN));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_OUT_OF_RANGE, v.reason);
+    TEST_ASSERT_EQUAL_FLOAT(4.0f, core.state.target_mps);
+    TEST_ASSERT_EQUAL_FLOAT(1000.0f, rw_params_get(&core.params, RW_PARAM_ESC_MIN_US));
+    TEST_ASSERT_EQUAL_FLOAT(2.6f, rw_params_get(&core.params, RW_PARAM_TOV_MPS));
+    TEST_ASSERT_EQUAL_UINT16(7u, core.state.counters.nacks);
+    TEST_ASSERT_EQUAL_UINT16(0u, core.state.counters.rx_bad);
+    TEST_ASSERT_TRUE(command(buf, frame_speed(buf, ++host_seq, 2990)).ack);
+}
+
+static void test_retransmitted_param_set_is_executed_once(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    tick();
+    size_t n = frame_param_set(buf, 77u, RW_PARAM_SPEED_KP, 0.07f);
+    TEST_ASSERT_TRUE(command(buf, n).ack);
+    run_ms(3);
+    verdict again = command(buf, n);
+    TEST_ASSERT_TRUE(again.ack);
+    TEST_ASSERT_EQUAL_UINT16(77u, again.cmd_seq);
+    run_ms(10);
+    rw_msg_event ev[4];
+    TEST_ASSERT_EQUAL_UINT(1u, events_of_kind(0u, RW_EVENT_KIND_PARAM_CHANGED, ev, 4u));
+    TEST_ASSERT_EQUAL_UINT16(1u, core.state.counters.rx_duplicates);
+}
+
+static void test_late_copy_of_an_old_speed_does_not_undo_a_newer_one(void)
+{
+    uint8_t five[RW_MAX_FRAME_LEN];
+    uint8_t six[RW_MAX_FRAME_LEN];
+    boot_and_arm();
+    size_t n5 = frame_speed(five, 10u, 5000);
+    size_t n6 = frame_speed(six, 11u, 6000);
+    TEST_ASSERT_TRUE(command(five, n5).ack);
+    TEST_ASSERT_TRUE(command(six, n6).ack);
+    TEST_ASSERT_TRUE(command(five, n5).ack);
+    TEST_ASSERT_EQUAL_FLOAT(6.0f, core.state.target_mps);
+    TEST_ASSERT_EQUAL_UINT16(1u, core.state.counters.rx_duplicates);
+    /* Same seq, other bytes: a new command. */
+    n6 = frame_speed(six, 10u, 7000);
+    TEST_ASSERT_TRUE(command(six, n6).ack);
+    TEST_ASSERT_EQUAL_FLOAT(7.0f, core.state.target_mps);
+}
+
+static void test_one_datagram_in_and_out_per_tick_and_outbox_priority(void)
+{
+    uint8_t a[RW_MAX_FRAME_LEN];
+    uint8_t b[RW_MAX_FRAME_LEN];
+    tick();
+    run_ms(39); /* telemetry (50 Hz) is due at 40 ms */
+    unsigned from = fake.n_out;
+    queue_bytes(a, frame_param_set(a, 1u, RW_PARAM_SPEED_KP, 0.05f));
+    queue_bytes(b, frame_param_get(b, 2u, RW_PARAM_TOV_MPS));
+    tick();
+    TEST_ASSERT_EQUAL_UINT(1u, fake.in_count);
+    run_ms(6);
+    /* t=40: ACK(1); 41: ACK(2); then PARAM_VALUE x2, EVENT(PARAM_CHANGED), TELEMETRY. */
+    const uint8_t expect[] = { RW_MSG_ID_ACK, RW_MSG_ID_ACK, RW_MSG_ID_PARAM_VALUE, RW_MSG_ID_PARAM_VALUE,
+                               RW_MSG_ID_EVENT, RW_MSG_ID_TELEMETRY };
+    TEST_ASSERT_EQUAL_UINT(from + 6u, fake.n_out);
+    for (unsigned i = 0u; i < 6u; ++i) {
+        rw_frame f;
+        TEST_ASSERT_EQUAL_UINT8(expect[i], sent_msg_id(from + i, &f));
+        TEST_ASSERT_EQUAL_UINT32(fake.out[from].tick + i, fake.out[from + i].tick);
+    }
+    TEST_ASSERT_EQUAL_UINT(1u, fake.out_this_tick_max);
+}
+
+static void test_heartbeat_loss_spins_down_after_the_timeout(void)
+{
+    to_airborne(4000);
+    heartbeat();
+    tick();
+    uint32_t t_last = now_ms();
+    for (uint32_t i = 0u; i < 600u && rw_core_state(&core) == RW_STATE_AIRBORNE; ++i) {
+        set_rope_speed_mps((double)core.state.setpoint_mps);
+        tick();
+    }
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_SPINDOWN, rw_core_state(&core));
+    TEST_ASSERT_EQUAL_UINT32(t_last + 501u, now_ms());
+    TEST_ASSERT_EQUAL_UINT8(RW_CAUSE_HEARTBEAT_LOST, core.state.spindown_cause);
+    run_ms(10);
+    rw_msg_event lost;
+    TEST_ASSERT_EQUAL_UINT(1u, events_of_kind(0u, RW_EVENT_KIND_HEARTBEAT_LOST, &lost, 1u));
+    TEST_ASSERT_EQUAL_INT32(501, lost.arg);
+}
+
+static void test_heartbeat_loss_while_armed_only_reports(void)
+{
+    boot_and_arm();
+    run_ms(2000);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_ARMED, rw_core_state(&core));
+    rw_msg_event lost;
+    TEST_ASSERT_EQUAL_UINT(1u, events_of_kind(0u, RW_EVENT_KIND_HEARTBEAT_LOST, &lost, 1u));
+    TEST_ASSERT_EQUAL_UINT16(1000u, fake.pulse_us);
+}
+
+static void test_silent_encoder_with_throttle_up_faults(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    boot_and_arm();
+    TEST_ASSERT_TRUE(command(buf, frame_speed(buf, ++host_seq, 5000)).ack);
+    uint32_t t_up = 0u;
+    for (uint32_t i = 0u; i < 1000u && rw_core_state(&core) != RW_STATE_FAULT; ++i) {
+        if (t_up == 0u && fake.pulse_us > 1000u + RW_CORE_THROTTLE_ACTIVE_US) {
+            t_up = now_ms();
+        }
+        tick();
+    }
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_FAULT, rw_core_state(&core));
+    TEST_ASSERT_TRUE(t_up > 0u);
+    TEST_ASSERT_UINT32_WITHIN(2u, t_up + 251u, now_ms());
+    TEST_ASSERT_EQUAL_UINT16(RW_FAULT_ENCODER_SILENT, core.state.fault_bits);
+    TEST_ASSERT_EQUAL_UINT16(1000u, fake.pulse_us);
+    run_ms(300);
+    TEST_ASSERT_TRUE(command(buf, frame_disarm(buf, ++host_seq)).ack);
+    TEST_ASSERT_EQUAL_UINT16(0u, core.state.fault_bits);
+}
+
+/* The same scenario with the tick clock starting at 0 and just before 2^32: identical pulses. */
+static void record_scenario(uint32_t offset_us, uint16_t *pulses, unsigned n)
+{
+    setUp();
+    fake.clock_offset_us = offset_us;
+    fake.last_edge_us = offset_us;
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    unsigned k = 0u;
+    tick();
+    pulses[k++] = fake.pulse_us;
+    while (k < n) {
+        if (k == 520u) {
+            queue_bytes(buf, frame_arm(buf, ++host_seq));
+        } else if (k == 530u) {
+            queue_bytes(buf, frame_speed(buf, ++host_seq, 4000));
+        } else if (k % 100u == 0u) {
+            heartbeat();
+        }
+        set_rope_speed_mps((double)core.state.setpoint_mps);
+        tick();
+        pulses[k++] = fake.pulse_us;
+    }
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_AIRBORNE, rw_core_state(&core));
+}
+
+static void test_tick_clock_wrap_changes_nothing(void)
+{
+    static uint16_t ref[1500];
+    static uint16_t wrapped[1500];
+    record_scenario(0u, ref, 1500u);
+    unsigned n_ref = fake.n_out;
+    record_scenario(0xFFFFFFFFu - 700000u, wrapped, 1500u); /* wraps at 700 ms, mid spin-up */
+    TEST_ASSERT_EQUAL_UINT(n_ref, fake.n_out);
+    TEST_ASSERT_EQUAL_UINT16_ARRAY(ref, wrapped, 1500u);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_arm_refused_not_ready_during_hold_then_accepted);
+    RUN_TEST(test_full_cycle_transitions_and_causes);
+    RUN_TEST(test_estop_cuts_the_esc_in_the_same_tick_and_latches);
+    RUN_TEST(test_frame_level_nack_reasons_are_counted_and_harmless);
+    RUN_TEST(test_command_refusals_carry_their_detail);
+    RUN_TEST(test_retransmitted_param_set_is_executed_once);
+    RUN_TEST(test_late_copy_of_an_old_speed_does_not_undo_a_newer_one);
+    RUN_TEST(test_one_datagram_in_and_out_per_tick_and_outbox_priority);
+    RUN_TEST(test_heartbeat_loss_spins_down_after_the_timeout);
+    RUN_TEST(test_heartbeat_loss_while_armed_only_reports);
+    RUN_TEST(test_silent_encoder_with_throttle_up_faults);
+    RUN_TEST(test_tick_clock_wrap_changes_nothing);
+    return UNITY_END();
+}
