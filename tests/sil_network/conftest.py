@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from pathlib import Path
@@ -41,3 +42,9 @@ def plain_host(native_build_dir: Path) -> Iterator[ScriptedHost]:
         host.run_for(0.6)
         yield host
         host.close()
+
+# link_ledger and soak_runner are imported by plain name from the tests of this folder and from
+# bench/bench_soak.py (also under pytest's importlib mode, where test folders are not on sys.path).
+_HERE = str(Path(__file__).resolve().parent)
+if _HERE not in sys.path:
+    sys.path.insert(0, _HERE)

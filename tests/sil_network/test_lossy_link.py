@@ -1,0 +1,201 @@
+"""Commands over an impaired link: lost, duplicated, reordered, corrupted and blacked-out datagrams.
+
+The firmware must execute every command at most once (retransmissions and network duplicates are
+answered from its duplicate cache), refuse corrupted frames without acting on them, spin the rope down
+when the host falls silent and take commands again when the link returns. The device-side truth comes
+from the proxy's log (link_ledger): what the firmware really received and really sent.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+from link_ledger import LinkLedger
+
+from robowrangler.client import Client
+from robowrangler.errors import LinkTimeout
+from robowrangler.protocol import generated as gen
+from robowrangler.protocol.generated import EventKind, State
+from robowrangler_sim.sil import SilSession
+from robowrangler_sim.sil.impairment import ImpairmentConfig, ImpairmentProxy, LinkImpairment
+from robowrangler_sim.sil.scripted_host import ScriptedHost
+
+CLEAN = ImpairmentConfig()
+HEARTBEAT_TIMEOUT_MS = 500
+TICK_MS = 1
+
+
+def command_transitions(ledger: LinkLedger) -> list[tuple[State, State]]:
+    return [(State(e.state_from), State(e.state_to)) for e in ledger.device_events(EventKind.STATE_CHANGED)
+            if e.arg == gen.Cause.COMMAND]
+
+
+def test_every_command_completes_exactly_once_through_30_percent_loss(native_build_dir: Path) -> None:
+    """The real Client (retries reuse the seq) against the SIL in real time, 30 % loss both ways."""
+    link = LinkImpairment(loss_prob_good=0.3)
+    with SilSession(speedup=1.0) as sil:
+        sil.run_in_background()
+        sil.wait_until(0.6)
+        with ImpairmentProxy(device_port=sil.cmd_port, config=ImpairmentConfig.symmetric(link), seed=3,
+                             keep_log=True).start() as proxy:
+            # 13 transmissions per command: all lost with p = (1 - 0.7^2)^13 = 1.6e-4
+            with Client(proxy.url, ack_timeout_s=0.1, retries=12, heartbeat_hz=20.0) as rw:
+                assert rw.arm() == State.ARMED
+                assert rw.set_param("speed_kp", 0.05) == pytest.approx(0.05)
+                rw.spin(4.0)
+                rw.wait_for_state(State.AIRBORNE, timeout_s=3.0)
+                assert rw.spin(5.0) == State.AIRBORNE
+                assert rw.set_param("collapse_time_s", 0.4) == pytest.approx(0.4)
+                rw.spindown()
+                rw.wait_for_state(State.ARMED, timeout_s=3.0)
+                assert rw.disarm() == State.DISARMED
+                time.sleep(0.2)  # a few more telemetry frames carry the final counters
+                stats = rw.stats
+            proxy.check()
+            ledger = LinkLedger()
+            ledger.feed(proxy.take_log())
+            counters = proxy.counters
+    sil.check()
+    assert counters["to_device"].dropped > 5 and counters["to_host"].dropped > 10  # the loss was real
+    assert stats.retransmissions > 0
+    # executed once: the device counted every repeat it got as a duplicate, and acted once per command
+    assert ledger.duplicate_deliveries > 0
+    assert ledger.last_device_telemetry.rx_duplicates == ledger.duplicate_deliveries
+    assert [m.NAME for _, m in ledger.executed_commands] == [
+        "ARM", "PARAM_SET", "SET_ROPE_SPEED", "SET_ROPE_SPEED", "PARAM_SET", "SPINDOWN", "DISARM"]
+    changed = ledger.device_events(EventKind.PARAM_CHANGED)
+    assert [e.arg for e in changed] == [gen.PARAMS_BY_NAME["speed_kp"].id, gen.PARAMS_BY_NAME["collapse_time_s"].id]
+    assert command_transitions(ledger) == [(State.DISARMED, State.ARMED), (State.ARMED, State.SPINUP),
+                                           (State.AIRBORNE, State.SPINDOWN), (State.ARMED, State.DISARMED)]
+    # every frame the firmware got has its one verdict (answered again for each repeat)
+    verdicts = len(ledger.device_messages(gen.Ack)) + len(ledger.device_messages(gen.Nack))
+    assert verdicts == ledger.command_frames_delivered
+    assert ledger.device_seqs_never_sent == 0  # the device itself lost nothing
+
+
+def test_duplicated_and_reordered_frames_never_execute_twice(lossy_host) -> None:
+    link = LinkImpairment(duplicate_prob=0.5, reorder_prob=0.3, reorder_delay_ms=30.0, delay_ms=1.0, jitter_ms=4.0)
+    host: ScriptedHost = lossy_host(ImpairmentConfig.symmetric(link), seed=24)
+    proxy = host.sil.proxy
+    host.send(gen.Arm())
+    host.run_for(0.05)
+    speeds = [4000, 4500, 5000, 5500, 6000, 5200, 4800, 6500]
+    for mmps in speeds:
+        host.send(gen.SetRopeSpeed(mmps))
+        host.run_for(0.02)  # closer than the reorder delay: commands overtake each other
+    params = [("speed_filter_tau_s", 0.012), ("collapse_time_s", 0.35), ("ramp_up_mps2", 25.0)]
+    for name, value in params:
+        host.send(gen.ParamSet(gen.PARAMS_BY_NAME[name].id, value))
+        host.run_for(0.02)
+    host.run_for(1.5)
+    ledger = LinkLedger()
+    ledger.feed(proxy.take_log())
+    c = proxy.counters["to_device"]
+    assert c.duplicated >= 3 and c.reordered >= 2  # the network did mess the order up
+    executed = [m for _, m in ledger.executed_commands]
+    executed_speeds = [m.rope_speed_mmps for m in executed if isinstance(m, gen.SetRopeSpeed)]
+    assert sorted(executed_speeds) == sorted(speeds) and executed_speeds != speeds  # reordered, each once
+    t = ledger.last_device_telemetry
+    assert t.rx_duplicates == ledger.duplicate_deliveries >= 3
+    assert t.rope_speed_target_mmps == executed_speeds[-1]  # the last one executed wins, no replay after it
+    assert host.received.telemetry[-1].rope_speed_target_mmps == executed_speeds[-1]
+    changed = ledger.device_events(EventKind.PARAM_CHANGED)
+    assert sorted(e.arg for e in changed) == sorted(gen.PARAMS_BY_NAME[n].id for n, _ in params)
+
+
+def test_corrupted_frames_are_refused_and_never_act(lossy_host) -> None:
+    host: ScriptedHost = lossy_host(CLEAN, seed=8)
+    proxy = host.sil.proxy
+    host.arm_and_spin(5000, settle_s=1.0)
+    ledger = LinkLedger()
+    ledger.feed(proxy.take_log())
+    before = ledger.last_device_telemetry
+    nacks_before = len(host.received.nacks)
+    proxy.config = ImpairmentConfig(to_device=LinkImpairment(corrupt_prob=1.0),
+                                    to_host=LinkImpairment(corrupt_prob=0.2))
+    for message in (gen.SetRopeSpeed(8000), gen.Spindown(), gen.Estop(), gen.SetRopeSpeed(3500),
+                    gen.ParamSet(gen.PARAMS_BY_NAME["tov_mps"].id, 3.0)) * 4:
+        host.send(message)
+        host.run_for(0.01)
+    proxy.config = CLEAN
+    host.run_for(0.3)
+    ledger.feed(proxy.take_log())
+    t = ledger.last_device_telemetry
+    corrupted = proxy.counters["to_device"].corrupted
+    assert corrupted >= 20 and ledger.corrupted_to_device == corrupted
+    assert t.rx_bad - before.rx_bad == corrupted  # every one counted as bad
+    assert t.state == State.AIRBORNE and t.rope_speed_target_mmps == 5000  # none of them acted
+    assert not ledger.device_events(EventKind.PARAM_CHANGED)
+    assert abs(host.sil.plant.rope_speed_mps - 5.0) < 0.1
+    nack_reasons = {gen.NackReason(n.reason) for n in ledger.device_messages(gen.Nack)}
+    assert gen.NackReason.BAD_CHECKSUM in nack_reasons
+    assert nack_reasons <= {gen.NackReason.BAD_CHECKSUM, gen.NackReason.BAD_MAGIC, gen.NackReason.BAD_VERSION,
+                            gen.NackReason.UNSUPPORTED_FLAGS, gen.NackReason.UNKNOWN_MESSAGE,
+                            gen.NackReason.TRUNCATED, gen.NackReason.BAD_LENGTH, gen.NackReason.OVERSIZE}
+    # the host saw the NACKs that were not lost, and rejected every corrupted frame sent its way
+    assert len(host.received.nacks) > nacks_before
+    assert ledger.corrupted_to_host > 0 and host.received.decode_errors == ledger.corrupted_to_host
+
+
+def test_total_loss_spins_down_within_the_heartbeat_timeout_in_lockstep(lossy_host) -> None:
+    host: ScriptedHost = lossy_host(CLEAN, seed=1)
+    proxy = host.sil.proxy
+    host.arm_and_spin(6000, settle_s=1.0)
+    ledger = LinkLedger()
+    ledger.feed(proxy.take_log())
+    proxy.config = ImpairmentConfig.symmetric(LinkImpairment.blackout())
+    host.run_for(2.0)
+    entries = proxy.take_log()
+    ledger.feed(entries)
+    last_delivered_ms = max(e.time_us for e in entries if e.direction == "to_device" and e.kind == "out") // 1000 \
+        if any(e.direction == "to_device" and e.kind == "out" for e in entries) else None
+    lost = ledger.device_events(EventKind.HEARTBEAT_LOST)
+    spindown = [e for e in ledger.device_events(EventKind.STATE_CHANGED) if e.state_to == State.SPINDOWN]
+    assert len(lost) == 1 and len(spindown) == 1 and spindown[0].arg == gen.Cause.HEARTBEAT_LOST
+    assert spindown[0].time_ms == lost[0].time_ms
+    assert HEARTBEAT_TIMEOUT_MS < lost[0].arg <= HEARTBEAT_TIMEOUT_MS + TICK_MS
+    if last_delivered_ms is not None:
+        assert lost[0].time_ms - last_delivered_ms <= HEARTBEAT_TIMEOUT_MS + TICK_MS
+    assert ledger.last_device_telemetry.state == State.ARMED and host.sil.plant.rope_speed_mps < 0.2
+    assert len(host.received.events) < len(ledger.device_frames)  # the host heard none of it
+    # the link returns: the same host spins up again
+    proxy.config = CLEAN
+    host.run_for(0.2)
+    host.arm_and_spin(4000, settle_s=1.0)
+    assert host.last_telemetry.state == State.AIRBORNE and abs(host.sil.plant.rope_speed_mps - 4.0) < 0.1
+
+
+def test_client_rides_out_a_blackout_and_flies_again(native_build_dir: Path) -> None:
+    """Real time, the real Client: commands time out during a total loss, the rope lands, then all works again."""
+    with SilSession(speedup=1.0) as sil:
+        sil.run_in_background()
+        sil.wait_until(0.6)
+        with ImpairmentProxy(device_port=sil.cmd_port, seed=5, keep_log=True).start() as proxy:
+            with Client(proxy.url, ack_timeout_s=0.1, retries=2, connect_timeout_s=3.0) as rw:
+                rw.arm()
+                rw.spin(5.0)
+                rw.wait_for_state(State.AIRBORNE, timeout_s=3.0)
+                proxy.config = ImpairmentConfig.symmetric(LinkImpairment.blackout())
+                with pytest.raises(LinkTimeout):
+                    rw.spin(6.0)
+                time.sleep(0.8)  # > heartbeat_timeout_s of silence
+                proxy.config = CLEAN
+                landed = rw.wait_for_state(State.ARMED, timeout_s=3.0)
+                assert landed.rope_speed_mps < 0.2
+                assert rw.arm() == State.ARMED
+                rw.spin(4.0)
+                flying = rw.wait_for_state(State.AIRBORNE, timeout_s=3.0)
+                assert flying.rope_speed_target_mps == pytest.approx(4.0)
+                rw.spindown()
+                rw.wait_for_state(State.ARMED, timeout_s=3.0)
+            ledger = LinkLedger()
+            ledger.feed(proxy.take_log())
+    sil.check()
+    lost = ledger.device_events(EventKind.HEARTBEAT_LOST)
+    assert len(lost) == 1 and HEARTBEAT_TIMEOUT_MS < lost[0].arg <= HEARTBEAT_TIMEOUT_MS + TICK_MS
+    causes = [gen.Cause(e.arg) for e in ledger.device_events(EventKind.STATE_CHANGED) if e.state_to == State.SPINDOWN]
+    assert causes == [gen.Cause.HEARTBEAT_LOST, gen.Cause.COMMAND]
+    # the 6 m/s command sent into the blackout never reached the device
+    assert all(not (isinstance(m, gen.SetRopeSpeed) and m.rope_speed_mmps == 6000) for _, m in ledger.executed_commands)
