@@ -144,7 +144,8 @@ static void set_rope_speed_mps(double v_mps)
     double counts_per_s = v_mps / (TWO_PI * 0.015) * 64.0;
     bool was_stopped = fake.period_ns == 0u;
     fake.period_ns = (uint64_t)(1.0e9 / counts_per_s + 0.5);
-    if (was_stopped) {
+    /* A faster wheel brings the next edge forward (one period from now at the latest). */
+    if (was_stopped || fake.next_edge_ns > fake.t_ns + fake.period_ns) {
         fake.next_edge_ns = fake.t_ns + fake.period_ns;
     }
 }
@@ -654,6 +655,30 @@ static void test_tick_clock_wrap_changes_nothing(void)
     TEST_ASSERT_EQUAL_UINT16_ARRAY(ref, wrapped, 1500u);
 }
 
+/* A 10 s pause between two ticks (debugger, stalled loop) is integrated as one short control step: the
+ * ESC pulse moves by a normal step, not by 10 s of integral (which would saturate it). */
+static void test_long_tick_gap_does_not_jump_the_esc_pulse(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_core_set_param(&core, RW_PARAM_HEARTBEAT_TIMEOUT_S, 10.0f));
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_core_set_param(&core, RW_PARAM_RAMP_UP_MPS2, 2.0f));
+    to_airborne(4000);
+    for (uint32_t i = 0u; i < 2000u && core.state.setpoint_mps < 4.0f; ++i) {
+        set_rope_speed_mps((double)core.state.setpoint_mps);
+        tick();
+    }
+    TEST_ASSERT_TRUE(command(buf, frame_speed(buf, ++host_seq, 8000)).ack);
+    set_rope_speed_mps(4.0); /* the rope is loaded: held at 4 m/s while the setpoint ramps on */
+    run_ms(100);
+    const uint16_t before = fake.pulse_us;
+    heartbeat();
+    fake.t_ns += 10000000000ull - (uint64_t)TICK_US * 1000u; /* tick() adds the last millisecond */
+    tick();
+    TEST_ASSERT_UINT16_WITHIN(60u, before, fake.pulse_us);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_AIRBORNE, rw_core_state(&core));
+    TEST_ASSERT_FLOAT_WITHIN(0.1f, 4.0f, core.state.measured_mps);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -669,5 +694,6 @@ int main(void)
     RUN_TEST(test_heartbeat_loss_while_armed_only_reports);
     RUN_TEST(test_silent_encoder_with_throttle_up_faults);
     RUN_TEST(test_tick_clock_wrap_changes_nothing);
+    RUN_TEST(test_long_tick_gap_does_not_jump_the_esc_pulse);
     return UNITY_END();
 }
