@@ -41,6 +41,20 @@ void rw_core_apply_params(rw_core *core)
     core->state.guard.cfg.tov_mps = rw_params_get(p, RW_PARAM_TOV_MPS);
     core->state.guard.cfg.margin = rw_params_get(p, RW_PARAM_TOV_MARGIN);
     core->state.guard.cfg.collapse_time_s = rw_params_get(p, RW_PARAM_COLLAPSE_TIME_S);
+    rw_spindle_config *sp = &core->state.spindle.cfg;
+    sp->lead_mm_per_rev = rw_params_get(p, RW_PARAM_LEAD_MM_PER_REV);
+    sp->guide_min_mm = rw_params_get(p, RW_PARAM_GUIDE_MIN_MM);
+    sp->guide_max_mm = rw_params_get(p, RW_PARAM_GUIDE_MAX_MM);
+    sp->kp_per_s = rw_params_get(p, RW_PARAM_SPINDLE_KP_PER_S);
+    sp->max_speed_mmps = rw_params_get(p, RW_PARAM_SPINDLE_MAX_SPEED_MMPS);
+    sp->tolerance_mm = rw_params_get(p, RW_PARAM_SPINDLE_TOLERANCE_MM);
+    sp->homing_speed_mmps = rw_params_get(p, RW_PARAM_HOMING_SPEED_MMPS);
+    sp->homing_load_pct = rw_params_get(p, RW_PARAM_HOMING_LOAD_PCT);
+    sp->stall_load_pct = rw_params_get(p, RW_PARAM_SPINDLE_STALL_LOAD_PCT);
+    sp->stall_time_s = rw_params_get(p, RW_PARAM_SPINDLE_STALL_TIME_S);
+    sp->secure_load_pct = rw_params_get(p, RW_PARAM_GRASP_SECURE_LOAD_PCT);
+    sp->retract_speed_mmps = rw_params_get(p, RW_PARAM_RETRACT_SPEED_MMPS);
+    sp->timeout_s = rw_params_get(p, RW_PARAM_SPINDLE_TIMEOUT_S);
 }
 
 void rw_core_init(rw_core *core)
@@ -64,6 +78,8 @@ void rw_core_init(rw_core *core)
     rw_tov_guard_init(&core->state.guard, &guard);
     rw_duplicate_cache_reset(&core->state.duplicates);
     rw_outbox_reset(&core->state.outbox);
+    rw_spindle_config spindle = { 0 };
+    rw_spindle_init(&core->state.spindle, &spindle);
     rw_core_apply_params(core);
     core->state.state = RW_STATE_DISARMED;
     core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
@@ -124,14 +140,25 @@ void rw_core_raise_fault(rw_core *core, uint16_t fault_bit)
         core->state.fault_bits |= fault_bit;
         rw_core_emit_event(core, RW_EVENT_KIND_FAULT_RAISED, core->state.state, core->state.state, (int32_t)fault_bit);
     }
-    if (core->state.state != RW_STATE_ESTOP) {
+    /* Only a blind speed loop makes the rope unsafe: FAULT holds the ESC at its minimum. The other faults
+     * (battery, spindle) are handled where they are detected and leave the state machine alone. */
+    if (fault_bit == RW_FAULT_ENCODER_SILENT && core->state.state != RW_STATE_ESTOP) {
+        rw_spindle_stop(&core->state.spindle);
+        core->state.grasp_pending = false;
         rw_core_set_state(core, RW_STATE_FAULT, RW_CAUSE_FAULT);
     }
 }
 
 static bool rope_driven(uint8_t state)
 {
-    return state == RW_STATE_SPINUP || state == RW_STATE_AIRBORNE || state == RW_STATE_SPINDOWN;
+    return state == RW_STATE_SPINUP || state == RW_STATE_AIRBORNE || state == RW_STATE_SPINDOWN ||
+           state == RW_STATE_RELAX;
+}
+
+/* States whose rope setpoint ramps to zero (a commanded or forced landing). */
+static bool rope_landing(uint8_t state)
+{
+    return state == RW_STATE_SPINDOWN || state == RW_STATE_RELAX;
 }
 
 static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encoder_counts_delta)
@@ -154,7 +181,26 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
         }
         if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
             rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_HEARTBEAT_LOST);
+        } else if (st == RW_STATE_RETRACT) {
+            rw_spindle_stop(&core->state.spindle);
+            rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_HEARTBEAT_LOST);
+        } else if (st == RW_STATE_RELAX) {
+            core->state.grasp_pending = false; /* land, but do not go on to retract without a host */
         }
+    }
+
+    /* Battery: under the cutoff for battery_cutoff_time_s (brief load sags pass) -> land the rope. */
+    if (core->state.battery_v < rw_params_get(p, RW_PARAM_BATTERY_CUTOFF_V)) {
+        core->state.battery_low_ms += dt_ms;
+        if ((float)core->state.battery_low_ms >= rw_params_get(p, RW_PARAM_BATTERY_CUTOFF_TIME_S) * 1000.0f) {
+            rw_core_raise_fault(core, RW_FAULT_BATTERY_LOW);
+            st = core->state.state;
+            if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
+                rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_BATTERY_LOW);
+            }
+        }
+    } else {
+        core->state.battery_low_ms = 0u;
     }
 
     /* Encoder silent while the throttle is up: the speed loop is blind, stop driving. */
@@ -182,7 +228,65 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     } else if (st == RW_STATE_SPINDOWN && rw_ramp_output(&core->state.ramp) <= 0.0f &&
                core->state.measured_mps < RW_CORE_STOPPED_MPS) {
         rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_SPEED_REACHED);
+    } else if (st == RW_STATE_RELAX && core->state.grasp_pending && rw_ramp_output(&core->state.ramp) <= 0.0f &&
+               core->state.measured_mps < RW_CORE_STOPPED_MPS) {
+        core->state.grasp_pending = false;
+        rw_spindle_retract(&core->state.spindle);
+        rw_core_set_state(core, RW_STATE_RETRACT, RW_CAUSE_SPEED_REACHED);
     }
+}
+
+/* The spindle loop, every RW_CORE_SPINDLE_PERIOD_MS: read the servo, step, write, act on the outcome. */
+static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
+{
+    if (hal->spindle == NULL) {
+        return;
+    }
+    rw_spindle_reading reading;
+    bool answered = hal->spindle->read(hal->spindle->ctx, &reading);
+    rw_spindle *sp = &core->state.spindle;
+    uint8_t st = core->state.state;
+    switch (rw_spindle_step(sp, answered ? &reading : NULL, dt_s)) {
+    case RW_SPINDLE_HOMED_BY_STALL:
+        rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_HOMED, st, st, 1);
+        break;
+    case RW_SPINDLE_HOMED_BY_SWITCH:
+        rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_HOMED, st, st, 2);
+        break;
+    case RW_SPINDLE_TARGET_REACHED:
+        rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_TARGET_REACHED, st, st,
+                           (int32_t)(sp->state.position_mm * 1000.0f));
+        break;
+    case RW_SPINDLE_SECURED:
+        if (st == RW_STATE_RETRACT) {
+            rw_core_set_state(core, RW_STATE_HOLD, RW_CAUSE_LOAD_SECURED);
+        }
+        break;
+    case RW_SPINDLE_STROKE_END:
+        if (st == RW_STATE_RETRACT) {
+            rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_STROKE_END);
+        }
+        break;
+    case RW_SPINDLE_STALLED:
+        rw_core_raise_fault(core, RW_FAULT_SPINDLE_STALL);
+        break;
+    case RW_SPINDLE_NO_ANSWER:
+        rw_core_raise_fault(core, RW_FAULT_SPINDLE_NO_ANSWER);
+        if (st == RW_STATE_RETRACT) {
+            rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_FAULT);
+        }
+        break;
+    case RW_SPINDLE_NOTHING:
+        break;
+    }
+    /* The spindle never moves while the device is disarmed, in ESTOP or in FAULT. */
+    st = core->state.state;
+    if (st == RW_STATE_ESTOP || st == RW_STATE_FAULT ||
+        (st == RW_STATE_DISARMED && sp->state.mode != RW_SPINDLE_HOMING)) {
+        rw_spindle_stop(sp);
+        sp->state.moving_speed_raw = 0u;
+    }
+    hal->spindle->write_moving_speed_raw(hal->spindle->ctx, sp->state.moving_speed_raw);
 }
 
 static void control(rw_core *core, float dt_s)
@@ -196,10 +300,10 @@ static void control(rw_core *core, float dt_s)
         core->state.pulse_us = esc_min;
         return;
     }
-    float target = st == RW_STATE_SPINDOWN ? 0.0f : core->state.target_mps;
+    float target = rope_landing(st) ? 0.0f : core->state.target_mps;
     float setpoint = rw_ramp_step(&core->state.ramp, target, dt_s);
     core->state.setpoint_mps = setpoint;
-    if (st == RW_STATE_SPINDOWN && setpoint <= 0.0f) {
+    if (rope_landing(st) && setpoint <= 0.0f) {
         rw_pi_controller_reset(&core->state.pi);
         core->state.pulse_us = esc_min;
         return;
@@ -208,6 +312,17 @@ static void control(rw_core *core, float dt_s)
     float u = rw_pi_controller_step(&core->state.pi, setpoint, core->state.measured_mps, ff, dt_s);
     uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u);
     core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
+}
+
+static uint8_t spindle_flags(const rw_spindle *sp)
+{
+    uint8_t flags = 0u;
+    flags |= sp->state.homed ? RW_SPINDLE_FLAG_HOMED : 0u;
+    flags |= sp->state.answering ? RW_SPINDLE_FLAG_ANSWERING : 0u;
+    flags |= sp->state.turns.state.dead_reckoning ? RW_SPINDLE_FLAG_DEAD_ZONE : 0u;
+    flags |= sp->state.moving_speed_raw != 0u ? RW_SPINDLE_FLAG_MOVING : 0u;
+    flags |= sp->state.mode == RW_SPINDLE_HOMING ? RW_SPINDLE_FLAG_HOMING : 0u;
+    return flags;
 }
 
 static void queue_telemetry(rw_core *core, const rw_hal *hal)
@@ -231,6 +346,11 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
         .nacks = c->nacks,
         .events = c->events,
         .tick_overruns = hal->scheduler != NULL ? (uint16_t)hal->scheduler->tick_overruns(hal->scheduler->ctx) : 0u,
+        .guide_position_um = (int32_t)(core->state.spindle.state.position_mm * 1000.0f),
+        .guide_target_um = (int32_t)(core->state.spindle.state.target_mm * 1000.0f),
+        .spindle_load_permille = core->state.spindle.state.load_permille,
+        .spindle_flags = spindle_flags(&core->state.spindle),
+        .spindle_rejected = core->state.spindle.state.turns.state.rejected,
     };
     uint8_t frame[RW_MAX_FRAME_LEN];
     size_t len = rw_msg_telemetry_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
@@ -270,6 +390,11 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
 
     /* 3. supervision, 4. control */
     supervise(core, dt_s, dt_ms, primed ? counts_delta : 1u);
+    if ((int32_t)(core->state.uptime_ms - core->state.spindle_due_ms) >= 0) {
+        uint32_t period_ms = RW_CORE_SPINDLE_PERIOD_MS;
+        spindle_tick(core, hal, (float)period_ms * 1.0e-3f);
+        core->state.spindle_due_ms = core->state.uptime_ms + period_ms;
+    }
     control(core, dt_s);
     hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
 

@@ -5,10 +5,11 @@
  * output goes through the HAL: the ESC pulse, replies, events and telemetry (at most one datagram
  * received and one sent per tick).
  *
- * Tick (period = the time between calls, 1 ms on the board and in SIL):
+ * Tick (period = the time between calls, 1 ms on the board and in SIL; the spindle every 10 ms):
  *   1. encoder -> M/T estimator -> rope speed (m/s);  battery (V)
  *   2. one received datagram -> decode -> duplicate check -> command -> ACK/NACK (straight to its sender)
- *   3. supervision: arming hold, heartbeat loss -> SPINDOWN, encoder silence -> FAULT, loop collapse
+ *   3. supervision: arming hold, heartbeat loss -> SPINDOWN, encoder silence -> FAULT, loop collapse,
+ *      battery cutoff -> SPINDOWN, spindle outcomes (homed, secured, stall, no answer) -> grasp states
  *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us)
  *   5. telemetry at telemetry_rate_hz; one queued frame to the peer
  */
@@ -27,6 +28,7 @@
 #include "rw_pi_controller.h"
 #include "rw_protocol.h"
 #include "rw_ramp.h"
+#include "rw_spindle.h"
 #include "rw_throttle_map.h"
 #include "rw_tov_guard.h"
 
@@ -34,6 +36,8 @@
 #define RW_CORE_STOPPED_MPS 0.15f
 /* Throttle above idle, for the encoder-silence check: the ESC pulse is more than this over esc_min_us. */
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
+/* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
+#define RW_CORE_SPINDLE_PERIOD_MS 10u
 
 typedef struct rw_core_counters {
     uint16_t rx_ok;
@@ -51,6 +55,7 @@ typedef struct rw_core {
         rw_ramp ramp;
         rw_throttle_map throttle;
         rw_tov_guard guard;
+        rw_spindle spindle;
         rw_duplicate_cache duplicates;
         rw_outbox outbox;
         rw_core_counters counters;
@@ -67,6 +72,9 @@ typedef struct rw_core {
         uint32_t last_host_frame_ms;
         uint32_t encoder_silent_ms;
         uint32_t telemetry_due_ms;
+        uint32_t spindle_due_ms;
+        uint32_t battery_low_ms;
+        bool grasp_pending;       /* GRASP: RELAX goes on to RETRACT once the rope has stopped */
         uint16_t tx_seq;
         uint16_t last_cmd_seq;
 

@@ -47,14 +47,19 @@ static verdict cmd_disarm(rw_core *core)
 {
     switch (core->state.state) {
     case RW_STATE_DISARMED:
-        return ACCEPT;
     case RW_STATE_ARMED:
+    case RW_STATE_RELAX:
     case RW_STATE_FAULT:
     case RW_STATE_ESTOP:
         if (!rope_stopped(core)) {
             return refuse(RW_NACK_REASON_BAD_STATE, (int32_t)(core->state.measured_mps * 1000.0f));
         }
-        core->state.fault_bits = 0u;
+        rw_spindle_stop(&core->state.spindle);
+        if (core->state.fault_bits != 0u) {
+            uint8_t st = core->state.state;
+            rw_core_emit_event(core, RW_EVENT_KIND_FAULT_CLEARED, st, st, (int32_t)core->state.fault_bits);
+            core->state.fault_bits = 0u;
+        }
         rw_core_set_state(core, RW_STATE_DISARMED, RW_CAUSE_COMMAND);
         return ACCEPT;
     default:
@@ -70,6 +75,9 @@ static verdict cmd_set_rope_speed(rw_core *core, const rw_msg_set_rope_speed *ms
     }
     if (msg->rope_speed_mmps > max_mmps) {
         return refuse(RW_NACK_REASON_OUT_OF_RANGE, max_mmps);
+    }
+    if ((core->state.fault_bits & RW_FAULT_BATTERY_LOW) != 0u) {
+        return refuse(RW_NACK_REASON_BAD_STATE, (int32_t)core->state.fault_bits);
     }
     float target_mps = (float)msg->rope_speed_mmps * 1.0e-3f;
     uint8_t st = core->state.state;
@@ -98,6 +106,8 @@ static verdict cmd_spindown(rw_core *core)
     switch (core->state.state) {
     case RW_STATE_SPINUP:
     case RW_STATE_AIRBORNE:
+    case RW_STATE_RELAX:
+        core->state.grasp_pending = false;
         core->state.target_mps = 0.0f;
         rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_COMMAND);
         return ACCEPT;
@@ -113,6 +123,8 @@ static verdict cmd_spindown(rw_core *core)
 static verdict cmd_estop(rw_core *core)
 {
     core->state.target_mps = 0.0f;
+    core->state.grasp_pending = false;
+    rw_spindle_stop(&core->state.spindle);
     rw_core_set_state(core, RW_STATE_ESTOP, RW_CAUSE_COMMAND);
     return ACCEPT;
 }
@@ -128,7 +140,105 @@ static verdict cmd_param_set(rw_core *core, const rw_msg_param_set *msg)
     return ACCEPT;
 }
 
-static verdict execute(rw_core *core, const rw_frame *frame)
+
+/* ---- spindle and grasp ------------------------------------------------------------------------- */
+
+static verdict spindle_usable(const rw_core *core, const rw_hal *hal, bool need_homed)
+{
+    if (hal->spindle == NULL || (core->state.fault_bits & (RW_FAULT_SPINDLE_NO_ANSWER | RW_FAULT_SPINDLE_STALL)) != 0u) {
+        return refuse(RW_NACK_REASON_SPINDLE_UNAVAILABLE, (int32_t)core->state.fault_bits);
+    }
+    if (need_homed && !rw_spindle_is_homed(&core->state.spindle)) {
+        return refuse(RW_NACK_REASON_NOT_HOMED, 0);
+    }
+    return ACCEPT;
+}
+
+static verdict cmd_home(rw_core *core, const rw_hal *hal)
+{
+    uint8_t st = core->state.state;
+    if ((st != RW_STATE_DISARMED && st != RW_STATE_ARMED) || !rope_stopped(core)) {
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+    verdict v = spindle_usable(core, hal, false);
+    if (v.reason == 0u) {
+        rw_spindle_home(&core->state.spindle);
+    }
+    return v;
+}
+
+static verdict cmd_set_loop(rw_core *core, const rw_hal *hal, const rw_msg_set_loop *msg)
+{
+    uint8_t st = core->state.state;
+    if (st != RW_STATE_ARMED && st != RW_STATE_SPINUP && st != RW_STATE_AIRBORNE) {
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+    int32_t min_um = (int32_t)(rw_params_get(&core->params, RW_PARAM_GUIDE_MIN_MM) * 1000.0f + 0.5f);
+    int32_t max_um = (int32_t)(rw_params_get(&core->params, RW_PARAM_GUIDE_MAX_MM) * 1000.0f + 0.5f);
+    if (msg->guide_position_um < min_um) {
+        return refuse(RW_NACK_REASON_OUT_OF_RANGE, min_um);
+    }
+    if (msg->guide_position_um > max_um) {
+        return refuse(RW_NACK_REASON_OUT_OF_RANGE, max_um);
+    }
+    verdict v = spindle_usable(core, hal, true);
+    if (v.reason == 0u) {
+        rw_spindle_move_to(&core->state.spindle, (float)msg->guide_position_um * 1.0e-3f);
+    }
+    return v;
+}
+
+static verdict cmd_relax(rw_core *core, bool then_grasp)
+{
+    uint8_t st = core->state.state;
+    if (then_grasp ? st != RW_STATE_AIRBORNE : (st != RW_STATE_SPINUP && st != RW_STATE_AIRBORNE)) {
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+    core->state.grasp_pending = then_grasp;
+    core->state.target_mps = 0.0f;
+    rw_spindle_stop(&core->state.spindle);
+    rw_core_set_state(core, RW_STATE_RELAX, RW_CAUSE_COMMAND);
+    return ACCEPT;
+}
+
+static verdict cmd_grasp(rw_core *core, const rw_hal *hal)
+{
+    verdict v = spindle_usable(core, hal, true);
+    return v.reason != 0u ? v : cmd_relax(core, true);
+}
+
+static verdict cmd_retract(rw_core *core, const rw_hal *hal)
+{
+    uint8_t st = core->state.state;
+    if ((st != RW_STATE_RELAX && st != RW_STATE_ARMED) || !rope_stopped(core)) {
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+    verdict v = spindle_usable(core, hal, true);
+    if (v.reason == 0u) {
+        core->state.grasp_pending = false;
+        rw_spindle_retract(&core->state.spindle);
+        rw_core_set_state(core, RW_STATE_RETRACT, RW_CAUSE_COMMAND);
+    }
+    return v;
+}
+
+static verdict cmd_release(rw_core *core, const rw_hal *hal)
+{
+    if (core->state.state != RW_STATE_HOLD) {
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+    verdict v = spindle_usable(core, hal, true);
+    if (v.reason == 0u) {
+        /* extend by release_mm, not past the home-end soft limit */
+        float target = core->state.spindle.state.position_mm - rw_params_get(&core->params, RW_PARAM_RELEASE_MM);
+        float min_mm = rw_params_get(&core->params, RW_PARAM_GUIDE_MIN_MM);
+        rw_spindle_move_to(&core->state.spindle, target < min_mm ? min_mm : target);
+        rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_COMMAND);
+    }
+    return v;
+}
+
+static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
 {
     switch (frame->msg_id) {
     case RW_MSG_ID_ARM:
@@ -154,6 +264,21 @@ static verdict execute(rw_core *core, const rw_frame *frame)
         rw_msg_param_set_unpack(&msg, frame->payload);
         return cmd_param_set(core, &msg);
     }
+    case RW_MSG_ID_HOME:
+        return cmd_home(core, hal);
+    case RW_MSG_ID_SET_LOOP: {
+        rw_msg_set_loop msg;
+        rw_msg_set_loop_unpack(&msg, frame->payload);
+        return cmd_set_loop(core, hal, &msg);
+    }
+    case RW_MSG_ID_RELAX:
+        return cmd_relax(core, false);
+    case RW_MSG_ID_GRASP:
+        return cmd_grasp(core, hal);
+    case RW_MSG_ID_RETRACT:
+        return cmd_retract(core, hal);
+    case RW_MSG_ID_RELEASE:
+        return cmd_release(core, hal);
     default:
         return refuse(RW_NACK_REASON_NOT_A_COMMAND, 0);
     }
@@ -231,7 +356,7 @@ bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal)
         ++core->state.counters.rx_duplicates;
         v = refuse(dup->nack_reason, dup->nack_detail);
     } else {
-        v = execute(core, &frame);
+        v = execute(core, hal, &frame);
         rw_duplicate_cache_store(&core->state.duplicates, frame.msg_id, frame.seq, checksum, v.reason, v.detail,
                                  core->state.uptime_ms);
         core->state.last_cmd_seq = frame.seq;

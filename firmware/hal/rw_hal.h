@@ -8,6 +8,7 @@
 #include "rw_hal_esc_output.h"
 #include "rw_hal_link.h"
 #include "rw_hal_scheduler.h"
+#include "rw_hal_spindle.h"
 
 typedef struct rw_hal {
     const rw_hal_esc_output *esc;
@@ -15,6 +16,7 @@ typedef struct rw_hal {
     const rw_hal_battery *battery;
     const rw_hal_link *link;
     const rw_hal_scheduler *scheduler;
+    const rw_hal_spindle *spindle; /* NULL: no spindle fitted (spindle commands are refused) */
 } rw_hal;
 
 #endif /* RW_HAL_H */

@@ -450,10 +450,10 @@ typedef enum {
     RW_PARAM_SPINDLE_MAX_SPEED_MMPS = 21, /* [mm/s] Fastest commanded guide speed. */
     RW_PARAM_SPINDLE_TOLERANCE_MM = 22, /* [mm] Guide position counted as reached within this distance of the target. */
     RW_PARAM_HOMING_SPEED_MMPS = 23, /* [mm/s] Guide speed towards the home end while homing. */
-    RW_PARAM_HOMING_LOAD_PCT = 24, /* [%] Homing ends (home found) when the present load stays over this for spindle_stall_time_s with no motion. */
+    RW_PARAM_HOMING_LOAD_PCT = 24, /* [%] Homing ends (home found) when the present load stays over this for spindle_stall_time_s with no motion (wheel mode is open-loop: a stalled servo loads to its drive level, about 38 % at the default homing speed). */
     RW_PARAM_SPINDLE_STALL_LOAD_PCT = 25, /* [%] Outside homing and grasping, load over this with no motion for spindle_stall_time_s is a stall fault. */
     RW_PARAM_SPINDLE_STALL_TIME_S = 26, /* [s] How long a stall (or a homing stop) must last. */
-    RW_PARAM_GRASP_SECURE_LOAD_PCT = 27, /* [%] Retracting stops and holds (HOLD) when the load resisting retraction reaches this. */
+    RW_PARAM_GRASP_SECURE_LOAD_PCT = 27, /* [%] Retracting stops and holds (HOLD) when the load resisting retraction stays at this for spindle_stall_time_s (12 % of the AX-12A's 1.5 N m through a T8 screw: about 18 N of rope tension). */
     RW_PARAM_RELEASE_MM = 28, /* [mm] RELEASE extends the guide by this much. */
     RW_PARAM_RETRACT_SPEED_MMPS = 29, /* [mm/s] Guide speed while retracting a grasp. */
     RW_PARAM_BATTERY_CUTOFF_V = 30, /* [V] Battery under this (3S: 3.3 V a cell) for battery_cutoff_time_s: BATTERY_LOW fault, spin-down. */
@@ -485,10 +485,10 @@ typedef enum {
 #define RW_PARAM_DEFAULT_SPINDLE_MAX_SPEED_MMPS 6.0f
 #define RW_PARAM_DEFAULT_SPINDLE_TOLERANCE_MM 0.5f
 #define RW_PARAM_DEFAULT_HOMING_SPEED_MMPS 3.0f
-#define RW_PARAM_DEFAULT_HOMING_LOAD_PCT 50.0f
-#define RW_PARAM_DEFAULT_SPINDLE_STALL_LOAD_PCT 80.0f
+#define RW_PARAM_DEFAULT_HOMING_LOAD_PCT 25.0f
+#define RW_PARAM_DEFAULT_SPINDLE_STALL_LOAD_PCT 50.0f
 #define RW_PARAM_DEFAULT_SPINDLE_STALL_TIME_S 0.3f
-#define RW_PARAM_DEFAULT_GRASP_SECURE_LOAD_PCT 35.0f
+#define RW_PARAM_DEFAULT_GRASP_SECURE_LOAD_PCT 12.0f
 #define RW_PARAM_DEFAULT_RELEASE_MM 20.0f
 #define RW_PARAM_DEFAULT_RETRACT_SPEED_MMPS 5.0f
 #define RW_PARAM_DEFAULT_BATTERY_CUTOFF_V 9.9f

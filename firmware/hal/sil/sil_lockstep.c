@@ -73,7 +73,9 @@ void sil_lockstep_send_actuators(sil_lockstep *ls)
     if (!ls->has_plant) {
         return;
     }
-    rw_msg_sil_actuators msg = { .time_us = ls->sensors.time_us, .esc_pulse_us = ls->esc_pulse_us };
+    rw_msg_sil_actuators msg = {
+        .time_us = ls->sensors.time_us, .esc_pulse_us = ls->esc_pulse_us, .spindle_moving_speed_raw = ls->spindle_moving_speed_raw,
+    };
     uint8_t frame[RW_MAX_FRAME_LEN];
     size_t len = rw_msg_sil_actuators_encode(&msg, ls->tx_seq++, frame, sizeof frame);
     sendto(ls->fd, frame, len, 0, (const struct sockaddr *)&ls->plant, sizeof ls->plant);
@@ -113,5 +115,30 @@ rw_hal_battery sil_lockstep_battery(sil_lockstep *ls)
 rw_hal_esc_output sil_lockstep_esc(sil_lockstep *ls)
 {
     rw_hal_esc_output hal = { .ctx = ls, .write_pulse_us = esc_write_pulse_us };
+    return hal;
+}
+
+static bool spindle_read(void *ctx, rw_spindle_reading *out)
+{
+    const sil_lockstep *ls = ctx;
+    if (!ls->sensors.spindle_answered) {
+        return false;
+    }
+    out->position_raw = ls->sensors.spindle_position_raw;
+    out->speed_raw = ls->sensors.spindle_speed_raw;
+    out->load_raw = ls->sensors.spindle_load_raw;
+    out->limit_switch = ls->sensors.limit_switch != 0u;
+    return true;
+}
+
+static void spindle_write(void *ctx, uint16_t raw)
+{
+    sil_lockstep *ls = ctx;
+    ls->spindle_moving_speed_raw = raw;
+}
+
+rw_hal_spindle sil_lockstep_spindle(sil_lockstep *ls)
+{
+    rw_hal_spindle hal = { .ctx = ls, .read = spindle_read, .write_moving_speed_raw = spindle_write };
     return hal;
 }

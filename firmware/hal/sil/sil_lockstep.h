@@ -18,6 +18,7 @@ typedef struct sil_lockstep {
     bool has_plant;
     rw_msg_sil_sensors sensors; /* latest */
     uint16_t esc_pulse_us;      /* latest output */
+    uint16_t spindle_moving_speed_raw; /* latest output */
     uint32_t bad_datagrams;
     uint16_t tx_seq;
 } sil_lockstep;
@@ -32,5 +33,6 @@ void sil_lockstep_send_actuators(sil_lockstep *ls);
 rw_hal_encoder sil_lockstep_encoder(sil_lockstep *ls);
 rw_hal_battery sil_lockstep_battery(sil_lockstep *ls);
 rw_hal_esc_output sil_lockstep_esc(sil_lockstep *ls);
+rw_hal_spindle sil_lockstep_spindle(sil_lockstep *ls);
 
 #endif /* SIL_LOCKSTEP_H */

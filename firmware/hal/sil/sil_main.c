@@ -92,8 +92,10 @@ int main(int argc, char **argv)
     rw_hal_battery battery_hal = sil_lockstep_battery(&lockstep);
     rw_hal_esc_output esc_hal = sil_lockstep_esc(&lockstep);
     rw_hal_scheduler scheduler_hal = { .ctx = NULL, .tick_overruns = tick_overruns };
+    rw_hal_spindle spindle_hal = sil_lockstep_spindle(&lockstep);
     rw_hal hal = {
         .esc = &esc_hal, .encoder = &encoder_hal, .battery = &battery_hal, .link = &link_hal, .scheduler = &scheduler_hal,
+        .spindle = &spindle_hal,
     };
     static rw_core core;
     rw_core_init(&core);

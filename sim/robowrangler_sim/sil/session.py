@@ -17,6 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from robowrangler_sim.plants import DriveParams, DrivePlant
+from robowrangler_sim.plants.spindle import SpindleParams, SpindlePlant
 from robowrangler_sim.sil.errors import SilError, SilFirmwareError
 from robowrangler_sim.sil.firmware import FirmwareProcess
 from robowrangler_sim.sil.lockstep import LockstepLink
@@ -32,6 +33,9 @@ class PlantSample:
     battery_v: float
     external_rope_load_n: float
     loop_airborne: bool
+    guide_position_mm: float
+    loop_length_m: float
+    rope_tension_n: float
 
 
 @dataclass(frozen=True)
@@ -42,6 +46,11 @@ class SensorValues:
     encoder_counts: int
     encoder_last_edge_us: int
     battery_mv: int
+    spindle_position_raw: int = 0
+    spindle_speed_raw: int = 0
+    spindle_load_raw: int = 0
+    spindle_answered: bool = False
+    limit_switch: bool = False
 
 
 SensorFilter = Callable[[SensorValues], "SensorValues | None"]
@@ -55,6 +64,7 @@ class SilSession:
 
     Args:
         drive_params: drive plant parameters (defaults: AS2317-class motors, 3S LiPo, 15 mm wheels).
+        spindle_params: spindle plant parameters (AX-12A, T8 lead screw, 180 mm stroke).
         seed: plant noise seed.
         tick_us: control tick, microseconds (the firmware's period; 1000 = 1 kHz as on the board).
         speedup: pacing factor for run_for/background running; None = unpaced.
@@ -69,7 +79,8 @@ class SilSession:
     plant's ESC receives (applied on missed ticks too). Change the lists between steps or in at().
     """
 
-    def __init__(self, *, drive_params: DriveParams | None = None, seed: int = 0, tick_us: int = 1000,
+    def __init__(self, *, drive_params: DriveParams | None = None, spindle_params: SpindleParams | None = None,
+                 seed: int = 0, tick_us: int = 1000,
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
                  plant_timeout_s: int = 10) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
@@ -77,6 +88,8 @@ class SilSession:
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
             raise ValueError(f"speedup: expected a positive factor or None (unpaced), got {speedup!r}")
         self.plant = DrivePlant(drive_params, seed=seed)
+        self.spindle = SpindlePlant(spindle_params, seed=seed)
+        self.last_spindle_speed_raw = 0
         self.tick_us = tick_us
         self.speedup = speedup
         self.trace_every = trace_every
@@ -155,8 +168,11 @@ class SilSession:
             while self._actions and self._actions[0][0] <= plant.time_us:
                 _, _, action = heapq.heappop(self._actions)
                 action()
+        spindle = self.spindle
         sensors: SensorValues | None = SensorValues(plant.time_us, plant.encoder_counts, plant.encoder_last_edge_us,
-                                                    round(plant.battery_adc_v * 1000.0))
+                                                    round(plant.battery_adc_v * 1000.0), spindle.position_raw,
+                                                    spindle.speed_raw, spindle.load_raw, spindle.answering,
+                                                    spindle.limit_switch)
         for sensor_filter in self.sensor_filters:
             sensors = sensor_filter(sensors)
             if sensors is None:
@@ -166,7 +182,9 @@ class SilSession:
                 out = self._link.exchange(
                     time_us=sensors.time_us, encoder_counts=sensors.encoder_counts,
                     encoder_last_edge_us=sensors.encoder_last_edge_us, battery_mv=sensors.battery_mv,
-                    host_frames_sent=host_frames_sent,
+                    host_frames_sent=host_frames_sent, spindle_position_raw=sensors.spindle_position_raw,
+                    spindle_speed_raw=sensors.spindle_speed_raw, spindle_load_raw=sensors.spindle_load_raw,
+                    spindle_answered=sensors.spindle_answered, limit_switch=sensors.limit_switch,
                 )
             except SilError:
                 code = self._firmware.poll()
@@ -174,14 +192,19 @@ class SilSession:
                     raise SilFirmwareError(f"SIL firmware exited with code {code}: {self._firmware.stderr_text()}") from None
                 raise
             self.last_esc_pulse_us = out.esc_pulse_us
+            self.last_spindle_speed_raw = out.spindle_moving_speed_raw
         plant_pulse_us = self.last_esc_pulse_us
         for actuator_filter in self.actuator_filters:
             plant_pulse_us = actuator_filter(plant_pulse_us)
         plant.step_us(esc_pulse_us=float(plant_pulse_us), dt_us=self.tick_us)
+        spindle.moving_speed_raw = self.last_spindle_speed_raw
+        spindle.step(self.tick_us * 1e-6)
+        plant.rope_exposed_length_m = min(max(0.05, spindle.loop_length_m), plant.params.rope_loop_length_m)
         self.ticks += 1
         if self.trace_every and self.ticks % self.trace_every == 0:
             self.trace.append(PlantSample(plant.time_us * 1e-6, plant.rope_speed_mps, self.last_esc_pulse_us,
-                                          plant.battery_v, plant.external_rope_load_n, plant.loop_airborne))
+                                          plant.battery_v, plant.external_rope_load_n, plant.loop_airborne,
+                                          spindle.guide_position_mm, spindle.loop_length_m, spindle.rope_tension_n))
         self._pace()
 
     def _pace(self) -> None:

@@ -1,0 +1,92 @@
+/* Spindle: the AX-12A (wheel mode) turning the lead screw that moves the rope guide.
+ *
+ * Guide position in millimetres from the home end: the multi-turn servo angle (rw_multiturn) times
+ * lead_mm_per_rev / 360, zeroed by homing. Modes:
+ *   IDLE       moving speed 0 (the servo brakes)
+ *   HOMING     towards the home end at homing_speed_mmps until the limit switch closes, or the load
+ *              stays over homing_load_pct with no motion for stall_time_s: position 0 there
+ *   POSITION   P loop to a target: speed = clamp(kp_per_s * error, +-max_speed_mmps), 0 within
+ *              tolerance_mm; stall (load over stall_load_pct, no motion, stall_time_s) -> STALL
+ *   RETRACT    towards guide_max at retract_speed_mmps until the load resisting retraction stays over
+ *              secure_load_pct for stall_time_s (SECURED) or the stroke ends (STROKE_END)
+ * Any moving mode stops at the soft limits. No answer from the servo for timeout_s -> NO_ANSWER, IDLE.
+ * Call rw_spindle_step at the spindle period with the latest reading; write moving_speed_raw out. */
+#ifndef RW_SPINDLE_H
+#define RW_SPINDLE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "rw_hal_spindle.h"
+#include "rw_multiturn.h"
+
+typedef enum {
+    RW_SPINDLE_IDLE = 0,
+    RW_SPINDLE_HOMING,
+    RW_SPINDLE_POSITION,
+    RW_SPINDLE_RETRACT,
+} rw_spindle_mode;
+
+typedef enum {
+    RW_SPINDLE_NOTHING = 0,
+    RW_SPINDLE_HOMED_BY_STALL,
+    RW_SPINDLE_HOMED_BY_SWITCH,
+    RW_SPINDLE_TARGET_REACHED,
+    RW_SPINDLE_SECURED,
+    RW_SPINDLE_STROKE_END,
+    RW_SPINDLE_STALLED,
+    RW_SPINDLE_NO_ANSWER,
+} rw_spindle_outcome;
+
+typedef struct rw_spindle_config {
+    float lead_mm_per_rev;
+    float guide_min_mm;
+    float guide_max_mm;
+    float kp_per_s;
+    float max_speed_mmps;
+    float tolerance_mm;
+    float homing_speed_mmps;
+    float homing_load_pct;
+    float stall_load_pct;
+    float stall_time_s;
+    float secure_load_pct;
+    float retract_speed_mmps;
+    float timeout_s;
+} rw_spindle_config;
+
+typedef struct rw_spindle {
+    rw_spindle_config cfg;
+    struct {
+        rw_multiturn turns;
+        uint8_t mode;            /* rw_spindle_mode */
+        bool homed;
+        bool answering;
+        bool target_reported;    /* TARGET_REACHED sent for the current target */
+        float home_angle_deg;    /* multi-turn angle at guide position 0 */
+        float position_mm;
+        float target_mm;
+        float speed_mmps;        /* measured */
+        float command_mmps;      /* commanded */
+        int16_t load_permille;   /* + = resisting retraction */
+        float stall_s;           /* time the stall/home condition has held */
+        float silent_s;          /* time since the last answer */
+        uint16_t moving_speed_raw;
+    } state;
+} rw_spindle;
+
+void rw_spindle_init(rw_spindle *s, const rw_spindle_config *cfg);
+/* Stop (IDLE); keeps homing and position. */
+void rw_spindle_stop(rw_spindle *s);
+void rw_spindle_home(rw_spindle *s);
+/* Move to target_mm (the caller range-checks against guide_min_mm..guide_max_mm). */
+void rw_spindle_move_to(rw_spindle *s, float target_mm);
+void rw_spindle_retract(rw_spindle *s);
+/* One step: reading (NULL when the servo did not answer), elapsed time. Returns what happened. */
+rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *reading, float dt_s);
+
+static inline bool rw_spindle_is_homed(const rw_spindle *s)
+{
+    return s->state.homed;
+}
+
+#endif /* RW_SPINDLE_H */
