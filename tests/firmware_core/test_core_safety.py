@@ -127,6 +127,30 @@ def test_encoder_silent_with_throttle_up_faults_after_encoder_timeout(rw_core, t
     assert (tel.state, tel.fault_bits, tel.esc_pulse_us) == (S.FAULT, Fault.ENCODER_SILENT, 1000)
 
 
+def test_encoder_lost_while_airborne_faults_after_encoder_timeout(rw_core):
+    """The encoder stops reporting mid-flight (cable pulled): FAULT after encoder_timeout_s, ESC to idle.
+    Until then the loop sees a decaying speed and raises the throttle (measured: 1172 -> ~1710 us)."""
+    h = CoreHarness(rw_core)
+    h.boot_and_arm()
+    h.spin_to_airborne(target_mmps=4000)
+    h.follow_setpoint(until=lambda: h.t_ms > 1200, max_ms=1000, what="steady flight")
+    i_loss = len(h.hal.pulses_us)
+    t_loss = h.t_ms
+    h.encoder.speed_mps = 0.0  # counts freeze: the estimator sees silence
+    for _ in range(400):
+        if h.t_ms % 100 == 0:
+            h.heartbeat()
+        h.tick()
+    h.drain(3)
+    (raised,) = h.events(EventKind.FAULT_RAISED)
+    assert raised.arg == Fault.ENCODER_SILENT
+    assert 250 <= raised.time_ms - t_loss <= 252
+    assert h.transitions()[-1][1:] == (S.AIRBORNE, S.FAULT, Cause.FAULT)
+    t_fault = raised.time_ms
+    assert all(p == 1000 for p in h.hal.pulses_us[t_fault:])
+    assert max(h.hal.pulses_us[i_loss:t_fault]) < 2000, "no full throttle before the fault"
+
+
 def test_silent_encoder_at_idle_throttle_is_not_a_fault(rw_core):
     h = CoreHarness(rw_core)
     h.boot_and_arm()

@@ -258,3 +258,18 @@ def test_disarm_while_the_rope_is_driven_is_refused(rw_core):
         _to_state(h, state)
         reply = h.command(Disarm())
         assert isinstance(reply, Nack) and reply.reason == NackReason.BAD_STATE and reply.state == state
+
+
+def test_repeated_commands_are_idempotent_acks_without_events(rw_core):
+    h = CoreHarness(rw_core)
+    h.tick()
+    h.run_ms(600)
+    assert _ack_state(h.command(Disarm())) == S.DISARMED
+    assert _ack_state(h.command(Spindown())) == S.DISARMED
+    assert _ack_state(h.command(Arm())) == S.ARMED
+    assert _ack_state(h.command(Arm())) == S.ARMED
+    assert _ack_state(h.command(Spindown())) == S.ARMED
+    h.drain(5)
+    assert [(f, t) for _, f, t, _ in h.transitions()] == [(S.DISARMED, S.ARMED)]
+    tel = h.telemetry()
+    assert tel[-1].nacks == 0
