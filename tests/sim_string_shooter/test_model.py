@@ -4,7 +4,7 @@ contact, determinism, typed errors."""
 import numpy as np
 import pytest
 
-from robowrangler_sim.string_shooter import (Cylinder, HalfSpace, ModuleGeometry, ModuleMotion, NipParams,
+from robowrangler_sim.string_shooter import (Capsule, Cylinder, HalfSpace, ModuleGeometry, ModuleMotion, NipParams,
                                              RopeParams, ShooterParams, Sphere, StringShooter,
                                              StringShooterParamError)
 from robowrangler_sim.string_shooter.contact import Box, signed_distance_m
@@ -94,7 +94,12 @@ def test_an_obstacle_inside_the_initial_loop_is_refused():
 @pytest.mark.parametrize("obstacle, point, expected", [
     (Sphere(center_m=(0, 0, 0), radius_m=1.0), (2.0, 0, 0), 1.0),
     (Cylinder(end_a_m=(0, 0, 0), end_b_m=(1, 0, 0), radius_m=0.1), (0.5, 0, 0.3), 0.2),
+    (Cylinder(end_a_m=(0, 0, 0), end_b_m=(1, 0, 0), radius_m=0.1), (1.5, 0, 0), 0.5),  # flat end
+    (Cylinder(end_a_m=(0, 0, 0), end_b_m=(1, 0, 0), radius_m=0.1), (1.3, 0, 0.5), 0.5),  # beyond the rim: 0.3, 0.4
+    (Capsule(end_a_m=(0, 0, 0), end_b_m=(1, 0, 0), radius_m=0.1), (1.5, 0, 0), 0.4),  # round end
     (Box(center_m=(0, 0, 0), half_extents_m=(1, 2, 3)), (0, 0, 2.5), -0.5),
+    (Box(center_m=(0, 0, 0), half_extents_m=(1, 2, 3)), (1.5, 0, 0), 0.5),
+    (Box(center_m=(0, 0, 0), half_extents_m=(1, 2, 3), rotation=((0, -1, 0), (1, 0, 0), (0, 0, 1))), (1.5, 0, 0), -0.5),
     (HalfSpace(point_m=(0, 0, 1)), (5, 5, 0.5), -0.5),
 ])
 def test_obstacle_signed_distances(obstacle, point, expected):

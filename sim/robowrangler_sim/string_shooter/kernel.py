@@ -25,7 +25,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .contact import sdf_one
+
+# obstacle rows (contact.py builds them): [kind, mu, geometry...]
+OBSTACLE_ROW = 16
+KIND_SPHERE, KIND_CAPSULE, KIND_BOX, KIND_HALFSPACE, KIND_CYLINDER = 0, 1, 2, 3, 4
 
 # indices into the scalar parameter vector ``prm``
 P_LAMBDA, P_EA, P_ETA, P_B, P_RHO, P_CF, P_CN, P_D = 0, 1, 2, 3, 4, 5, 6, 7
@@ -36,6 +39,91 @@ N_PRM = 22
 # indices into the scalar state vector ``sc``
 S_N, S_REST_RET, S_REST_EXIT, S_U, S_EXIT_LABEL, S_T_EXIT, S_T_RET, S_TRACTION, S_TIME = 0, 1, 2, 3, 4, 5, 6, 7, 8
 N_SC = 9
+
+
+@njit(cache=True)
+def sdf_one(row, x, out_normal):
+    """Signed distance (m) of point x (3,) to the obstacle row; writes the outward unit normal."""
+    kind = int(row[0])
+    if kind == KIND_SPHERE:
+        dx, dy, dz = x[0] - row[2], x[1] - row[3], x[2] - row[4]
+        dist = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if dist < 1e-12:
+            out_normal[0], out_normal[1], out_normal[2] = 0.0, 0.0, 1.0
+        else:
+            out_normal[0], out_normal[1], out_normal[2] = dx / dist, dy / dist, dz / dist
+        return dist - row[5]
+    if kind == KIND_CYLINDER:
+        ax, ay, az = row[2], row[3], row[4]
+        bx, by, bz = row[5] - ax, row[6] - ay, row[7] - az
+        blen = np.sqrt(bx * bx + by * by + bz * bz)
+        ux, uy, uz = bx / blen, by / blen, bz / blen
+        px, py, pz = x[0] - ax - 0.5 * bx, x[1] - ay - 0.5 * by, x[2] - az - 0.5 * bz
+        h = px * ux + py * uy + pz * uz
+        rx, ry, rz = px - h * ux, py - h * uy, pz - h * uz
+        rr = np.sqrt(rx * rx + ry * ry + rz * rz)
+        if rr > 1e-12:
+            rx, ry, rz = rx / rr, ry / rr, rz / rr
+        else:
+            # any direction perpendicular to the axis
+            rx, ry, rz = (uy, -ux, 0.0) if abs(uz) < 0.9 else (0.0, uz, -uy)
+            nn = np.sqrt(rx * rx + ry * ry + rz * rz)
+            rx, ry, rz = rx / nn, ry / nn, rz / nn
+        dr = rr - row[8]
+        dz = abs(h) - 0.5 * blen
+        sz = 1.0 if h >= 0 else -1.0
+        if dr > 0 and dz > 0:
+            dist = np.sqrt(dr * dr + dz * dz)
+            out_normal[0] = (dr * rx + dz * sz * ux) / dist
+            out_normal[1] = (dr * ry + dz * sz * uy) / dist
+            out_normal[2] = (dr * rz + dz * sz * uz) / dist
+            return dist
+        if dr >= dz:
+            out_normal[0], out_normal[1], out_normal[2] = rx, ry, rz
+            return dr
+        out_normal[0], out_normal[1], out_normal[2] = sz * ux, sz * uy, sz * uz
+        return dz
+    if kind == KIND_CAPSULE:
+        ax, ay, az = row[2], row[3], row[4]
+        bx, by, bz = row[5] - ax, row[6] - ay, row[7] - az
+        px, py, pz = x[0] - ax, x[1] - ay, x[2] - az
+        t = (px * bx + py * by + pz * bz) / (bx * bx + by * by + bz * bz)
+        t = min(max(t, 0.0), 1.0)
+        dx, dy, dz = px - t * bx, py - t * by, pz - t * bz
+        dist = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if dist < 1e-12:
+            out_normal[0], out_normal[1], out_normal[2] = 0.0, 0.0, 1.0
+        else:
+            out_normal[0], out_normal[1], out_normal[2] = dx / dist, dy / dist, dz / dist
+        return dist - row[8]
+    if kind == KIND_BOX:
+        ex0, ex1, ex2 = row[8], row[9], row[10]
+        ez0, ez1, ez2 = row[11], row[12], row[13]
+        ey0, ey1, ey2 = ez1 * ex2 - ez2 * ex1, ez2 * ex0 - ez0 * ex2, ez0 * ex1 - ez1 * ex0
+        px, py, pz = x[0] - row[2], x[1] - row[3], x[2] - row[4]
+        lx = px * ex0 + py * ex1 + pz * ex2
+        ly = px * ey0 + py * ey1 + pz * ey2
+        lz = px * ez0 + py * ez1 + pz * ez2
+        qx, qy, qz = abs(lx) - row[5], abs(ly) - row[6], abs(lz) - row[7]
+        if qx > 0 or qy > 0 or qz > 0:
+            ox, oy, oz = max(qx, 0.0), max(qy, 0.0), max(qz, 0.0)
+            dist = np.sqrt(ox * ox + oy * oy + oz * oz)
+            nx, ny, nz = ox / dist * np.sign(lx), oy / dist * np.sign(ly), oz / dist * np.sign(lz)
+        else:
+            nx, ny, nz = 0.0, 0.0, 0.0
+            if qx >= qy and qx >= qz:
+                dist, nx = qx, np.sign(lx)
+            elif qy >= qz:
+                dist, ny = qy, np.sign(ly)
+            else:
+                dist, nz = qz, np.sign(lz)
+        out_normal[0] = nx * ex0 + ny * ey0 + nz * ez0
+        out_normal[1] = nx * ex1 + ny * ey1 + nz * ez1
+        out_normal[2] = nx * ex2 + ny * ey2 + nz * ez2
+        return dist
+    # half-space
+    out_normal[0], out_normal[1], out_normal[2] = row[5], row[6], row[7]
+    return (x[0] - row[2]) * row[5] + (x[1] - row[3]) * row[6] + (x[2] - row[4]) * row[7]
 
 
 @njit(cache=True)

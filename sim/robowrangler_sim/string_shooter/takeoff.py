@@ -48,7 +48,7 @@ class TakeoffResult:
         speed_mps: rope speed at which the loop's depth leaves the hanging branch by ``threshold``.
         speeds_mps: shape (S,), the speeds swept.
         depth_fraction: shape (S,), steady depth / (loop length / 2) at each speed.
-        baseline: (intercept, slope) of the hanging branch fitted to the first ``baseline_points``.
+        baseline: (intercept, slope) of the hanging branch (depth fraction versus speed).
     """
 
     speed_mps: float
@@ -58,14 +58,15 @@ class TakeoffResult:
 
 
 def find_takeoff_speed(params: ShooterParams | None = None, *, loop_length_m: float = 2.0, phi_rad: float = 0.0,
-                       speeds_mps=None, threshold: float = 0.03, baseline_points: int = 4,
+                       speeds_mps=None, threshold: float = 0.03, baseline_below_mps: float = 2.1,
                        settle_s: float = 5.0) -> TakeoffResult:
     """Sweep the rope speed and find where the loop leaves the hanging branch.
 
-    The hanging branch is the straight line through the depth fractions of the first ``baseline_points``
-    speeds (it slopes a little: the rope leaves the eyelet with momentum flux lambda v^2 and bends out
-    before it hangs, which matters for short loops). The takeoff speed is where the depth first falls
-    more than ``threshold`` below that line, interpolated linearly between sweep points.
+    The hanging branch is the straight line fitted to the depth fractions at speeds up to
+    ``baseline_below_mps`` (there f_t < 0.65 lambda g, deep in the hanging regime; the line slopes a
+    little because the rope leaves the eyelet with momentum flux lambda v^2 and bends out before it
+    hangs, which matters for short loops). The takeoff speed is where the depth first falls more than
+    ``threshold`` below that line, interpolated linearly between sweep points.
 
     Args:
         speeds_mps: ascending speeds, shape (S,), default 1.5 .. 3.6 step 0.1 m/s.
@@ -73,9 +74,13 @@ def find_takeoff_speed(params: ShooterParams | None = None, *, loop_length_m: fl
     """
     params = params or ShooterParams()
     speeds = np.arange(1.5, 3.61, 0.1) if speeds_mps is None else np.asarray(speeds_mps, dtype=float)
-    if speeds.ndim != 1 or speeds.size < baseline_points + 2 or np.any(np.diff(speeds) <= 0):
+    if speeds.ndim != 1 or np.any(np.diff(speeds) <= 0):
+        raise StringShooterParamError(f"speeds_mps: expected ascending speeds, got {speeds.tolist()}")
+    baseline_points = int(np.sum(speeds <= baseline_below_mps + 1e-9))
+    if baseline_points < 3 or baseline_points > speeds.size - 2:
         raise StringShooterParamError(
-            f"speeds_mps: expected ascending speeds, at least {baseline_points + 2}, got {speeds.tolist()}"
+            f"speeds_mps: expected at least 3 speeds <= baseline_below_mps = {baseline_below_mps} and 2 above, "
+            f"got {speeds.tolist()}"
         )
     depth = np.array([steady_depth_fraction(params, rope_speed_mps=float(v), loop_length_m=loop_length_m,
                                             phi_rad=phi_rad, settle_s=settle_s) for v in speeds])

@@ -1,0 +1,219 @@
+"""Validation sweeps and speed of the first-principles string shooter (issue 6). Prints its figures.
+
+    uv run python bench/bench_string_shooter.py            # everything (about 2-3 min on one core)
+    uv run python bench/bench_string_shooter.py --quick    # coarser sweeps
+    uv run python bench/bench_string_shooter.py --only takeoff,waves --plot-dir /tmp/ss
+
+Sections: takeoff (our rope, 2 m loop), length (0.4-2 m), angle (-30..40 deg), vacuum (no air),
+shape (roundness versus phi, the paper's Fig. 5b), waves (v +- c), speed (steady state, 10 s dynamic run).
+Progress goes to stderr, figures to stdout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from robowrangler_sim.shape_table import resample_by_arc_length
+from robowrangler_sim.string_shooter import (ModuleMotion, NumericsParams, ShooterParams, StringShooter,
+                                             takeoff_speed_estimate_mps)
+from robowrangler_sim.string_shooter.shape import reach_m, roundness
+from robowrangler_sim.string_shooter.takeoff import find_takeoff_speed, no_air
+from robowrangler_sim.string_shooter.waves import measure_wave_speeds
+
+SECTIONS = ("takeoff", "length", "angle", "vacuum", "shape", "waves", "speed")
+
+
+def log(msg: str) -> None:
+    print(f"  ... {msg}", file=sys.stderr, flush=True)
+
+
+def speeds(quick: bool) -> np.ndarray:
+    return np.arange(1.5, 3.61, 0.1 if quick else 0.05)
+
+
+def bench_takeoff(args, plots):
+    p = ShooterParams()
+    est = takeoff_speed_estimate_mps(p.rope, p.air)
+    log("takeoff sweep, 2 m loop, phi 0")
+    t0 = time.perf_counter()
+    r = find_takeoff_speed(p, loop_length_m=2.0, speeds_mps=speeds(args.quick))
+    print("\n## Takeoff, our rope (lambda 0.221 g/m, d 2 mm, C_f 0.085, rho 1.2): 2 m loop, phi 0")
+    print(f"  drag balance f_t(v*) = lambda g predicts v* = {est:.3f} m/s")
+    print(f"  simulated takeoff (depth leaves the hanging branch by 3 % of L/2): {r.speed_mps:.3f} m/s "
+          f"({100 * (r.speed_mps / 2.6 - 1):+.1f} % vs 2.6 m/s)   [{time.perf_counter() - t0:.0f} s]")
+    print("  v [m/s] : depth / (L/2)")
+    for v, d in zip(r.speeds_mps[::2], r.depth_fraction[::2]):
+        print(f"    {v:4.2f} : {d:.3f}")
+    plots["takeoff"] = r
+
+
+def bench_length(args, plots):
+    print("\n## Takeoff versus loop length (phi 0)")
+    out = []
+    for length in (0.4, 0.7, 1.0, 1.5, 2.0):
+        log(f"takeoff sweep, {length} m loop")
+        out.append(find_takeoff_speed(ShooterParams(), loop_length_m=length, speeds_mps=speeds(args.quick)).speed_mps)
+        print(f"  L = {length:3.1f} m : v* = {out[-1]:.3f} m/s")
+    mean = float(np.mean(out))
+    print(f"  spread: max |v* - mean| / mean = {100 * max(abs(np.array(out) - mean)) / mean:.1f} % (mean {mean:.3f} m/s)")
+
+
+def bench_angle(args, plots):
+    print("\n## Takeoff versus launch angle phi (2 m loop; and 0.4 m loop, where the exit jet matters)")
+    for length in (2.0, 0.4):
+        out = []
+        for phi in (-30, -20, -10, 0, 10, 20, 30, 40):
+            log(f"takeoff sweep, {length} m loop, phi {phi}")
+            out.append(find_takeoff_speed(ShooterParams(), loop_length_m=length, phi_rad=math.radians(phi),
+                                          speeds_mps=speeds(args.quick)).speed_mps)
+        mean = float(np.mean(out))
+        row = " ".join(f"{phi:+d}:{v:.2f}" for phi, v in zip((-30, -20, -10, 0, 10, 20, 30, 40), out))
+        print(f"  L = {length} m: {row}")
+        print(f"    spread max |v* - mean| / mean = {100 * max(abs(np.array(out) - mean)) / mean:.1f} % "
+              f"(mean {mean:.3f} m/s)")
+
+
+def bench_vacuum(args, plots):
+    print("\n## No air (rho = 0): spun up over 2 s from hanging, 1 m loop, last 3 s of 5 s")
+    for v in (3.0, 8.0, 15.0):
+        log(f"vacuum at {v} m/s")
+        sim = StringShooter(no_air(ShooterParams()), loop_length_m=1.0, initial_shape="hanging",
+                            motion=ModuleMotion(wheel_speed_mps=lambda t, v=v: v * np.clip(t / 2.0, 0, 1)))
+        rec = sim.run(5.0, frame_interval_s=0.02)
+        late = [f.loop_plane_xz_m() for f in rec.frames if f.time_s >= 2.0]
+        depth = np.array([-xz[:, 1].min() for xz in late]) / 0.5
+        rise = max(xz[:, 1].max() for xz in late)
+        print(f"  v = {v:4.1f} m/s: depth / (L/2) mean {depth.mean():.3f} min {depth.min():.3f}, "
+              f"highest point {1e3 * rise:+.1f} mm relative to the exit  -> hangs")
+    p = ShooterParams()
+    sim = StringShooter(p, loop_length_m=1.0, motion=ModuleMotion(wheel_speed_mps=8.0))
+    sim.step_for(3.0)
+    print(f"  (with air at 8 m/s: depth / (L/2) = {-sim.frame().loop_plane_xz_m()[:, 1].min() / 0.5:.3f} -> flies)")
+
+
+def bench_shape(args, plots):
+    from robowrangler_sim.string_shooter.shape_export import steady_contour_xz_m
+    print("\n## Loop shape versus phi (2 m loop): roundness 4 pi A / P^2 (1 = circle) and reach")
+    shapes = {}
+    for v in (4.0, 5.0, 8.0):
+        row = []
+        for phi in (-30, -20, -10, 0, 10, 20, 30, 40):
+            log(f"shape v {v} phi {phi}")
+            c = steady_contour_xz_m(ShooterParams(), phi_deg=phi, rope_speed_mps=v, loop_length_m=2.0, n_points=80,
+                                    settle_s=4.0 if args.quick else 6.0)
+            shapes[(v, phi)] = c
+            row.append(f"{phi:+d}:{roundness(c):.2f}/{reach_m(c):.2f}m")
+        print(f"  v = {v} m/s: " + " ".join(row))
+    plots["shape"] = shapes
+
+
+def bench_waves(args, plots):
+    print("\n## Waves: pluck on a straight moving span (no gravity, no air, B = 0); lab speeds of the two pulses")
+    for v, c in ((4.0, 2.0), (1.0, 2.0), (3.0, 3.0), (6.0, 1.5), (2.0, 5.0)):
+        log(f"waves v {v} c {c}")
+        r = measure_wave_speeds(rope_speed_mps=v, wave_speed_mps=c, span_m=3.0, segment_length_m=0.01)
+        print(f"  v = {v:3.1f}, c = sqrt(T/lambda) = {r.wave_speed_mps:.3f} m/s: measured "
+              f"{r.measured_mps[0]:+.3f} / {r.measured_mps[1]:+.3f}, predicted v-c {r.predicted_mps[0]:+.3f} / "
+              f"v+c {r.predicted_mps[1]:+.3f} m/s, error {100 * r.relative_error.max():.2f} % of v+c")
+
+
+def _steady(sim, tol_m=2e-3):
+    prev, calm = None, 0
+    while sim.time_s < 20.0:
+        sim.step_for(0.1)
+        c = resample_by_arc_length(sim.frame().loop_plane_xz_m(), 100)
+        if prev is not None and np.abs(c - prev).max() < tol_m:
+            calm += 1
+            if calm >= 5:
+                return sim.time_s
+        else:
+            calm = 0
+        prev = c
+    return float("nan")
+
+
+def bench_speed(args, plots):
+    print("\n## Speed (one core, numba-compiled kernel; first call compiles, not timed)")
+    StringShooter(ShooterParams(), loop_length_m=0.5).step_for(0.01)  # compile / load cache
+    for ds in (0.025, 0.0125):
+        p = ShooterParams(numerics=NumericsParams(segment_length_m=ds))
+        sim = StringShooter(p, loop_length_m=2.0, motion=ModuleMotion(wheel_speed_mps=5.0))
+        log(f"steady state, ds {ds}")
+        w0 = time.perf_counter()
+        t_ss = _steady(sim)
+        wall = time.perf_counter() - w0
+        steps = t_ss / sim.dt_s
+        print(f"  2 m loop at 5 m/s, ds = {100 * ds:.2f} cm ({sim.n_nodes} nodes, dt = {1e6 * sim.dt_s:.1f} us): "
+              f"steady (contour still to 2 mm) after {t_ss:.1f} s simulated in {wall:.2f} s wall "
+              f"= {t_ss / wall:.1f} sim s / wall s, {1e6 * wall / steps:.2f} us/step")
+        motion = ModuleMotion(
+            wheel_speed_mps=lambda t: 4.0 + 2.0 * np.clip(t - 2.0, 0, 1) - 1.5 * np.clip(t - 6.0, 0, 1),
+            phi_rad=lambda t: np.radians(10.0 + 25.0 * np.sin(0.8 * t)),
+            yaw_rad=lambda t: 0.3 * np.sin(0.5 * t),
+            base_position_m=lambda t: np.column_stack([0.1 * np.sin(1.3 * t), np.zeros_like(t), 0.05 * np.sin(2.1 * t)]),
+            guide_travel_m=lambda t: 0.09 + 0.08 * np.sin(0.4 * t),
+        )
+        sim = StringShooter(p, loop_length_m=2.0, motion=motion)
+        log(f"10 s dynamic run, ds {ds}")
+        w0 = time.perf_counter()
+        rec = sim.run(10.0, frame_interval_s=0.01, progress=True)
+        wall = time.perf_counter() - w0
+        print(f"  10 s dynamic run (phi, yaw, translation, wheel speed and guide travel all moving, 100 Hz frames): "
+              f"{wall:.2f} s wall = {10.0 / wall:.1f} sim s / wall s; loop length now {sim.loop_length_m():.3f} m, "
+              f"{len(rec.frames)} frames")
+    print("  limit: explicit step dt = 0.4 ds / sqrt(EA/lambda) (axial wave 150 m/s); cost ~ nodes x steps, so"
+          " halving ds costs 4x")
+
+
+def save_plots(plots, plot_dir: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    plot_dir.mkdir(parents=True, exist_ok=True)
+    if "takeoff" in plots:
+        r = plots["takeoff"]
+        fig, ax = plt.subplots(figsize=(6, 4))
+        ax.plot(r.speeds_mps, r.depth_fraction, "o-")
+        ax.axvline(r.speed_mps, color="k", ls="--", label=f"takeoff {r.speed_mps:.2f} m/s")
+        ax.set_xlabel("rope speed [m/s]"), ax.set_ylabel("depth / (L/2)"), ax.legend(), ax.grid()
+        fig.savefig(plot_dir / "takeoff.png", dpi=100)
+    if "shape" in plots:
+        fig, axs = plt.subplots(1, 3, figsize=(15, 5))
+        for ax, v in zip(axs, (4.0, 5.0, 8.0)):
+            for (vv, phi), c in plots["shape"].items():
+                if vv == v:
+                    ax.plot(c[:, 0], c[:, 1], label=f"{phi:+d} deg")
+            ax.set_aspect("equal"), ax.grid(), ax.legend(fontsize=7), ax.set_title(f"{v} m/s")
+        fig.savefig(plot_dir / "shapes.png", dpi=100)
+    print(f"\nplots written to {plot_dir}", file=sys.stderr)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="coarser sweeps")
+    ap.add_argument("--only", default=",".join(SECTIONS), help=f"comma-separated subset of {','.join(SECTIONS)}")
+    ap.add_argument("--plot-dir", type=Path, default=None, help="also save PNG figures here")
+    args = ap.parse_args(argv)
+    chosen = [s.strip() for s in args.only.split(",") if s.strip()]
+    unknown = [s for s in chosen if s not in SECTIONS]
+    if unknown:
+        ap.error(f"--only: unknown section(s) {unknown}; expected some of {list(SECTIONS)}")
+    plots = {}
+    t0 = time.perf_counter()
+    for name in chosen:
+        globals()[f"bench_{name}"](args, plots)
+        sys.stdout.flush()
+    print(f"\n(total {time.perf_counter() - t0:.0f} s wall)")
+    if args.plot_dir:
+        save_plots(plots, args.plot_dir)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
