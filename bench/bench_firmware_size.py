@@ -23,29 +23,8 @@ sys.path.insert(0, str(REPO_ROOT / "tests" / "firmware_arm"))
 
 import arm_harness_emulator as ah  # noqa: E402
 
-FLASH_SECTIONS = (".text", ".rodata", ".ARM.exidx", ".ARM.extab", ".data", ".relocate")
-RAM_SECTIONS = (".data", ".relocate", ".bss")
-NOLOAD_RAM_SECTIONS = (".bss", ".stack", ".heap")
-
-
-def section_sizes(elf_path: Path) -> dict[str, int]:
-    """Allocated sections of an ELF: name -> size in bytes."""
-    from elftools.elf.constants import SH_FLAGS
-    from elftools.elf.elffile import ELFFile
-
-    out: dict[str, int] = {}
-    with open(elf_path, "rb") as fh:
-        for sec in ELFFile(fh).iter_sections():
-            if sec["sh_flags"] & SH_FLAGS.SHF_ALLOC and sec["sh_size"]:
-                out[sec.name] = sec["sh_size"]
-    return out
-
-
-def flash_ram(sizes: dict[str, int]) -> tuple[int, int]:
-    """(flash bytes, static RAM bytes) of a section table: flash = text-like + data, RAM = data + bss."""
-    flash = sum(n for name, n in sizes.items() if name not in NOLOAD_RAM_SECTIONS)
-    ram = sum(n for name, n in sizes.items() if name in RAM_SECTIONS or name in NOLOAD_RAM_SECTIONS)
-    return flash, ram
+section_sizes = ah.section_sizes
+flash_ram = ah.flash_ram
 
 
 def owner_of(name: str) -> str:

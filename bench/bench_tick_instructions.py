@@ -155,12 +155,18 @@ def main() -> None:
     print("top functions:")
     for func, n in worst.per_function.most_common(12):
         print(f"  {func:<38}{n:>7}  {n / worst.instructions:6.1%}")
+    print("runtime-library instructions (soft-float, division, memcpy) by calling function, heaviest tick:")
+    for func, n in worst.runtime_by_caller.most_common(8):
+        print(f"  {func:<38}{n:>7}  {n / worst.instructions:6.1%}")
     print("quiet tick, instructions by group:")
     groups = Counter()
     for func, n in results["quiet"].per_function.items():
         groups[group_of(func)] += n
     for g, n in groups.most_common():
         print(f"  {g:<38}{n:>7}  {n / results['quiet'].instructions:6.1%}")
+    print("quiet tick, runtime-library instructions by calling function:")
+    for func, n in results["quiet"].runtime_by_caller.most_common(8):
+        print(f"  {func:<38}{n:>7}  {n / results['quiet'].instructions:6.1%}")
     print("instruction classes (heaviest tick):", dict(worst.per_class))
 
 

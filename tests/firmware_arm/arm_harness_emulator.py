@@ -73,6 +73,31 @@ def build_arm(*, build_dir: Path = ARM_BUILD_DIR) -> Path:
     return build_dir / HARNESS_ELF_NAME
 
 
+NOLOAD_RAM_SECTIONS = (".bss", ".stack", ".heap")
+RAM_SECTIONS = (".data", ".relocate")
+
+
+def section_sizes(elf_path: Path) -> dict[str, int]:
+    """Allocated sections of an ELF: name -> size in bytes."""
+    from elftools.elf.constants import SH_FLAGS
+    from elftools.elf.elffile import ELFFile
+
+    out: dict[str, int] = {}
+    with open(elf_path, "rb") as fh:
+        for sec in ELFFile(fh).iter_sections():
+            if sec["sh_flags"] & SH_FLAGS.SHF_ALLOC and sec["sh_size"]:
+                out[sec.name] = sec["sh_size"]
+    return out
+
+
+def flash_ram(sizes: dict[str, int]) -> tuple[int, int]:
+    """(flash bytes, static RAM bytes) of a section table: flash = code + rodata + .data's initial values,
+    RAM = .data + .bss (the stack comes on top)."""
+    flash = sum(n for name, n in sizes.items() if name not in NOLOAD_RAM_SECTIONS)
+    ram = sum(n for name, n in sizes.items() if name in RAM_SECTIONS or name in NOLOAD_RAM_SECTIONS)
+    return flash, ram
+
+
 @dataclass(frozen=True)
 class Symbol:
     name: str
@@ -104,13 +129,21 @@ class CallProfile:
 
     instructions: instructions retired; cycles: Cortex-M0+ cycles by the model in the module docstring;
     per_function: instructions per function name; per_class: instructions per class
-    ("alu", "load_store", "multiple", "branch", "call").
+    ("alu", "load_store", "multiple", "branch", "call"); runtime_by_caller: instructions spent in runtime
+    library routines (libgcc soft-float and division, memcpy/memset, libm) per nearest calling function of
+    ours, found with a shadow call stack.
     """
 
     instructions: int = 0
     cycles: int = 0
     per_function: Counter = field(default_factory=Counter)
     per_class: Counter = field(default_factory=Counter)
+    runtime_by_caller: Counter = field(default_factory=Counter)
+
+
+def is_runtime_routine(name: str) -> bool:
+    """True for libgcc/newlib/libm routines (soft-float, division, memcpy/memset, floorf/ceilf)."""
+    return name.startswith("__") or name in ("memcpy", "memset", "memmove", "floorf", "ceilf", "sqrtf", "fabsf")
 
 
 def _thumb_class(hw: int, next_hw: int) -> tuple[str, int, int]:
@@ -168,6 +201,7 @@ class HarnessEmulator:
         self.uc.mem_write(RETURN_ADDRESS, b"\x00\xbf" * 4)  # NOPs, never executed
         self._profile: CallProfile | None = None
         self._pending: tuple[int, int, int] | None = None  # (address, size, base cycles) of a branch/call
+        self._stack: list[str] = []
 
     # ---- calls -----------------------------------------------------------------------------------
     def call(self, name: str, *args: int, count: bool = False, max_instructions: int = 5_000_000) -> tuple[int, CallProfile | None]:
@@ -186,6 +220,7 @@ class HarnessEmulator:
         hook = None
         self._profile = CallProfile() if count else None
         self._pending = None
+        self._stack = []
         if count:
             hook = self.uc.hook_add(UC_HOOK_CODE, self._on_instruction)
             self.uc.ctl_flush_tb()  # blocks translated before the hook existed would run unhooked
@@ -221,6 +256,15 @@ class HarnessEmulator:
         i = bisect.bisect_right(self._func_starts, address) - 1
         func = self._funcs[i][2] if i >= 0 and address < self._funcs[i][0] + max(self._funcs[i][1], 2) else f"?0x{address:x}"
         prof.per_function[func] += 1
+        stack = self._stack
+        if not stack or stack[-1] != func:
+            if func in stack:
+                del stack[stack.index(func) + 1:]
+            else:
+                stack.append(func)
+        if is_runtime_routine(func):
+            caller = next((f for f in reversed(stack) if not is_runtime_routine(f)), "?")
+            prof.runtime_by_caller[caller] += 1
         if cls == "branch" and (hw >> 12) == 0b1101:
             self._pending = (address, size, cycles)
         else:

@@ -71,12 +71,7 @@ def test_no_heap_no_printf_no_double(symbols: dict[str, ah.Symbol]) -> None:
 
 
 def test_core_fits_its_flash_and_ram_budget(arm_elf: Path) -> None:
-    sys.path.insert(0, str(ah.REPO_ROOT / "bench"))
-    try:
-        import bench_firmware_size as size
-    finally:
-        sys.path.remove(str(ah.REPO_ROOT / "bench"))
-    flash, ram = size.flash_ram(size.section_sizes(arm_elf))
+    flash, ram = ah.flash_ram(ah.section_sizes(arm_elf))
     assert 1024 < flash <= CORE_FLASH_BUDGET_BYTES, f"core flash {flash} B, budget {CORE_FLASH_BUDGET_BYTES} B"
     assert 256 < ram <= CORE_RAM_BUDGET_BYTES, f"core RAM {ram} B, budget {CORE_RAM_BUDGET_BYTES} B"
 
