@@ -137,12 +137,13 @@ def main() -> None:
     print(f"rw_core_tick on Cortex-M0+ (unicorn), AIRBORNE at {TARGET_MMPS} mm/s, {CPU_HZ / 1e6:.0f} MHz, {TICK_HZ} Hz tick")
     print("cycle model: ALU 1, load/store 2, LDM/STM/PUSH/POP 1+N, branch taken 2 (BL 3), zero flash wait states;")
     print("             SAMD21 flash at 48 MHz has 1 wait state: real cycles up to ~1.5x the modelled figure.")
-    print(f"{'tick':<11}{'instructions':>13}{'cycles':>9}{'us @48MHz':>11}{'load @1kHz':>12}{'load x1.5':>11}")
+    print(f"{'tick':<11}{'instructions':>13}{'cycles':>9}{'us @48MHz':>11}{'load @1kHz':>12}{'load x1.5':>11}"
+          f"{'stack B':>9}")
     for name in ("quiet", "telemetry", "command", "param_set"):
         p = results[name]
         us = p.cycles / CPU_HZ * 1e6
         print(f"{name:<11}{p.instructions:>13}{p.cycles:>9}{us:>11.1f}{p.cycles / cycles_per_tick:>11.1%}"
-              f"{1.5 * p.cycles / cycles_per_tick:>11.1%}")
+              f"{1.5 * p.cycles / cycles_per_tick:>11.1%}{p.stack_bytes:>9}")
 
     worst_name = max(results, key=lambda k: results[k].cycles)
     worst = results[worst_name]

@@ -131,7 +131,7 @@ class CallProfile:
     per_function: instructions per function name; per_class: instructions per class
     ("alu", "load_store", "multiple", "branch", "call"); runtime_by_caller: instructions spent in runtime
     library routines (libgcc soft-float and division, memcpy/memset, libm) per nearest calling function of
-    ours, found with a shadow call stack.
+    ours, found with a shadow call stack; stack_bytes: deepest stack use below the caller's stack pointer.
     """
 
     instructions: int = 0
@@ -139,6 +139,7 @@ class CallProfile:
     per_function: Counter = field(default_factory=Counter)
     per_class: Counter = field(default_factory=Counter)
     runtime_by_caller: Counter = field(default_factory=Counter)
+    stack_bytes: int = 0
 
 
 def is_runtime_routine(name: str) -> bool:
@@ -202,6 +203,9 @@ class HarnessEmulator:
         self._profile: CallProfile | None = None
         self._pending: tuple[int, int, int] | None = None  # (address, size, base cycles) of a branch/call
         self._stack: list[str] = []
+        from unicorn.arm_const import UC_ARM_REG_SP
+
+        self._sp_reg = UC_ARM_REG_SP
 
     # ---- calls -----------------------------------------------------------------------------------
     def call(self, name: str, *args: int, count: bool = False, max_instructions: int = 5_000_000) -> tuple[int, CallProfile | None]:
@@ -246,6 +250,9 @@ class HarnessEmulator:
 
     def _on_instruction(self, uc, address: int, size: int, _user) -> None:  # noqa: ANN001
         prof = self._profile
+        depth = STACK_TOP - uc.reg_read(self._sp_reg)
+        if depth > prof.stack_bytes:
+            prof.stack_bytes = depth
         if self._pending is not None:
             self._settle_branch(address)
         raw = bytes(uc.mem_read(address, 4))

@@ -140,4 +140,6 @@ def test_tick_profile_counts_instructions(arm_elf: Path) -> None:
     assert profile is not None and profile.instructions > 100
     assert profile.cycles >= profile.instructions
     assert "rw_core_tick" in profile.per_function
+    # The harness reserves 4 KB of stack (samd21g18a.ld); a tick must stay well inside it.
+    assert 64 < profile.stack_bytes < 2048, f"rw_core_tick used {profile.stack_bytes} B of stack"
     assert any(name.startswith("__aeabi_f") or name.endswith("sf2") for name in profile.per_function)

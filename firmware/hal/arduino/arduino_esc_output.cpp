@@ -1,7 +1,7 @@
 /* ESC PWM on TCC1 (SAMD21 timer/counter for control), not the Servo library.
  *
- * Clock: GCLK0 (48 MHz, the Arduino core's main clock, already routed to the TCC0/TCC1 clock channel by
- * the core for analogWrite) divided by 16 in TCC1 -> 3 MHz counter, 1/3 us per count, so a microsecond
+ * Clock: GCLK0 (48 MHz, the Arduino core's main clock; routed here to the TCC0/TCC1 clock channel, as
+ * analogWrite would) divided by 16 in TCC1 -> 3 MHz counter, 1/3 us per count, so a microsecond
  * pulse is exact (pulse_us * 3 counts). Normal PWM (NPWM), PER = 3 MHz / 400 Hz - 1 = 7499 -> 2.5 ms period.
  * WO[0] and WO[1] of TCC1 come out on PA10 (D2) and PA11 (D3) with pin function E.
  *
