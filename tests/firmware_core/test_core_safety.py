@@ -8,7 +8,7 @@ import pytest
 
 from core_harness import CoreHarness
 from robowrangler.protocol.generated import (
-    PARAMS_BY_NAME, Ack, Cause, NackReason, Disarm, Estop, EventKind, Fault, ParamSet, SetRopeSpeed, Spindown, State,
+    PARAMS_BY_NAME, Ack, Arm, Cause, NackReason, Disarm, Estop, EventKind, Fault, ParamSet, SetRopeSpeed, Spindown, State,
 )
 
 S = State
@@ -220,3 +220,64 @@ def test_zero_throttle_while_driving_is_the_esc_idle_pulse(rw_core, esc_min_us):
         h.tick()
     assert h.telemetry()[-1].state == S.SPINUP
     assert h.pulse_us == esc_min_us
+
+
+def _fly(h: CoreHarness, ms: int) -> None:
+    """ms of ticks with the rope following the setpoint and the host sending heartbeats."""
+    end = h.t_ms + ms
+    h.follow_setpoint(until=lambda: h.t_ms >= end, max_ms=ms + 1, what=f"{ms} ms of flight")
+
+
+def test_battery_under_cutoff_for_cutoff_time_lands_the_rope(rw_core):
+    h = CoreHarness(rw_core)  # cutoff 9.9 V for 1.0 s (spec defaults)
+    h.boot_and_arm()
+    h.spin_to_airborne(target_mmps=4000)
+    _fly(h, 50)
+    t_sag = h.t_ms + 1  # the next tick reads the low voltage
+    h.hal.battery_mv = 9800
+    _fly(h, 990)
+    assert h.events(EventKind.FAULT_RAISED) == [] and h.state == S.AIRBORNE
+    _fly(h, 30)
+    (raised,) = h.events(EventKind.FAULT_RAISED)
+    assert raised.arg == Fault.BATTERY_LOW
+    assert 999 <= raised.time_ms - t_sag <= 1001, "battery_cutoff_time_s of low readings"
+    t, f, to, cause = h.transitions()[-1]
+    assert (t, f, to, cause) == (raised.time_ms, S.AIRBORNE, S.SPINDOWN, Cause.BATTERY_LOW)
+    reply = h.command(SetRopeSpeed(4000))
+    assert reply.reason == NackReason.BAD_STATE, "no new spin-up on a flat battery"
+    h.follow_setpoint(until=lambda: h.state == S.ARMED, max_ms=2000, what="landed")
+    assert h.pulse_us == 1000
+    h.drain(25)
+    assert h.telemetry()[-1].fault_bits == Fault.BATTERY_LOW
+
+
+def test_brief_battery_sags_are_ignored(rw_core):
+    h = CoreHarness(rw_core)
+    h.boot_and_arm()
+    h.spin_to_airborne(target_mmps=4000)
+    for _ in range(3):
+        h.hal.battery_mv = 9000
+        _fly(h, 900)
+        h.hal.battery_mv = 14000
+        _fly(h, 5)
+    h.drain(3)
+    assert h.events(EventKind.FAULT_RAISED) == [] and h.state == S.AIRBORNE
+
+
+def test_battery_fault_is_cleared_by_disarm_once_the_battery_is_back(rw_core):
+    h = CoreHarness(rw_core, params={"battery_cutoff_time_s": 0.1})
+    h.boot_and_arm()
+    h.hal.battery_mv = 9000
+    h.run_ms(150)
+    h.heartbeat()
+    h.tick()
+    h.drain(25)
+    assert h.telemetry()[-1].fault_bits == Fault.BATTERY_LOW
+    assert h.state == S.ARMED, "a battery fault leaves ARMED alone"
+    h.hal.battery_mv = 15000
+    assert isinstance(h.command(Disarm()), Ack)
+    h.drain(25)
+    assert [e.arg for e in h.events(EventKind.FAULT_CLEARED)] == [Fault.BATTERY_LOW]
+    assert h.telemetry()[-1].fault_bits == 0
+    assert isinstance(h.command(Arm()), Ack)
+    assert isinstance(h.command(SetRopeSpeed(3000)), Ack)
