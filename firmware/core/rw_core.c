@@ -95,6 +95,9 @@ int rw_core_set_param(rw_core *core, uint8_t param_id, float value)
     int result = rw_params_set(&core->params, param_id, value, core->state.state == RW_STATE_DISARMED);
     if (result == RW_DECODE_OK) {
         rw_core_apply_params(core);
+        if (param_id == RW_PARAM_TELEMETRY_RATE_HZ) {
+            core->state.telemetry_due_ms = core->state.uptime_ms; /* the new period starts now */
+        }
     }
     return result;
 }

@@ -125,9 +125,6 @@ def test_telemetry_rate_change_takes_effect(rw_core):
     assert {b - a for a, b in zip(late, late[1:])} == {10}
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_core.c schedules the next telemetry (telemetry_due_ms) with the old period; after "
-    "1 Hz -> 100 Hz the first new telemetry comes up to 1 s later"))
 def test_faster_telemetry_rate_takes_effect_within_one_new_period(rw_core):
     h = CoreHarness(rw_core, params={"telemetry_rate_hz": 1.0})
     h.tick()
