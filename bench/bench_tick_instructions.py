@@ -10,6 +10,8 @@ heartbeats), then profiles single rw_core_tick calls:
                at most one datagram per tick, so the ACK goes out and the telemetry in the next tick)
   param_set    PARAM_SET received and ACKed, PARAM_CHANGED event and PARAM_VALUE queued, parameters re-applied,
                telemetry packed (the heaviest path found)
+  heartbeat    HEARTBEAT received and accepted (no reply), telemetry packed and sent in the same tick: the
+               one path on which a received datagram and an outgoing telemetry frame share a tick
 
 Prints instructions, modelled cycles (see tests/firmware_arm/arm_harness_emulator.py for the Cortex-M0+ cycle
 model) and the CPU load of that tick at 1 kHz on 48 MHz, then what dominates the heaviest tick per function
@@ -131,6 +133,11 @@ def main() -> None:
     sent, results["param_set"] = sc.tick(sc.frame(proto.ParamSet(param_id=kp.id, value=kp.default)), count=True)
     assert sent and isinstance(sent[0], proto.Ack), f"param_set tick sent {sent}"
     assert emu.state() == proto.State.AIRBORNE
+    sc.run_quiet(5)  # PARAM_VALUE and the event leave
+    sc.until_telemetry()
+    sc.run_quiet(period_ms - 1)
+    sent, results["heartbeat"] = sc.tick(sc.frame(proto.Heartbeat(host_time_ms=sc.now_us // 1000)), count=True)
+    assert sent and isinstance(sent[0], proto.Telemetry), f"heartbeat tick sent {sent}"
 
     cycles_per_tick = CPU_HZ / TICK_HZ
     print(f"ELF: {elf}")
@@ -139,7 +146,7 @@ def main() -> None:
     print("             SAMD21 flash at 48 MHz has 1 wait state: real cycles up to ~1.5x the modelled figure.")
     print(f"{'tick':<11}{'instructions':>13}{'cycles':>9}{'us @48MHz':>11}{'load @1kHz':>12}{'load x1.5':>11}"
           f"{'stack B':>9}")
-    for name in ("quiet", "telemetry", "command", "param_set"):
+    for name in ("quiet", "telemetry", "heartbeat", "command", "param_set"):
         p = results[name]
         us = p.cycles / CPU_HZ * 1e6
         print(f"{name:<11}{p.instructions:>13}{p.cycles:>9}{us:>11.1f}{p.cycles / cycles_per_tick:>11.1%}"
