@@ -9,14 +9,14 @@ unhooks it. Faults act on what crosses the boundary, never inside the plant:
 * EscNotResponding: the ESCs ignore the firmware's pulse; the plant's ESC gets its minimum pulse (zero
   throttle: bridge off, the motor coasts).
 * RopeBreak: the loop is gone: the external load and the exposed rope's air drag vanish
-  (``rope_exposed_length_m`` = 0). The rope's inertia (m_rope r^2 in the plant's total inertia) has no
+  (``external_rope_load_n`` = 0, ``rope_exposed_length_m`` = 0, re-applied every tick). The rope's inertia (m_rope r^2 in the plant's total inertia) has no
   settable input, so it stays: the plant needs a hook for that (reported).
 * BatterySag: the pack's terminal voltage sinks linearly to target_v over ramp_s by a growing auxiliary
   load (``battery_aux_current_a``), so the motors see the sag as well as the ADC.
 * StalledControlLoop: the firmware misses its ticks for duration_s (no SIL_SENSORS; the ESC keeps its last
   pulse and the plant runs on); the next tick the firmware sees one long dt.
 
-A spindle stall is not here: the spindle plant does not exist yet.
+A spindle stall is not here yet (tests/sil/test_spindle.py covers the spindle plant's own stall).
 """
 
 from __future__ import annotations
@@ -94,24 +94,34 @@ class EscNotResponding(_WindowedFault):
         self._sil = None
 
 
-class RopeBreak:
-    """At at_s the rope loop breaks: external load 0 N and no exposed rope (its air drag vanishes).
+class RopeBreak(_WindowedFault):
+    """From start_s the rope loop is broken: external load 0 N and no exposed rope (its air drag vanishes).
 
-    Known gap: the rope's inertia stays in the plant (no settable input for it).
+    Re-applied before every tick while active (the session may set the exposed length from the spindle's
+    loop length each tick). Known gap: the rope's inertia stays in the plant (no settable input for it).
     """
 
-    def __init__(self, *, at_s: float) -> None:
-        _check_window(at_s, None)
-        self.at_s = float(at_s)
+    def __init__(self, *, start_s: float, duration_s: float | None = None) -> None:
+        super().__init__(start_s=start_s, duration_s=duration_s)
+        self._sil: SilSession | None = None
         self.drag_before_n: float | None = None
 
+    def __call__(self, sensors: SensorValues | None) -> SensorValues | None:
+        plant = self._sil.plant
+        if self.active_at(plant.time_us):
+            if self.drag_before_n is None:
+                self.drag_before_n = plant.rope_drag_n
+            plant.external_rope_load_n = 0.0
+            plant.rope_exposed_length_m = 0.0
+        return sensors
+
     def install(self, sil: SilSession) -> RopeBreak:
-        def snap() -> None:
-            self.drag_before_n = sil.plant.rope_drag_n
-            sil.plant.external_rope_load_n = 0.0
-            sil.plant.rope_exposed_length_m = 0.0
-        sil.at(self.at_s, snap)
+        self._sil = sil
+        sil.sensor_filters.insert(0, self)  # acts on the plant before any filter can skip the tick
         return self
+
+    def remove(self, sil: SilSession) -> None:
+        sil.sensor_filters.remove(self)
 
 
 class BatterySag(_WindowedFault):
