@@ -67,12 +67,26 @@ class _HalScheduler(ctypes.Structure):
     _fields_ = [("ctx", c_void_p), ("tick_overruns", _Overruns)]
 
 
+class SpindleReading(ctypes.Structure):
+    """rw_spindle_reading (rw_hal_spindle.h)."""
+
+    _fields_ = [("position_raw", c_uint16), ("speed_raw", c_uint16), ("load_raw", c_uint16),
+                ("limit_switch", ctypes.c_bool)]
+
+
+_SpindleRead = ctypes.CFUNCTYPE(ctypes.c_bool, c_void_p, POINTER(SpindleReading))
+_SpindleWrite = ctypes.CFUNCTYPE(None, c_void_p, c_uint16)
+
+
+class _HalSpindle(ctypes.Structure):
+    _fields_ = [("ctx", c_void_p), ("read", _SpindleRead), ("write_moving_speed_raw", _SpindleWrite)]
+
+
 class _Hal(ctypes.Structure):
-    # spindle: NULL, no spindle fitted (the rope core is tested here). Interfaces added to rw_hal later
-    # must be appended here too; the trailing NULL pointers keep an older mirror from handing the core
-    # garbage in the meantime.
+    # spindle: NULL when no spindle is fitted. Interfaces added to rw_hal later must be appended here
+    # too; the trailing NULL pointers keep an older mirror from handing the core garbage meanwhile.
     _fields_ = [("esc", POINTER(_HalEsc)), ("encoder", POINTER(_HalEncoder)), ("battery", POINTER(_HalBattery)),
-                ("link", POINTER(_HalLink)), ("scheduler", POINTER(_HalScheduler)), ("spindle", c_void_p),
+                ("link", POINTER(_HalLink)), ("scheduler", POINTER(_HalScheduler)), ("spindle", POINTER(_HalSpindle)),
                 ("_reserved_null", c_void_p * 4)]
 
 
@@ -152,6 +166,78 @@ class RopeEncoder:
         return math.floor(self.phase_counts)
 
 
+# ---- Spindle model (AX-12A in wheel mode on a lead screw, with end stops and an object) -------------
+
+AX12_DEG_S_PER_MOVING_UNIT = 59.0 * 6.0 / 1023.0  # no-load wheel speed over the moving-speed range
+AX12_DEG_S_PER_SPEED_UNIT = 0.111 * 6.0
+AX12_DEG_PER_POSITION_UNIT = 300.0 / 1023.0
+AX12_DIRECTION_BIT = 0x400
+
+
+class FakeSpindle:
+    """The servo turns at the last commanded moving speed (counter-clockwise = + = retract); the guide
+    position x_mm = (angle - home_stop_deg) * lead / 360 is held in [0, stroke_mm] by end stops and, if
+    object_mm is set, retraction stops there (the rope tightens around the object). Blocked: speed 0,
+    load `blocked_load_permille` in the pushing direction; free: speed as commanded, load
+    `free_load_permille`. The position register reads angle mod 360 over 0-300 degrees and
+    `dead_zone_reading` in the 60 degree dead zone. answering=False: reads fail."""
+
+    def __init__(self, *, lead_mm_per_rev: float = 8.0, start_mm: float = 3.0, stroke_mm: float = 185.0,
+                 home_stop_deg: float = 1000.0, has_switch: bool = False) -> None:
+        self.lead_mm_per_rev = lead_mm_per_rev
+        self.home_stop_deg = home_stop_deg
+        self.stroke_mm = stroke_mm
+        self.angle_deg = home_stop_deg + start_mm * 360.0 / lead_mm_per_rev
+        self.command_deg_s = 0.0
+        self.object_mm: float | None = None
+        self.has_switch = has_switch
+        self.answering = True
+        self.blocked = False
+        self.free_load_permille = 30
+        self.blocked_load_permille = 600
+        self.dead_zone_reading = 1023
+        self.writes: list[int] = []
+        self.last_t_us: int | None = None
+
+    @property
+    def x_mm(self) -> float:
+        return (self.angle_deg - self.home_stop_deg) * self.lead_mm_per_rev / 360.0
+
+    def _deg(self, x_mm: float) -> float:
+        return self.home_stop_deg + x_mm * 360.0 / self.lead_mm_per_rev
+
+    def advance(self, t_us: int) -> None:
+        dt_s = 0.0 if self.last_t_us is None else (t_us - self.last_t_us) * 1e-6
+        self.last_t_us = t_us
+        self.angle_deg += self.command_deg_s * dt_s
+        upper = self.stroke_mm if self.object_mm is None else min(self.stroke_mm, self.object_mm)
+        self.blocked = False
+        if self.x_mm <= 0.0 and self.command_deg_s < 0.0:
+            self.angle_deg, self.blocked = self._deg(0.0), True
+        elif self.x_mm >= upper and self.command_deg_s > 0.0:
+            self.angle_deg, self.blocked = self._deg(upper), True
+
+    def reading(self) -> SpindleReading:
+        speed = 0.0 if self.blocked else self.command_deg_s
+        load = self.blocked_load_permille if self.blocked else (self.free_load_permille if speed else 0)
+        sign_bit = AX12_DIRECTION_BIT if self.command_deg_s < 0.0 else 0
+        w = self.angle_deg % 360.0
+        pos = round(w / AX12_DEG_PER_POSITION_UNIT) if w < 300.0 else self.dead_zone_reading
+        mag = min(1023, round(abs(speed) / AX12_DEG_S_PER_SPEED_UNIT))
+        return SpindleReading(min(pos, 1023), mag | (AX12_DIRECTION_BIT if speed < 0.0 else 0),
+                              min(load, 1023) | (sign_bit if load else 0),
+                              self.has_switch and self.x_mm <= 0.5)
+
+    def write(self, raw: int) -> None:
+        self.writes.append(raw)
+        mag = raw & 0x3FF
+        self.command_deg_s = -mag * AX12_DEG_S_PER_MOVING_UNIT if raw & AX12_DIRECTION_BIT else mag * AX12_DEG_S_PER_MOVING_UNIT
+
+    @property
+    def moving(self) -> bool:
+        return bool(self.writes) and (self.writes[-1] & 0x3FF) != 0
+
+
 # ---- The harness -----------------------------------------------------------------------------------
 
 class CoreHarness:
@@ -164,7 +250,7 @@ class CoreHarness:
     """
 
     def __init__(self, lib: ctypes.CDLL, *, clock_offset_us: int = 0, battery_mv: int = 14800,
-                 params: dict[str, float] | None = None) -> None:
+                 params: dict[str, float] | None = None, spindle: FakeSpindle | None = None) -> None:
         self.lib = declare_core(lib)
         self.clock_offset_us = int(clock_offset_us)
         self.size = int(lib.rw_core_sizeof())
@@ -174,6 +260,7 @@ class CoreHarness:
         lib.rw_core_init(self.core)
         self.hal = FakeHal(battery_mv=battery_mv, encoder_last_edge_us=self.clock_offset_us % U32)
         self.encoder = RopeEncoder()
+        self.spindle = spindle
         self.t_us = 0
         self.started = False
         self.seq = 0
@@ -216,6 +303,18 @@ class CoreHarness:
         def overruns(_ctx):
             return hal.tick_overruns
 
+        def spindle_read(_ctx, out):
+            sp = self.spindle
+            sp.advance(self.t_us)
+            if not sp.answering:
+                return False
+            out[0] = sp.reading()
+            return True
+
+        def spindle_write(_ctx, raw):
+            self.spindle.advance(self.t_us)
+            self.spindle.write(int(raw))
+
         # Keep every CFUNCTYPE object alive as long as the harness.
         self._callbacks = [_EncoderRead(encoder_read), _BatteryRead(battery_read), _EscWrite(esc_write),
                            _LinkRecv(link_recv), _LinkOut(record("reply")), _LinkAccept(accept_peer),
@@ -228,6 +327,10 @@ class CoreHarness:
         self._sched = _HalScheduler(None, ovr)
         self._hal = _Hal(ctypes.pointer(self._esc), ctypes.pointer(self._enc), ctypes.pointer(self._bat),
                          ctypes.pointer(self._link), ctypes.pointer(self._sched))
+        if self.spindle is not None:
+            self._callbacks += [_SpindleRead(spindle_read), _SpindleWrite(spindle_write)]
+            self._spin = _HalSpindle(None, self._callbacks[-2], self._callbacks[-1])
+            self._hal.spindle = ctypes.pointer(self._spin)
 
     def _check_canary(self) -> None:
         if ctypes.string_at(self.core + self.size, len(_CANARY)) != _CANARY:
