@@ -185,3 +185,22 @@ def test_grasp_is_refused_unless_airborne(rw_core):
     h.command(SetRopeSpeed(2000))
     _nack(h.command(proto.Grasp()), NackReason.BAD_STATE)
     _nack(h.command(Disarm()), NackReason.BAD_STATE)
+
+
+def test_set_loop_is_range_checked_with_the_limit_and_moves_the_guide(rw_core):
+    h = _homed(rw_core)
+    h.command(Arm())
+    reply = _nack(h.command(proto.SetLoop(180_001)), NackReason.OUT_OF_RANGE)
+    assert reply.detail == 180_000, "detail = guide_max_mm, um"
+    h.set_param("guide_min_mm", 5.0)
+    reply = _nack(h.command(proto.SetLoop(4_999)), NackReason.OUT_OF_RANGE)
+    assert reply.detail == 5_000
+    assert not h.spindle.moving
+    assert _ack(h.command(proto.SetLoop(25_000))) == S.ARMED
+    for _ in range(10000):
+        if h.events(EventKind.SPINDLE_TARGET_REACHED):
+            break
+        _ticks(h, 1)
+    (reached,) = h.events(EventKind.SPINDLE_TARGET_REACHED)
+    assert reached.arg == pytest.approx(25_000, abs=600)
+    assert h.spindle.x_mm == pytest.approx(25.0, abs=0.6)
