@@ -22,6 +22,7 @@ from __future__ import annotations
 import collections
 import queue
 import secrets
+import struct
 import threading
 import time
 from collections.abc import Iterable, Iterator
@@ -40,6 +41,13 @@ TELEMETRY_QUEUE_LEN = 4096  # per telemetry() iterator; the oldest sample is dro
 EVENT_HISTORY_LEN = 10000
 NOT_READY_RETRY_S = 0.05  # pause between ARM attempts while the device reports NOT_READY
 _CLOSED = object()
+# NACK reasons that mean "the frame arrived damaged": our frames are well-formed, so the link corrupted
+# it (or, if it keeps happening, host and firmware disagree on the protocol). UNKNOWN_MESSAGE is not here:
+# a corrupted id is reported under that corrupted id and matches no waiter, so an UNKNOWN_MESSAGE naming
+# our (msg_id, seq) means the firmware really does not know the command.
+TRANSIT_NACK_REASONS = frozenset({NackReason.BAD_MAGIC, NackReason.BAD_VERSION, NackReason.TRUNCATED,
+                                  NackReason.BAD_LENGTH, NackReason.OVERSIZE, NackReason.BAD_CHECKSUM,
+                                  NackReason.UNSUPPORTED_FLAGS})
 
 
 @dataclass
@@ -58,8 +66,10 @@ class ClientStats:
     recv_errors: int = 0
     acks: int = 0
     nacks: int = 0
+    transit_nacks: int = 0
     late_replies: int = 0
     param_values: int = 0
+    stale_param_values: int = 0
     telemetry_received: int = 0
     telemetry_dropped: int = 0
     events_received: int = 0
@@ -68,11 +78,18 @@ class ClientStats:
 
 
 class _Waiter:
-    __slots__ = ("event", "reply")
+    """One awaited reply. For PARAM_VALUE: `armed` once the ACK of the request arrived (PARAM_VALUE carries
+    no seq: a PARAM_GET takes only values received after its ACK), `expect_bits` the float32 a PARAM_SET
+    wrote (a PARAM_SET takes only that value)."""
 
-    def __init__(self) -> None:
+    __slots__ = ("event", "reply", "param_waiter", "armed", "expect_bits")
+
+    def __init__(self, *, expect_bits: bytes | None = None) -> None:
         self.event = threading.Event()
         self.reply: gen.Message | None = None
+        self.param_waiter: _Waiter | None = None
+        self.armed = False
+        self.expect_bits = expect_bits
 
 
 def param_spec(name: object) -> ParamSpec:
@@ -351,7 +368,8 @@ class Client:
         if not self._connected or self._transport is None:
             raise NotConnected(f"not connected to {self.url}: call connect() or use `with Client(...)`")
 
-    def _send_new(self, message: gen.Message, waiter_key_msg_id: int | None = None) -> tuple[int, bytes, _Waiter | None]:
+    def _send_new(self, message: gen.Message, waiter_key_msg_id: int | None = None,
+                  param_waiter: _Waiter | None = None) -> tuple[int, bytes, _Waiter | None]:
         """Allocate a seq, encode and send; registers an ACK/NACK waiter first if asked."""
         with self._send_lock:
             seq = self._next_seq_value
@@ -360,6 +378,7 @@ class Client:
             waiter = None
             if waiter_key_msg_id is not None:
                 waiter = _Waiter()
+                waiter.param_waiter = param_waiter
                 with self._lock:
                     self._waiters[(waiter_key_msg_id, seq)] = waiter
             self._send_raw(frame)
@@ -378,18 +397,32 @@ class Client:
         with self._lock:
             self._stats.frames_sent += 1
 
-    def _command(self, message: gen.Message, *, value: float | None = None, param: str | None = None) -> gen.Ack:
+    def _command(self, message: gen.Message, *, value: float | None = None, param: str | None = None,
+                 param_waiter: _Waiter | None = None) -> gen.Ack:
         """Send a command and wait for its ACK (returned) or NACK (CommandRefused), retransmitting the same
-        bytes every ack_timeout_s up to `retries` times; LinkTimeout after that."""
+        bytes every ack_timeout_s up to `retries` times; LinkTimeout after that.
+
+        A NACK saying the device could not read the frame (TRANSIT_NACK_REASONS: corrupted on the way)
+        is answered by retransmitting at once, within the same `retries` budget; only the last such
+        NACK is raised."""
         self._require_connected()
-        seq, frame, waiter = self._send_new(message, waiter_key_msg_id=message.MSG_ID)
+        seq, frame, waiter = self._send_new(message, waiter_key_msg_id=message.MSG_ID, param_waiter=param_waiter)
         key = (message.MSG_ID, seq)
         with self._lock:
             self._stats.commands_sent += 1
         try:
             attempts = 1
-            while not waiter.event.wait(self.ack_timeout_s):
-                if attempts > self.retries:
+            while True:
+                if waiter.event.wait(self.ack_timeout_s):
+                    reply = waiter.reply
+                    if not (isinstance(reply, gen.Nack) and reply.reason in TRANSIT_NACK_REASONS
+                            and attempts <= self.retries):
+                        break
+                    with self._lock:  # the frame was damaged on the way: the same bytes go again at once
+                        self._stats.transit_nacks += 1
+                        waiter.reply = None
+                        waiter.event.clear()
+                elif attempts > self.retries:
                     waited_s = attempts * self.ack_timeout_s
                     raise LinkTimeout(
                         f"{message.NAME} (seq {seq}): no ACK/NACK from {self.url} after {attempts} attempts "
@@ -411,23 +444,26 @@ class Client:
     def _param_exchange(self, spec: ParamSpec, message: gen.Message, *, value: float | None) -> float:
         """PARAM_GET or PARAM_SET, then the PARAM_VALUE that follows its ACK.
 
-        If the ACK arrives but the PARAM_VALUE is lost, a PARAM_GET (new seq; reading twice is
-        harmless) asks again, up to `retries` times.
+        PARAM_VALUE carries no seq: for a PARAM_GET only a value received after its ACK counts, for a
+        PARAM_SET only the float32 that was written (and only once the ACK says it was accepted); others
+        are late duplicates of older answers, ignored and counted in stats.stale_param_values. If the PARAM_VALUE is lost, a PARAM_GET (new seq; reading
+        twice is harmless) asks again, up to `retries` times.
         """
         request: gen.Message = message
+        expect_bits = None if value is None else struct.pack("<f", value)
         for _ in range(self.retries + 1):
-            waiter = _Waiter()
+            waiter = _Waiter(expect_bits=expect_bits)
             with self._lock:
                 self._param_waiters[spec.id].append(waiter)
             try:
-                self._command(request, value=value, param=spec.name)
+                self._command(request, value=value, param=spec.name, param_waiter=waiter)
                 if waiter.event.wait(self.ack_timeout_s):
                     return units.float32_to_si(waiter.reply.value)
             finally:
                 with self._lock:
                     if waiter in self._param_waiters[spec.id]:
                         self._param_waiters[spec.id].remove(waiter)
-            request = gen.ParamGet(spec.id)
+            request, expect_bits = gen.ParamGet(spec.id), None
         waited_s = (self.retries + 1) * self.ack_timeout_s
         raise LinkTimeout(f"{spec.name}: ACKed by {self.url} but no PARAM_VALUE arrived after "
                           f"{self.retries + 1} requests", url=self.url, waited_s=waited_s)
@@ -484,10 +520,15 @@ class Client:
         elif msg_id == MsgId.PARAM_VALUE:
             with self._lock:
                 self._stats.param_values += 1
-                waiters = self._param_waiters.get(msg.param_id, [])
-                for w in waiters:
-                    w.reply = msg
-                    w.event.set()
+                taken = False
+                for w in self._param_waiters.get(msg.param_id, []):
+                    if w.reply is None and (w.armed if w.expect_bits is None
+                                            else struct.pack("<f", msg.value) == w.expect_bits):
+                        w.reply = msg
+                        w.event.set()
+                        taken = True
+                if not taken:
+                    self._stats.stale_param_values += 1
         elif msg_id == MsgId.TELEMETRY:
             self._on_telemetry(TelemetrySample.from_wire(msg, received_s=received_s))
         elif msg_id == MsgId.EVENT:
@@ -513,6 +554,8 @@ class Client:
                 self._stats.late_replies += 1  # answer to a retransmission, or after a timeout
                 return
             waiter.reply = msg
+            if isinstance(msg, gen.Ack) and waiter.param_waiter is not None:
+                waiter.param_waiter.armed = True  # the PARAM_VALUE that follows this ACK is ours
             waiter.event.set()
 
     def _on_telemetry(self, sample: TelemetrySample) -> None:

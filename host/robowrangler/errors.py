@@ -129,8 +129,10 @@ class CommandRefused(RoboWranglerError):
             return f"{self.param} can only be set while DISARMED (state is {st}); disarm first"
         if r == NackReason.NOT_A_COMMAND:
             return "the device does not accept this message from a host"
-        return ("the device could not read the frame; host and firmware protocol versions or schemas "
-                "probably differ (update one of them)")
+        if r == NackReason.UNKNOWN_MESSAGE:
+            return "the firmware does not know this command: update the firmware or use an older host"
+        return ("the device could not read the frame on any attempt: the link corrupts data, or host and "
+                "firmware protocol versions or schemas differ (update one of them)")
 
 
 def _bad_state_advice(cmd: int, state: State | int) -> str:

@@ -22,6 +22,7 @@ from robowrangler.protocol.generated import MsgId, NackReason, PARAMS, State
 EVENT_MSG = gen.Event
 EV_STATE_CHANGED, EV_PARAM_CHANGED, EV_ARMING_HOLD_DONE = 1, 5, 6
 CAUSE_COMMAND, CAUSE_SPEED_REACHED = 0, 1
+TRANSIT_REASONS = {int(r) for r in NackReason if r <= NackReason.UNSUPPORTED_FLAGS and r != NackReason.UNKNOWN_MESSAGE}
 
 
 def make(cls: type[gen.Message], **fields: float) -> gen.Message:
@@ -43,9 +44,12 @@ class ScriptedDevice:
         silent: answer no command (telemetry still flows unless telemetry_hz is 0).
         drop_replies[msg_id]: drop this many of the next ACKs for that command (it still executes).
         drop_param_values: drop this many of the next PARAM_VALUE messages.
-        nack_script[msg_id]: list of (NackReason, detail) answered to the next new commands of that id.
+        nack_script[msg_id]: list of (NackReason, detail) answered to the next new commands of that id
+            (frame-level reasons such as BAD_CHECKSUM play a frame damaged on the way: not cached).
         arm_hold_s: ARM is refused with NOT_READY this long after start.
         drop_event_seqs: event_seq values whose EVENT is not sent (to test lost-event counting).
+        stale_param_values: PARAM_VALUEs with these values are sent around each parameter answer, as late
+            duplicates of older answers would arrive (before the ACK; for PARAM_SET also after it).
     Records: received (frames with msg), executed (msg name, seq) per executed command,
     duplicates (retransmissions answered from the cache).
     """
@@ -65,6 +69,7 @@ class ScriptedDevice:
         self.drop_param_values = 0
         self.nack_script: dict[int, list[tuple[NackReason, int]]] = defaultdict(list)
         self.drop_event_seqs: set[int] = set()
+        self.stale_param_values: list[float] = []
         self.params = {p.id: _f32(p.default) for p in PARAMS}
         self.received: list[tuple[gen.Frame, gen.Message]] = []
         self.executed: list[tuple[str, int]] = []
@@ -165,7 +170,8 @@ class ScriptedDevice:
                 return
         replies = self._execute(frame, msg)
         answers = [r for r in replies if r[3] != MsgId.EVENT]  # a retransmission is answered, events are not repeated
-        self._cache.append((frame.seq, data, answers))
+        if not (answers and answers[0][3] == MsgId.NACK and answers[0][10] in TRANSIT_REASONS):
+            self._cache.append((frame.seq, data, answers))  # a damaged frame's bytes are never seen again
         self._deliver(frame.msg_id, replies)
 
     def _deliver(self, cmd_msg_id: int, replies: list[bytes]) -> None:
@@ -257,7 +263,11 @@ class ScriptedDevice:
                 self.params[spec.id] = _f32(x)
                 events = self._event(EV_PARAM_CHANGED, s, s, spec.id)
             self.executed.append((msg.NAME, frame.seq))
-            return [self._ack(frame), self._send(gen.ParamValue(spec.id, self.params[spec.id], len(PARAMS)))] + events
+            stale = [self._send(gen.ParamValue(spec.id, v, len(PARAMS))) for v in self.stale_param_values]
+            ack, value = self._ack(frame), self._send(gen.ParamValue(spec.id, self.params[spec.id], len(PARAMS)))
+            if mid == MsgId.PARAM_SET:  # late duplicates of older answers on both sides of the ACK
+                return stale + [ack] + stale + [value] + events
+            return stale + [ack, value] + events
         else:
             return self._nack(frame, NackReason.NOT_A_COMMAND)
         self.executed.append((msg.NAME, frame.seq))

@@ -188,3 +188,40 @@ def test_an_injected_transport_is_used_and_closed(device: ScriptedDevice) -> Non
     with Client(transport=transport, **FAST) as rw:
         assert rw.url == device.url and rw.arm() == State.ARMED
     assert transport.recv(0.01) is None and transport._closed
+
+
+def test_a_frame_damaged_on_the_way_is_sent_again_at_once_with_the_same_seq(device: ScriptedDevice) -> None:
+    device.nack_script[MsgId.ARM] = [(NackReason.BAD_CHECKSUM, 0), (NackReason.TRUNCATED, 0)]
+    with Client(device.url, **FAST) as rw:
+        start = time.monotonic()
+        assert rw.arm() == State.ARMED
+        assert time.monotonic() - start < FAST["ack_timeout_s"]  # no timeout was waited out
+        stats = rw.stats
+    frames = device.received_commands(MsgId.ARM)
+    assert len(frames) == 3 and len({seq for seq, _ in frames}) == 1
+    assert device.executed_names() == ["ARM"] and stats.transit_nacks == 2
+
+
+def test_a_link_that_damages_every_attempt_ends_in_the_last_refusal(device: ScriptedDevice) -> None:
+    device.nack_script[MsgId.ARM] = [(NackReason.BAD_CHECKSUM, 0)] * (FAST["retries"] + 1)
+    with Client(device.url, **FAST) as rw, pytest.raises(CommandRefused) as info:
+        rw.arm()
+    assert info.value.reason == NackReason.BAD_CHECKSUM and "the link corrupts data" in str(info.value)
+    assert len(device.received_commands(MsgId.ARM)) == FAST["retries"] + 1 and device.executed_names() == []
+
+
+def test_a_command_the_firmware_does_not_know_is_refused_without_retries(device: ScriptedDevice) -> None:
+    device.nack_script[MsgId.ESTOP] = [(NackReason.UNKNOWN_MESSAGE, 0)]
+    with Client(device.url, **FAST) as rw, pytest.raises(CommandRefused) as info:
+        rw.estop()
+    assert "firmware does not know this command" in str(info.value)
+    assert len(device.received_commands(MsgId.ESTOP)) == 1
+
+
+def test_late_duplicates_of_older_param_values_are_not_taken_for_the_answer(device: ScriptedDevice) -> None:
+    device.stale_param_values = [9.5, 1.0]
+    with Client(device.url, **FAST) as rw:
+        assert rw.set_param("tov_mps", 3.25) == 3.25
+        assert rw.get_param("tov_mps") == 3.25
+        stats = rw.stats
+    assert stats.stale_param_values == 6 and device.executed_names() == ["PARAM_SET", "PARAM_GET"]

@@ -25,7 +25,7 @@ def test_unknown_reason_and_state_from_a_newer_firmware_are_kept_as_numbers() ->
 
 def test_frame_level_refusals_point_at_a_schema_mismatch() -> None:
     err = CommandRefused(command_msg_id=MsgId.ARM, reason=NackReason.BAD_CHECKSUM, state=State.DISARMED, detail=0)
-    assert "protocol versions or schemas probably differ" in str(err)
+    assert "the link corrupts data, or host and firmware protocol versions or schemas differ" in str(err)
 
 
 def test_unknown_parameter_suggests_close_names_or_lists_all() -> None:
