@@ -13,6 +13,8 @@ Tree (names are the plant's API)::
       <object> bodies            free (freejoint <name>_free) or fixtures
 
     tendon  closure              spatial tendon link_{N-1}_end -> return, spring rest length 0
+    equality closure_constraint  (when closure_constraint_timeconst_s > 0) soft connect of the same
+                                 two points: the spring made implicit by the constraint solver
     actuators drive_inplane_<i>, drive_outplane_<i>: general position servos (gain kp, bias -kp q - kd qdot)
             only where the parameter gains are non-zero.
 
@@ -32,7 +34,7 @@ from robowrangler_sim.chain.errors import ChainModelError
 from robowrangler_sim.chain.objects import ObjectPlacement
 from robowrangler_sim.chain.params import ChainParams
 
-CHAIN_BITS = dict(contype=1, conaffinity=2 | 8)
+CHAIN_BITS = dict(contype=1, conaffinity=2)  # chain-floor contacts are explicit pairs (clearance margin)
 OBJECT_BITS = dict(contype=2, conaffinity=1 | 2 | 4 | 8)
 MODULE_BITS = dict(contype=4, conaffinity=2)
 FLOOR_BITS = dict(contype=8, conaffinity=1 | 2)
@@ -89,6 +91,9 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
     _sub(asset, "texture", name="sky", type="skybox", builtin="gradient", rgb1=(0.55, 0.7, 0.9),
          rgb2=(0.95, 0.95, 1.0), width="256", height="256")
 
+    default = _sub(root, "default")
+    _sub(default, "geom", solimp=(params.contact_impedance_min, params.contact_impedance_max,
+                                  params.contact_impedance_width_m, 0.5, 2))
     world = _sub(root, "worldbody")
     _sub(world, "light", name="sun", pos=(0.5, -1.0, 4.0), dir=(-0.1, 0.25, -1), diffuse=(0.8, 0.8, 0.8),
          directional="true")
@@ -132,6 +137,16 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
                    rgba=(0.2, 0.6, 1, 0.6))
     _sub(spatial, "site", site=f"link_{n - 1}_end")
     _sub(spatial, "site", site="return")
+    if floor_height_m is not None:
+        contact = _sub(root, "contact")
+        for i in range(n):
+            _sub(contact, "pair", geom1="floor", geom2=f"link_{i}", condim="3",
+                 margin=params.rope_floor_clearance_m, friction=(params.floor_friction, params.floor_friction,
+                                                                 0.005, 0.0001, 0.0001))
+    if params.closure_constraint_timeconst_s > 0:
+        equality = _sub(root, "equality")
+        _sub(equality, "connect", name="closure_constraint", body1=f"link_{n - 1}", body2="module",
+             anchor=(link_len, 0, 0), solref=(params.closure_constraint_timeconst_s, 1.0))
 
     actuator = _sub(root, "actuator")
     for i in range(n):

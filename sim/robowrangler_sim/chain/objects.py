@@ -110,11 +110,15 @@ class ObjectSpec:
         """Top of the highest primitive above the body origin (approximate for rotated ones)."""
         top = 0.0
         for g in self.geoms:
-            extent = {"box": g.size_m[2] if g.euler_rad == (0.0, 0.0, 0.0) else max(g.size_m),
-                      "sphere": g.size_m[0],
-                      "cylinder": g.size_m[1] if g.euler_rad == (0.0, 0.0, 0.0) else g.size_m[0],
-                      "capsule": g.size_m[1] + g.size_m[0] if g.euler_rad == (0.0, 0.0, 0.0)
-                      else g.size_m[0]}[g.type]
+            upright = g.euler_rad == (0.0, 0.0, 0.0)
+            if g.type == "box":
+                extent = g.size_m[2] if upright else max(g.size_m)
+            elif g.type == "sphere":
+                extent = g.size_m[0]
+            elif g.type == "cylinder":
+                extent = g.size_m[1] if upright else g.size_m[0]
+            else:
+                extent = g.size_m[1] + g.size_m[0] if upright else g.size_m[0]
             top = max(top, g.pos_m[2] + extent)
         return top
 

@@ -42,6 +42,10 @@ class ChainParams:
     Closure:
         closure_stiffness_n_per_m, closure_damping_ns_per_m: the artificial spring (rest length 0)
             from the end of the last link to the return point on the module.
+        closure_constraint_timeconst_s: if > 0, the closure is (also) a soft equality ``connect`` of the
+            same two points with this MuJoCo solref time constant: a spring stiff enough to carry grasp
+            loads that the constraint solver integrates stably (the explicit tendon spring cannot be
+            stiff on 2e-5 kg links). 0 = tendon spring only.
     Numerics (stability choices, docs/chain_model.md):
         timestep_s: MuJoCo timestep.
         passive_damping_nms_per_rad: passive damping on every hinge (implicit; stabilises free links).
@@ -55,6 +59,12 @@ class ChainParams:
     Contact:
         rope_friction: sliding friction of the rope links (MuJoCo takes the larger of a pair's values).
         floor_friction: sliding friction of the floor/table plane.
+        rope_floor_clearance_m: the chain rests this far above the floor (contact margin of the explicit
+            chain-floor pairs), so that it meets objects above their bottom rim (see docs).
+        contact_impedance_min, contact_impedance_max, contact_impedance_width_m: MuJoCo solimp of every
+            geom. MuJoCo scales a contact's softness with the effective mass it acts on; on 2e-5 kg links
+            the default (0.9, 0.95, 1 mm) lets a heavy object squeeze the rope through the floor and
+            under its rim. Impedance near 1 makes rope contacts nearly hard (docs/chain_model.md).
     """
 
     n_links: int = 20
@@ -74,6 +84,7 @@ class ChainParams:
     upper_branch_fraction: float = 0.5
     closure_stiffness_n_per_m: float = 20.0
     closure_damping_ns_per_m: float = 0.05
+    closure_constraint_timeconst_s: float = 0.02
     timestep_s: float = 0.005
     passive_damping_nms_per_rad: float = 1.0e-4
     armature_kgm2: float = 1.0e-5
@@ -81,6 +92,10 @@ class ChainParams:
     takeoff_speed_mps: float = 2.6
     lift_ramp_s: float = 0.2
     rope_friction: float = 0.3
+    rope_floor_clearance_m: float = 0.01
+    contact_impedance_min: float = 0.99
+    contact_impedance_max: float = 0.9999
+    contact_impedance_width_m: float = 0.001
     floor_friction: float = 0.6
 
     def __post_init__(self) -> None:
@@ -104,6 +119,10 @@ class ChainParams:
         if not 0.0 < self.upper_branch_fraction < 1.0:
             raise ChainModelError(
                 f"upper_branch_fraction: expected in (0, 1), got {self.upper_branch_fraction}")
+        if not (0.0 < self.contact_impedance_min <= self.contact_impedance_max < 1.0):
+            raise ChainModelError(
+                "contact_impedance_min/max: expected 0 < min <= max < 1, got "
+                f"{self.contact_impedance_min}, {self.contact_impedance_max}")
         if self.timestep_s > 0.02:
             raise ChainModelError(f"timestep_s: expected <= 0.02 s, got {self.timestep_s}")
         if self.min_loop_length_m < 0.1:

@@ -103,12 +103,16 @@ def base_inclination_rad(quat_wxyz: np.ndarray) -> float:
     return math.atan2(x_axis[2], math.hypot(x_axis[0], x_axis[1]))
 
 
-def pitch_quat_wxyz(phi_rad: float, *, yaw_rad: float = 0.0) -> tuple[float, float, float, float]:
-    """Module orientation with the launch axis pitched up by phi (and yawed), as a unit quaternion."""
+def pitch_quat_wxyz(phi_rad: float, *, yaw_rad: float = 0.0, roll_rad: float = 0.0) -> tuple[float, float, float, float]:
+    """Module orientation: launch axis pitched up by phi, then yawed; roll turns the loop plane about
+    the launch axis (roll pi/2: the loop plane is horizontal). Returns a unit quaternion (w, x, y, z)."""
     qy = np.array([math.cos(yaw_rad / 2), 0.0, 0.0, math.sin(yaw_rad / 2)])
     qp = np.array([math.cos(-phi_rad / 2), 0.0, math.sin(-phi_rad / 2), 0.0])  # about +y: x->-z, so -phi
+    qr = np.array([math.cos(roll_rad / 2), math.sin(roll_rad / 2), 0.0, 0.0])
+    tmp = np.empty(4)
     out = np.empty(4)
-    mujoco.mju_mulQuat(out, qy, qp)
+    mujoco.mju_mulQuat(tmp, qy, qp)
+    mujoco.mju_mulQuat(out, tmp, qr)
     return tuple(float(v) for v in out)
 
 
@@ -170,6 +174,7 @@ class ChainPlant:
         self._drive_kd = -m.actuator_biasprm[self._drive_act, 2].copy()
         self._drive_dof = np.array([m.jnt_dofadr[m.actuator_trnid[a, 0]] for a in self._drive_act], dtype=int)
         self._base_armature = m.dof_armature[self._drive_dof].copy()
+        self._closure_eq = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, "closure_constraint")
         self._floor_geom = name(G, "floor")
         self._module_geom = name(G, "module_housing")
         self._object_body = {o.spec.name: name(B, o.spec.name) for o in self.objects}
@@ -221,6 +226,8 @@ class ChainPlant:
         s = self._speed_index(inputs.rope_speed_mps)
         ret = self._loop_length_m * self.targets.return_point_per_m(self._phi_rad, speed_index=s)
         self.model.site_pos[self._return_site] = (ret[0], 0.0, ret[1])
+        if self._closure_eq >= 0:  # connect anchors: body1 (last link) frame, then body2 (module) frame
+            self.model.eq_data[self._closure_eq, 0:6] = (self._link_len_m, 0.0, 0.0, ret[0], 0.0, ret[1])
         self._ctrl_targets = self.targets.joint_targets(self._phi_rad, speed_index=s)
 
     def _set_link_length(self, link_len_m: float) -> None:
@@ -371,6 +378,11 @@ class ChainPlant:
 
     def object_pos_m(self, name: str) -> np.ndarray:
         return self.data.xpos[self._body(name)].copy()
+
+    def object_com_m(self, name: str) -> np.ndarray:
+        """Centre of mass of an object (world, m): unlike the body origin it does not move when the
+        object only rolls in place."""
+        return self.data.xipos[self._body(name)].copy()
 
     def object_quat_wxyz(self, name: str) -> np.ndarray:
         return self.data.xquat[self._body(name)].copy()
