@@ -387,13 +387,23 @@ def gen_c_source(spec: Spec) -> str:
     w("static uint32_t get_u32(const uint8_t *p) { return (uint32_t)get_u16(p) | ((uint32_t)get_u16(p + 2) << 16); }")
     w("static uint64_t get_u64(const uint8_t *p) { return (uint64_t)get_u32(p) | ((uint64_t)get_u32(p + 4) << 32); }")
     w("")
+    # table-driven (one lookup a byte): the bitwise loop cost 40 % of a busy tick on the Cortex-M0+
+    table = []
+    for byte in range(256):
+        crc = byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+        table.append(crc)
+    w("/* CRC-16/CCITT-FALSE table: entry i is the CRC register after shifting byte i through (poly 0x1021). */")
+    w("static const uint16_t crc16_table[256] = {")
+    for row in range(0, 256, 8):
+        w("    " + " ".join(f"0x{v:04X}u," for v in table[row:row + 8]))
+    w("};")
+    w("")
     w("uint16_t rw_crc16_ccitt(uint16_t crc, const uint8_t *data, size_t len)")
     w("{")
     w("    for (size_t i = 0; i < len; ++i) {")
-    w("        crc ^= (uint16_t)((uint16_t)data[i] << 8);")
-    w("        for (int bit = 0; bit < 8; ++bit) {")
-    w("            crc = (crc & 0x8000u) ? (uint16_t)((crc << 1) ^ 0x1021u) : (uint16_t)(crc << 1);")
-    w("        }")
+    w("        crc = (uint16_t)((uint16_t)(crc << 8) ^ crc16_table[(uint8_t)((crc >> 8) ^ data[i])]);")
     w("    }")
     w("    return crc;")
     w("}")

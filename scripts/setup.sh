@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Install everything the project needs on a Debian machine, idempotently:
-#   Debian packages (compiler, CMake, OSMesa for headless MuJoCo rendering), uv (pinned, from PyPI),
+#   Debian packages (compilers for the host and the board, CMake, OSMesa for headless MuJoCo rendering),
+#   uv (pinned, from PyPI),
 #   the Python environment from uv.lock, and the native build of the firmware core and SIL.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES=(build-essential cmake libosmesa6)
+# gcc-arm-none-eabi + newlib: the core cross-compiled for the board's Cortex-M0+ (size, instruction counts, tests)
+APT_PACKAGES=(build-essential cmake libosmesa6 gcc-arm-none-eabi libnewlib-arm-none-eabi)
 UV_VERSION=0.13.8
 
 say() { printf '[setup] %s\n' "$*" >&2; }

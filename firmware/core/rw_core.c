@@ -365,7 +365,7 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     if (!core->state.started) {
         core->state.started = true;
         core->state.last_now_us = now_us;
-        rw_core_emit_event(core, RW_EVENT_KIND_BOOT, core->state.state, core->state.state, 0);
+        rw_core_emit_event(core, RW_EVENT_KIND_BOOT, core->state.state, core->state.state, (int32_t)core->reset_cause);
     }
     uint32_t dt_us = now_us - core->state.last_now_us;
     core->state.last_now_us = now_us;

@@ -49,6 +49,7 @@ typedef struct rw_core_counters {
 
 typedef struct rw_core {
     rw_params params; /* public: read through rw_params_get; set through PARAM_SET or rw_core_set_param */
+    uint32_t reset_cause; /* public: the board's reset reason, set before the first tick (BOOT event arg) */
     struct {
         rw_mt_speed_estimator speed;
         rw_pi_controller pi;
@@ -88,6 +89,10 @@ typedef struct rw_core {
     } state;
 } rw_core;
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 void rw_core_init(rw_core *core);
 
 /* One control tick at time now_us (the tick clock, wraps); the first call only latches the clock. */
@@ -103,5 +108,9 @@ static inline uint8_t rw_core_state(const rw_core *core)
 {
     return core->state.state;
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* RW_CORE_H */

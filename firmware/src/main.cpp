@@ -43,7 +43,7 @@ rw_hal_link link_hal;
 rw_hal_scheduler scheduler_hal;
 rw_hal hal;
 
-uint8_t reset_cause; /* PM->RCAUSE of this boot; the core's BOOT event cannot carry it yet */
+uint8_t reset_cause; /* PM->RCAUSE of this boot, reported in the core's BOOT event */
 rw_config_status config_status;
 
 bool esc_at_idle(uint8_t state)
@@ -60,6 +60,7 @@ void setup()
 
     config_status = rw_arduino_config_load(&config);
     rw_core_init(&core);
+    core.reset_cause = reset_cause;
     (void)rw_arduino_config_apply_params(&config, &core);
 
     const uint16_t esc_min_us = static_cast<uint16_t>(rw_params_get(&core.params, RW_PARAM_ESC_MIN_US));
