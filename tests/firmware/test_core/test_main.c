@@ -128,10 +128,40 @@ static const rw_hal_encoder hal_encoder = { NULL, encoder_read };
 static const rw_hal_battery hal_battery = { NULL, battery_read_mv };
 static const rw_hal_link hal_link = { NULL, link_recv, link_reply, link_accept_peer, link_send };
 static const rw_hal_scheduler hal_scheduler = { NULL, tick_overruns };
-/* Designated: interfaces this suite does not use (the spindle) stay NULL = not fitted. */
-static const rw_hal hal = {
+/* A spindle that answers but never moves (enough for the refusals): position register fixed. */
+static struct {
+    unsigned writes;
+    uint16_t last_raw;
+} spindle_fake;
+
+static bool spindle_read(void *ctx, rw_spindle_reading *out)
+{
+    (void)ctx;
+    out->position_raw = 512u;
+    out->speed_raw = 0u;
+    out->load_raw = 0u;
+    out->limit_switch = false;
+    return true;
+}
+
+static void spindle_write_moving_speed_raw(void *ctx, uint16_t raw)
+{
+    (void)ctx;
+    ++spindle_fake.writes;
+    spindle_fake.last_raw = raw;
+}
+
+static const rw_hal_spindle hal_spindle_fake = { NULL, spindle_read, spindle_write_moving_speed_raw };
+
+/* Designated: interfaces a HAL does not set stay NULL = not fitted. */
+static const rw_hal hal_no_spindle = {
     .esc = &hal_esc, .encoder = &hal_encoder, .battery = &hal_battery, .link = &hal_link, .scheduler = &hal_scheduler,
 };
+static const rw_hal hal_with_spindle = {
+    .esc = &hal_esc, .encoder = &hal_encoder, .battery = &hal_battery, .link = &hal_link, .scheduler = &hal_scheduler,
+    .spindle = &hal_spindle_fake,
+};
+static const rw_hal *hal = &hal_no_spindle;
 
 /* ---- driving the core ---------------------------------------------------------------------------- */
 
@@ -161,7 +191,7 @@ static void tick(void)
         fake.next_edge_ns += fake.period_ns;
     }
     fake.out_this_tick = 0u;
-    rw_core_tick(&core, &hal, (uint32_t)(fake.clock_offset_us + (uint32_t)(fake.t_ns / 1000u)));
+    rw_core_tick(&core, hal, (uint32_t)(fake.clock_offset_us + (uint32_t)(fake.t_ns / 1000u)));
     if (fake.out_this_tick > fake.out_this_tick_max) {
         fake.out_this_tick_max = fake.out_this_tick;
     }
@@ -347,6 +377,8 @@ static void to_airborne(int32_t mmps)
 void setUp(void)
 {
     memset(&fake, 0, sizeof fake);
+    memset(&spindle_fake, 0, sizeof spindle_fake);
+    hal = &hal_no_spindle;
     fake.battery_mv = 14800u;
     host_seq = 0u;
     rw_core_init(&core);
@@ -679,6 +711,35 @@ static void test_long_tick_gap_does_not_jump_the_esc_pulse(void)
     TEST_ASSERT_FLOAT_WITHIN(0.1f, 4.0f, core.state.measured_mps);
 }
 
+static size_t frame_simple(uint8_t *buf, uint8_t msg_id, uint16_t seq)
+{
+    return rw_frame_encode(msg_id, seq, NULL, 0u, buf, RW_MAX_FRAME_LEN);
+}
+
+static void test_spindle_refusals(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    /* No spindle fitted: SPINDLE_UNAVAILABLE. */
+    tick();
+    run_ms(600);
+    verdict v = command(buf, frame_simple(buf, RW_MSG_ID_HOME, ++host_seq));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_SPINDLE_UNAVAILABLE, v.reason);
+    /* A spindle that was never homed: NOT_HOMED for GRASP, nothing changes. */
+    setUp();
+    hal = &hal_with_spindle;
+    to_airborne(4000);
+    v = command(buf, frame_simple(buf, RW_MSG_ID_GRASP, ++host_seq));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_NOT_HOMED, v.reason);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_AIRBORNE, rw_core_state(&core));
+    /* SET_LOOP out of range: detail = the limit, um (checked before homing). */
+    rw_msg_set_loop loop = { 180001 };
+    v = command(buf, rw_msg_set_loop_encode(&loop, ++host_seq, buf, sizeof buf));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_OUT_OF_RANGE, v.reason);
+    TEST_ASSERT_EQUAL_INT32(180000, v.detail);
+    TEST_ASSERT_TRUE(spindle_fake.writes > 0u);
+    TEST_ASSERT_EQUAL_UINT16(0u, spindle_fake.last_raw);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -695,5 +756,6 @@ int main(void)
     RUN_TEST(test_silent_encoder_with_throttle_up_faults);
     RUN_TEST(test_tick_clock_wrap_changes_nothing);
     RUN_TEST(test_long_tick_gap_does_not_jump_the_esc_pulse);
+    RUN_TEST(test_spindle_refusals);
     return UNITY_END();
 }
