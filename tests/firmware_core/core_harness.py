@@ -245,12 +245,14 @@ class CoreHarness:
     rw_core_tick(core, hal, (clock_offset_us + t_us) mod 2^32); the first tick is at t_us = 0.
 
     Keyword options: clock_offset_us puts the tick clock anywhere (to cross the 2^32 wrap);
+    encoder_count_offset starts the encoder's cumulative count anywhere (to cross its wrap);
     battery_mv the battery reading; params {name: value} set through rw_core_set_param before the first
     tick (the checks are those of PARAM_SET, a refusal raises ValueError).
     """
 
     def __init__(self, lib: ctypes.CDLL, *, clock_offset_us: int = 0, battery_mv: int = 14800,
-                 params: dict[str, float] | None = None, spindle: FakeSpindle | None = None) -> None:
+                 params: dict[str, float] | None = None, spindle: FakeSpindle | None = None,
+                 encoder_count_offset: int = 0) -> None:
         self.lib = declare_core(lib)
         self.clock_offset_us = int(clock_offset_us)
         self.size = int(lib.rw_core_sizeof())
@@ -258,7 +260,9 @@ class CoreHarness:
         ctypes.memmove(ctypes.addressof(self._mem) + self.size, _CANARY, len(_CANARY))
         self.core = ctypes.addressof(self._mem)
         lib.rw_core_init(self.core)
-        self.hal = FakeHal(battery_mv=battery_mv, encoder_last_edge_us=self.clock_offset_us % U32)
+        self.encoder_count_offset = int(encoder_count_offset)
+        self.hal = FakeHal(battery_mv=battery_mv, encoder_last_edge_us=self.clock_offset_us % U32,
+                           encoder_counts=self.encoder_count_offset % U32)
         self.encoder = RopeEncoder()
         self.spindle = spindle
         self.t_us = 0
@@ -353,7 +357,7 @@ class CoreHarness:
             self.encoder.advance(self.t_us, int(dt_us))
         self.started = True
         if self.encoder.speed_mps > 0.0 or self.encoder.counts > 0:
-            self.hal.encoder_counts = self.encoder.counts
+            self.hal.encoder_counts = (self.encoder_count_offset + self.encoder.counts) % U32
             self.hal.encoder_last_edge_us = (self.clock_offset_us + round(self.encoder.last_edge_t_us)) % U32
         self.lib.rw_core_tick(self.core, ctypes.byref(self._hal), self.now_us)
         self._check_canary()

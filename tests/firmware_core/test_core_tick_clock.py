@@ -42,6 +42,19 @@ def test_tick_clock_wrap_gives_byte_identical_behaviour(rw_core, wrap_at_ms):
     assert ref.state == S.ESTOP
 
 
+def test_encoder_count_wrap_gives_byte_identical_behaviour(rw_core):
+    ref = CoreHarness(rw_core)
+    _scenario(ref)
+    wrapped = CoreHarness(rw_core, encoder_count_offset=U32 - 1500)  # wraps early in the spin-up
+    _scenario(wrapped)
+    assert wrapped.hal.encoder_counts < 1_000_000 and ref.encoder.counts > 1500, "the count really wrapped"
+    assert wrapped.hal.pulses_us == ref.hal.pulses_us
+    assert [o.raw for o in wrapped.hal.out] == [o.raw for o in ref.hal.out], "every datagram identical"
+    kinds = {e.event for e in ref.events()}
+    assert {EventKind.HEARTBEAT_LOST, EventKind.ARMING_HOLD_DONE, EventKind.PARAM_CHANGED} <= kinds
+    assert ref.state == S.ESTOP
+
+
 def _airborne_loaded(rw_core) -> CoreHarness:
     """AIRBORNE, the setpoint still ramping from 4 to 8 m/s, the rope held at 4 m/s (loaded): the PI
     integrates a steady error."""
