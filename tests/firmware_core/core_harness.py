@@ -498,9 +498,6 @@ def raw_frame(msg_id: int, seq: int, payload: bytes, *, crc_extra: int | None = 
     return body + proto.checksum(body[1:], crc_extra).to_bytes(2, "little")
 
 
-_COUNTERS = ("rx_ok", "rx_bad", "rx_duplicates", "nacks", "events")
-
-
 def telemetry_without(tel: proto.Telemetry, *names: str) -> dict:
     """The telemetry fields as a dict, without the named ones."""
     return {f.name: getattr(tel, f.name) for f in tel.FIELDS if f.name not in names}
