@@ -16,10 +16,11 @@ Script (all times in simulated seconds, GraspScript fields):
   4. hold      (hold_s): guide kept; nothing moves.
   5. pull      (pull_s): the module moves back by ``pull_m`` and up by ``lift_m`` (the robot's leg).
 
-Judgement (GraspOutcome.secured): the object's centre of mass followed the module during the pull
+Judgement (GraspOutcome.secured), over the second half of the pull (the first half takes up the
+slack between the loop and the object): the object's centre of mass followed the module
 (displacement along the pull direction >= ``follow_fraction`` of the module's) AND the rope dragged
-it: the mean chain-on-object normal force over the pull is at least ``drag_force_fraction`` of the
-force that slides the object on the floor (floor friction x weight). An object the rope only pushes
+it: the mean chain-on-object normal force is at least ``drag_force_fraction`` of the force that
+slides the object on the floor (floor friction x weight). An object the rope only pushes
 ahead of itself (a ball rolling away) or leaves behind is "slipped". Positions and forces come from
 MuJoCo contacts; nothing is decided by a rule on the object's shape.
 """
@@ -78,9 +79,10 @@ class GraspOutcome:
     Attributes:
         object_name: the object.
         secured: True if held (see module doc), False if it slipped out.
-        follow_ratio: object displacement along the pull / module displacement (1 = rigidly held).
+        follow_ratio: object displacement along the pull / module displacement, second half of the
+            pull (1 = moves with the module).
         final_chain_force_n: chain-on-object normal force at the end, N.
-        mean_pull_force_n: mean chain-on-object normal force during the pull, N.
+        mean_pull_force_n: mean chain-on-object normal force, second half of the pull, N.
         drag_force_n: force that slides the object on the floor (floor friction x weight), N.
         max_chain_force_n: the largest chain-on-object normal force seen, N.
         object_displacement_m: shape (3,), object centre-of-mass change over the whole script.
@@ -178,16 +180,19 @@ def run_grasp(obj: ObjectSpec | str, *, table: ShapeTable, params: ChainParams |
     pull_forces: list[float] = []
     trace: list[dict] = []
     pull_start_obj = None
+    t_judge_s = script.duration_s - 0.5 * script.pull_s
     max_force = 0.0
     n = int(round(script.duration_s / sample_s))
     for k in range(n):
         phase, inputs = grasp_inputs(script, k * sample_s, base_pos_m=base)
-        if phase == "pull" and pull_start_obj is None:
+        t_s = k * sample_s
+        judging = phase == "pull" and t_s >= t_judge_s - 1e-9
+        if judging and pull_start_obj is None:
             pull_start_obj = plant.object_com_m(name)
         plant.advance(inputs, duration_s=sample_s)
         chain_f, _, _ = plant.contact_forces_n()
         max_force = max(max_force, chain_f[name])
-        if phase == "pull":
+        if judging:
             pull_forces.append(chain_f[name])
         trace.append(dict(time_s=plant.time_s, phase=phase, object_pos_m=plant.object_com_m(name),
                           chain_force_n=chain_f[name], guide_mm=inputs.guide_position_mm,
@@ -195,7 +200,7 @@ def run_grasp(obj: ObjectSpec | str, *, table: ShapeTable, params: ChainParams |
         if on_sample is not None:
             on_sample(plant, phase)
     end = plant.object_com_m(name)
-    pull_vec = np.array([-script.pull_m, 0.0, script.lift_m])
+    pull_vec = 0.5 * np.array([-script.pull_m, 0.0, script.lift_m])
     if pull_start_obj is None or np.linalg.norm(pull_vec) == 0:
         follow = 0.0
     else:
