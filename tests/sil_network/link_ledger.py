@@ -14,8 +14,7 @@ from dataclasses import dataclass, field
 from robowrangler.protocol import generated as gen
 from robowrangler_sim.sil.impairment import LoggedDatagram
 
-COMMAND_IDS = frozenset(m.MSG_ID for m in (gen.Arm, gen.Disarm, gen.SetRopeSpeed, gen.Spindown, gen.Estop,
-                                           gen.ParamGet, gen.ParamSet))
+COMMAND_IDS = frozenset(msg_id for msg_id, m in gen.MESSAGES.items() if m.KIND == gen.MsgKind.COMMAND)
 
 
 @dataclass

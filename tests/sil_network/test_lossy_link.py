@@ -199,3 +199,23 @@ def test_client_rides_out_a_blackout_and_flies_again(native_build_dir: Path) -> 
     assert causes == [gen.Cause.HEARTBEAT_LOST, gen.Cause.COMMAND]
     # the 6 m/s command sent into the blackout never reached the device
     assert all(not (isinstance(m, gen.SetRopeSpeed) and m.rope_speed_mmps == 6000) for _, m in ledger.executed_commands)
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "core: the duplicate cache keeps the last RW_DUPLICATE_CACHE_SIZE = 16 commands, so a repeat that arrives "
+    "after 16 newer commands, 0.3 s later (inside RW_DUPLICATE_WINDOW_MS = 5000 ms), is executed again: here "
+    "a late copy of SET_ROPE_SPEED 7 m/s overrides the newer 6 m/s target"))
+def test_a_late_duplicate_behind_16_newer_commands_is_not_executed_again(plain_host: ScriptedHost) -> None:
+    host = plain_host
+    host.arm_and_spin(5000, settle_s=1.0)
+    late = gen.encode_frame(gen.SetRopeSpeed(7000), 40_000)
+    host.send_raw(late)
+    host.run_for(0.01)
+    for _ in range(15):
+        assert isinstance(host.command(gen.ParamGet(gen.PARAMS_BY_NAME["tov_mps"].id)), gen.Ack)
+    assert isinstance(host.command(gen.SetRopeSpeed(6000)), gen.Ack)  # the 16th newer command
+    before = host.last_telemetry.rx_duplicates
+    host.send_raw(late)  # the network's late copy, 0.3 s after the original
+    host.run_for(0.1)
+    t = host.last_telemetry
+    assert t.rope_speed_target_mmps == 6000 and t.rx_duplicates == before + 1

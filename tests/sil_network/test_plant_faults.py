@@ -77,7 +77,7 @@ def test_encoder_dropout_raises_encoder_silent_and_idles_the_esc(flying: Scripte
     assert isinstance(flying.command(gen.Disarm()), gen.Ack)  # stopped: the fault clears
 
 
-@pytest.mark.xfail(strict=True, reason=(
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
     "core: while the encoder is frozen the M/T estimate decays towards 0 and the PI winds the throttle up "
     "(1224 -> 1903 us) for the whole encoder_timeout_s (0.25 s): the rope reaches about 20 m/s for a 5 m/s "
     "target before ENCODER_SILENT trips. A stale estimate (no edge for longer than the edge period at the "
@@ -199,7 +199,7 @@ def test_a_stalled_control_loop_resumes_without_a_fault(flying: ScriptedHost) ->
     assert t.state == State.AIRBORNE and t.fault_bits == 0 and abs(t.rope_speed_mmps - TARGET_MMPS) <= 100
 
 
-@pytest.mark.xfail(strict=True, reason="core/sil HAL: a tick that comes 300 ms after the previous one (period "
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason="core/sil HAL: a tick that comes 300 ms after the previous one (period "
                    "1 ms) is not counted in TELEMETRY.tick_overruns: the sil scheduler returns 0 by construction "
                    "and the core never compares dt with its period (DESIGN.md: main loop overrun counted)")
 def test_a_stalled_control_loop_is_counted_as_an_overrun(flying: ScriptedHost) -> None:

@@ -137,13 +137,14 @@ class DirectionCounters:
 
 @dataclass(frozen=True)
 class LoggedDatagram:
-    """One datagram seen by the proxy: kind 'in' (received, before impairment) or 'out' (delivered)."""
+    """One datagram seen by the proxy: kind 'in' (received, before impairment), 'drop' (lost), 'out' (delivered)."""
 
     direction: Direction
-    kind: Literal["in", "out"]
+    kind: Literal["in", "drop", "out"]
     time_us: int
     data: bytes
     corrupted: bool = False
+    original: bytes = b""  # for a corrupted copy: the datagram as it was before the bit flip
 
 
 class _Lane:
@@ -153,9 +154,10 @@ class _Lane:
         self.rng = rng
         self.bad = False
         self.counters = DirectionCounters()
-        self.in_flight: list[tuple[int, int, bytes, bool]] = []  # (release_us, order, data, corrupted)
+        self.in_flight: list[tuple[int, int, bytes, bool, bytes]] = []  # (release_us, order, data, corrupted, original)
 
-    def admit(self, link: LinkImpairment, data: bytes, now_us: int, order: itertools.count) -> None:
+    def admit(self, link: LinkImpairment, data: bytes, now_us: int, order: itertools.count) -> bool:
+        """Decide the datagram's fate and queue its copies; False if it was dropped."""
         u = self.rng.random(_DRAWS_PER_DATAGRAM)
         c = self.counters
         c.received += 1
@@ -168,7 +170,7 @@ class _Lane:
         if u[1] < (link.loss_prob_bad if self.bad else link.loss_prob_good):
             c.dropped += 1
             c.dropped_in_bad_state += int(self.bad)
-            return
+            return False
         copies = 2 if u[2] < link.duplicate_prob else 1
         c.duplicated += copies - 1
         for k in range(copies):
@@ -184,13 +186,14 @@ class _Lane:
             if reorder_u < link.reorder_prob:
                 delay_ms += link.reorder_delay_ms
                 c.reordered += 1
-            heapq.heappush(self.in_flight, (now_us + round(delay_ms * 1000.0), next(order), payload, corrupted))
+            heapq.heappush(self.in_flight, (now_us + round(delay_ms * 1000.0), next(order), payload, corrupted, data))
+        return True
 
-    def due(self, now_us: int) -> list[tuple[bytes, bool]]:
+    def due(self, now_us: int) -> list[tuple[bytes, bool, bytes]]:
         out = []
         while self.in_flight and self.in_flight[0][0] <= now_us:
-            _, _, data, corrupted = heapq.heappop(self.in_flight)
-            out.append((data, corrupted))
+            _, _, data, corrupted, original = heapq.heappop(self.in_flight)
+            out.append((data, corrupted, original))
         return out
 
 
@@ -385,11 +388,13 @@ class ImpairmentProxy:
     def _admit(self, direction: Direction, data: bytes, now_us: int) -> None:
         if self.keep_log:
             self._log.append(LoggedDatagram(direction, "in", now_us, data))
-        self._lanes[direction].admit(getattr(self._config, direction), data, now_us, self._order)
+        kept = self._lanes[direction].admit(getattr(self._config, direction), data, now_us, self._order)
+        if self.keep_log and not kept:
+            self._log.append(LoggedDatagram(direction, "drop", now_us, data))
 
     def _release(self, now_us: int) -> None:
         for direction, lane in self._lanes.items():
-            for data, corrupted in lane.due(now_us):
+            for data, corrupted, original in lane.due(now_us):
                 try:
                     if direction == "to_device":
                         self._device_sock.send(data)
@@ -401,7 +406,8 @@ class ImpairmentProxy:
                     continue
                 lane.counters.delivered += 1
                 if self.keep_log:
-                    self._log.append(LoggedDatagram(direction, "out", now_us, data, corrupted))
+                    self._log.append(LoggedDatagram(direction, "out", now_us, data, corrupted,
+                                                    original if corrupted else b""))
 
 
 class ImpairedLockstep:

@@ -1,0 +1,511 @@
+"""Soak: seeded random valid and invalid commands through an impaired link, invariants checked every tick.
+
+Lockstep and deterministic: a ScriptedHost talks to the SIL firmware through an ImpairmentProxy stepped by
+simulated time (ImpairedLockstep). The host retries a command like the Client does (same seq, same bytes,
+every ack_timeout_s, at most `retries` times). Every tick the proxy's log gives the device-side truth
+(every frame the firmware got, every frame it sent) and the invariants are checked:
+
+* executed once: the firmware takes its datagrams in order, so each verdict (ACK/NACK) it sends belongs to
+  the next non-heartbeat frame delivered to it; a repeat of a command frame (same msg_id, seq, checksum)
+  must get the first verdict again, and every TELEMETRY.rx_duplicates must equal the repeats answered
+  before it (a re-execution would not count); PARAM_CHANGED events = PARAM_SETs first accepted.
+* the ToV guard: while the device reports AIRBORNE (latest telemetry or STATE_CHANGED, by sequence
+  number) the setpoint is at or over tov x margin and the plant's rope speed is over it less
+  SPEED_TOLERANCE_MPS; no LOOP_COLLAPSED (nothing loads the rope here); a HEARTBEAT_LOST comes within
+  heartbeat_timeout_s + one tick.
+* no crash: the firmware process answers every tick; plant speed and battery voltage stay finite.
+* every gap accounted for: each sequence number the firmware used left it (no hole: its outbox dropped
+  nothing) and reached the host exactly when the proxy delivered a clean copy of it; whatever the host
+  missed, the proxy dropped or corrupted.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+import time
+from collections import Counter, deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robowrangler.protocol import generated as gen
+from robowrangler_sim.sil import SilError, SilSession
+from robowrangler_sim.sil.impairment import ImpairedLockstep, ImpairmentConfig, ImpairmentProxy, LinkImpairment
+from robowrangler_sim.sil.scripted_host import Received, ScriptedHost
+
+from link_ledger import COMMAND_IDS
+
+SPEED_TOLERANCE_MPS = 0.15  # PI undershoot on a step down to the guard and telemetry age (<= 20 ms)
+DEFAULT_LINK = ImpairmentConfig.symmetric(LinkImpairment(
+    loss_prob_good=0.03, loss_prob_bad=0.6, good_to_bad_prob=0.02, bad_to_good_prob=0.25,  # ~9 % in bursts
+    duplicate_prob=0.03, corrupt_prob=0.01, reorder_prob=0.03, reorder_delay_ms=8.0, delay_ms=1.0, jitter_ms=3.0))
+P = gen.PARAMS_BY_NAME
+TUNABLE = (("collapse_time_s", 0.2, 0.5), ("ramp_up_mps2", 10.0, 40.0), ("ramp_down_mps2", 5.0, 20.0),
+           ("speed_filter_tau_s", 0.005, 0.02), ("speed_kp", 0.03, 0.05))
+
+
+@dataclass(frozen=True)
+class SoakConfig:
+    """What the soak does. Times in simulated seconds.
+
+    duration_s: length of the soak. seed: seeds the plant, the proxy and the command choice.
+    link: the impairment outside blackouts. command_gap_s: (min, max) pause after a command's verdict
+    (or time-out). ack_timeout_s, retries: the host's retransmission policy. blackout_every_s,
+    blackout_s: in each window of blackout_every_s one total blackout of blackout_s starts at a random time
+    (0 = none). invalid_fraction: share of invalid commands and malformed datagrams.
+    """
+
+    duration_s: float = 30.0
+    seed: int = 0
+    link: ImpairmentConfig = DEFAULT_LINK
+    command_gap_s: tuple[float, float] = (0.05, 0.4)
+    ack_timeout_s: float = 0.06
+    retries: int = 8
+    blackout_every_s: float = 15.0
+    blackout_s: float = 0.8
+    invalid_fraction: float = 0.25
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.duration_s, (int, float)) and 0 < self.duration_s <= 24 * 3600):
+            raise ValueError(f"duration_s: expected a duration in (0, 86400] s, got {self.duration_s!r}")
+        lo, hi = self.command_gap_s
+        if not 0 < lo <= hi:
+            raise ValueError(f"command_gap_s: expected 0 < min <= max s, got {self.command_gap_s!r}")
+        if not 0 <= self.invalid_fraction <= 1:
+            raise ValueError(f"invalid_fraction: expected a fraction in [0, 1], got {self.invalid_fraction!r}")
+        if self.blackout_s and self.blackout_s >= self.blackout_every_s:
+            raise ValueError(f"blackout_s: expected < blackout_every_s {self.blackout_every_s}, got {self.blackout_s}")
+
+
+@dataclass
+class SoakFigures:
+    """What happened in a soak (counts over the whole run)."""
+
+    simulated_s: float = 0.0
+    wall_s: float = 0.0
+    commands_sent: int = 0
+    malformed_sent: int = 0
+    transmissions: int = 0
+    retransmissions: int = 0
+    commands_answered: int = 0
+    commands_timed_out: int = 0
+    commands_executed: int = 0  # distinct command frames the firmware got (each acted on once)
+    commands_accepted: int = 0
+    commands_refused: int = 0
+    duplicates_answered: int = 0  # repeats the firmware answered from its cache (its rx_duplicates)
+    verdicts_checked: int = 0
+    telemetry_checked: int = 0
+    ticks_checked: int = 0
+    airborne_ticks: int = 0
+    min_airborne_margin_mps: float = math.inf  # plant speed minus the guard, lowest while AIRBORNE
+    heartbeat_losses: int = 0
+    blackouts: int = 0
+    device_frames: int = 0
+    host_frames_missing: int = 0  # device frames the host never got, all dropped/corrupted by the proxy
+    proxy: dict = field(default_factory=dict)
+    violations: int = 0
+    first_violations: list[str] = field(default_factory=list)
+
+
+class _Pending:
+    __slots__ = ("frame", "msg_id", "seq", "sent_us", "attempts")
+
+    def __init__(self, frame: bytes, msg_id: int, seq: int, sent_us: int) -> None:
+        self.frame, self.msg_id, self.seq, self.sent_us, self.attempts = frame, msg_id, seq, sent_us, 1
+
+
+class Soak:
+    """One soak run on a started SilSession; run() returns SoakFigures (violations listed there)."""
+
+    def __init__(self, sil: SilSession, config: SoakConfig) -> None:
+        self.sil = sil
+        self.config = config
+        self.rng = np.random.default_rng(config.seed)
+        self.proxy = ImpairmentProxy(device_port=sil.cmd_port, seed=config.seed + 1, keep_log=True)
+        self.host = ScriptedHost(ImpairedLockstep(sil, self.proxy))
+        self.figures = SoakFigures()
+        self.tick_ms = sil.tick_us / 1000
+        link = config.link
+        self.max_delay_us = round(1000 * max(l.delay_ms + l.jitter_ms + l.reorder_delay_ms
+                                             for l in (link.to_device, link.to_host))) + 50_000
+        # device-side truth
+        self._awaiting_verdict: deque[tuple[tuple | None, bool]] = deque()  # (command key or None, is_heartbeat)
+        self._first_verdict: dict[tuple, tuple[bool, int, int]] = {}  # key -> (ack, reason, detail)
+        self._key_params: dict[tuple, int] = {}
+        self._repeat_verdict_seqs: list[int] = []
+        self._dup_offset = 0
+        self._accepted_param_sets: Counter = Counter()
+        self._param_changed: Counter = Counter()
+        self._last_dev_seq: int | None = None
+        self._dev_state: tuple[int, int] = (-1, gen.State.DISARMED)  # (seq, state)
+        self._seq_fate: dict[int, list[int]] = {}  # device seq -> [first seen us, clean out, corrupted out, dropped]
+        self._host_seqs: set[int] = set()
+        self._max_seq_seen = -1
+        self._pruned_below = None
+        # host side
+        self._pending: _Pending | None = None
+        self._next_command_us = sil.plant.time_us + 200_000
+        self._blackout: tuple[int, int] | None = None
+        self._host_verdicts: set[tuple[int, int]] = set()
+
+    # ------------------------------------------------------------------------------------------ run
+    def run(self, *, progress: Callable[[SoakFigures], None] | None = None, progress_every_s: float = 60.0) -> SoakFigures:
+        cfg = self.config
+        wall0 = time.perf_counter()
+        self.host.run_for(0.6)  # clean link through the ESC arming hold
+        self._digest()
+        self.proxy.config = cfg.link
+        start_us = self.sil.plant.time_us
+        end_us = start_us + round(cfg.duration_s * 1e6)
+        next_window_us = start_us
+        next_progress_us = start_us + round(progress_every_s * 1e6)
+        try:
+            while self.sil.plant.time_us < end_us:
+                now = self.sil.plant.time_us
+                if cfg.blackout_s and now >= next_window_us:
+                    span = round((cfg.blackout_every_s - cfg.blackout_s) * 1e6)
+                    begin = now + int(self.rng.integers(0, span))
+                    self._blackout = (begin, begin + round(cfg.blackout_s * 1e6))
+                    next_window_us = now + round(cfg.blackout_every_s * 1e6)
+                self._apply_blackout(now)
+                self._drive_host(now)
+                try:
+                    self.host.tick()
+                except SilError as exc:
+                    self._violation(f"t={now / 1e6:.3f}s firmware crashed or hung: {exc}")
+                    break
+                self._digest()
+                self._check_plant()
+                self.figures.ticks_checked += 1
+                if progress is not None and self.sil.plant.time_us >= next_progress_us:
+                    next_progress_us += round(progress_every_s * 1e6)
+                    self._finish_figures(start_us, wall0)
+                    progress(self.figures)
+            self.proxy.config = ImpairmentConfig()
+            self.host.run_for(0.3)  # let the last frames land
+            self._digest()
+            self._prune(final=True)
+            self._check_final()
+        finally:
+            self._finish_figures(start_us, wall0)
+            self.host.close()
+            self.proxy.close()
+        return self.figures
+
+    def _finish_figures(self, start_us: int, wall0: float) -> None:
+        f = self.figures
+        f.simulated_s = (self.sil.plant.time_us - start_us) * 1e-6
+        f.wall_s = time.perf_counter() - wall0
+        f.proxy = {d: vars(c).copy() for d, c in self.proxy.counters.items()}
+
+    def _violation(self, text: str) -> None:
+        f = self.figures
+        f.violations += 1
+        if len(f.first_violations) < 20:
+            f.first_violations.append(text)
+
+    # ------------------------------------------------------------------------------------------ host
+    def _apply_blackout(self, now: int) -> None:
+        b = self._blackout
+        if b is None:
+            return
+        if now == b[0] or (b[0] <= now < b[1] and self.proxy.config is self.config.link):
+            self.proxy.config = ImpairmentConfig.symmetric(LinkImpairment.blackout())
+            self.figures.blackouts += 1
+        elif now >= b[1]:
+            self.proxy.config = self.config.link
+            self._blackout = None
+
+    def _drive_host(self, now: int) -> None:
+        cfg, f = self.config, self.figures
+        pending = self._pending
+        if pending is not None:
+            if self._host_verdict(pending):
+                f.commands_answered += 1
+                self._pending = None
+                self._schedule_next(now)
+            elif now - pending.sent_us >= round(cfg.ack_timeout_s * 1e6):
+                if pending.attempts > cfg.retries:
+                    f.commands_timed_out += 1
+                    self._pending = None
+                    self._schedule_next(now)
+                else:
+                    self.host.send_raw(pending.frame)
+                    pending.attempts += 1
+                    pending.sent_us = now
+                    f.transmissions += 1
+                    f.retransmissions += 1
+            return
+        if now < self._next_command_us:
+            return
+        kind, payload = self._choose()
+        if kind == "raw":
+            self.host.send_raw(payload)
+            f.malformed_sent += 1
+            self._schedule_next(now)
+            return
+        seq = self.host.seq
+        self.host.seq = (seq + 1) & 0xFFFF
+        frame = gen.encode_frame(payload, seq)
+        self.host.send_raw(frame)
+        self._pending = _Pending(frame, payload.MSG_ID, seq, now)
+        f.commands_sent += 1
+        f.transmissions += 1
+
+    def _schedule_next(self, now: int) -> None:
+        lo, hi = self.config.command_gap_s
+        self._next_command_us = now + round(self.rng.uniform(lo, hi) * 1e6)
+
+    def _host_verdict(self, pending: _Pending) -> bool:
+        """True once the host got an ACK or NACK for the pending command."""
+        key = (pending.msg_id, pending.seq)
+        if key in self._host_verdicts:
+            self._host_verdicts.clear()  # older answers (to retransmissions) are of no further use
+            return True
+        return False
+
+    def _choose(self) -> tuple[str, object]:
+        rng = self.rng
+        u = rng.random()
+        if u < self.config.invalid_fraction:
+            return self._choose_invalid()
+        choices = ("arm", "speed", "speed", "speed", "spindown", "disarm", "param_get", "param_set", "home",
+                   "set_loop", "relax", "estop", "grasp")
+        weights = np.array([12, 10, 10, 10, 8, 8, 8, 10, 3, 4, 3, 1, 1], dtype=float)
+        pick = choices[rng.choice(len(choices), p=weights / weights.sum())]
+        if pick == "arm":
+            return "msg", gen.Arm()
+        if pick == "speed":
+            return "msg", gen.SetRopeSpeed(int(rng.integers(3200, 8001)))
+        if pick == "spindown":
+            return "msg", gen.Spindown()
+        if pick == "disarm":
+            return "msg", gen.Disarm()
+        if pick == "param_get":
+            return "msg", gen.ParamGet(int(rng.integers(0, len(gen.PARAMS))))
+        if pick == "param_set":
+            name, lo, hi = TUNABLE[int(rng.integers(0, len(TUNABLE)))]
+            return "msg", gen.ParamSet(P[name].id, float(np.float32(rng.uniform(lo, hi))))
+        if pick == "home":
+            return "msg", gen.Home()
+        if pick == "set_loop":
+            return "msg", gen.SetLoop(int(rng.integers(0, 180_001)))
+        if pick == "relax":
+            return "msg", gen.Relax()
+        if pick == "estop":
+            return "msg", gen.Estop()
+        return "msg", gen.Grasp()
+
+    def _choose_invalid(self) -> tuple[str, object]:
+        rng = self.rng
+        k = int(rng.integers(0, 12))
+        good = gen.encode_frame(gen.SetRopeSpeed(5000), int(rng.integers(0, 0x10000)))
+        return [
+            ("msg", gen.SetRopeSpeed(0)),
+            ("msg", gen.SetRopeSpeed(-int(rng.integers(1, 10_000)))),
+            ("msg", gen.SetRopeSpeed(int(rng.integers(20_001, 100_000)))),
+            ("msg", gen.SetRopeSpeed(int(rng.integers(500, 2990)))),  # under the guard: refused while AIRBORNE
+            ("msg", gen.ParamSet(int(rng.integers(len(gen.PARAMS), 256)), 1.0)),
+            ("msg", gen.ParamSet(P["speed_kp"].id, float(rng.choice([5.0, -1.0, float("nan"), float("inf")])))),
+            ("msg", gen.SetLoop(int(rng.choice([-5000, 500_000])))),
+            ("raw", bytes(rng.integers(0, 256, int(rng.integers(0, 40)), dtype=np.uint8))),
+            ("raw", good[:-1]),
+            ("raw", good + b"\x00"),
+            ("raw", bytes([good[0], good[1], 0x01]) + good[3:]),  # flags set
+            ("raw", gen.encode_frame(gen.Telemetry(*([0] * len(gen.Telemetry.FIELDS))), 7)),  # wrong direction
+        ][k]
+
+    # ------------------------------------------------------------------------------------------ device truth
+    def _digest(self) -> None:
+        for e in self.proxy.take_log():
+            if e.direction == "to_device":
+                if e.kind == "out":
+                    self._on_delivered_to_device(e.data)
+            elif e.kind == "in":
+                self._on_device_frame(e.time_us, e.data)
+            else:
+                self._on_to_host_fate(e)
+        r = self.host.received
+        for data in r.raw:
+            try:
+                frame = gen.decode_frame(data)
+            except gen.FrameError:
+                continue
+            self._host_seqs.add(self._unwrap(frame.seq))
+        for reply in r.acks + r.nacks:
+            self._host_verdicts.add((reply.cmd_msg_id, reply.cmd_seq))
+        self.host.received = Received()
+        self._prune()
+
+    def _unwrap(self, seq: int) -> int:
+        ref = self._max_seq_seen if self._max_seq_seen >= 0 else seq
+        return ref + ((seq - ref + 0x8000) & 0xFFFF) - 0x8000
+
+    def _on_delivered_to_device(self, data: bytes) -> None:
+        try:
+            frame, msg = gen.decode_message(data)
+        except gen.FrameError:
+            self._awaiting_verdict.append((None, False))
+            return
+        if frame.msg_id == gen.MsgId.HEARTBEAT:
+            self._awaiting_verdict.append((None, True))
+            return
+        if frame.msg_id not in COMMAND_IDS:
+            self._awaiting_verdict.append((None, False))
+            return
+        key = (frame.msg_id, frame.seq, int.from_bytes(data[-2:], "little"))
+        if isinstance(msg, gen.ParamSet):
+            self._key_params[key] = msg.param_id
+        self._awaiting_verdict.append((key, False))
+
+    def _on_device_frame(self, time_us: int, data: bytes) -> None:
+        f = self.figures
+        try:
+            frame, msg = gen.decode_message(data)
+        except gen.FrameError as err:
+            self._violation(f"t={time_us / 1e6:.3f}s the firmware sent an undecodable frame: {err}")
+            return
+        seq = self._unwrap(frame.seq)
+        if self._pruned_below is not None and seq < self._pruned_below:
+            self._violation(f"t={time_us / 1e6:.3f}s device frame seq {seq} arrived long after its turn")
+        self._seq_fate.setdefault(seq, [time_us, 0, 0, 0])
+        self._max_seq_seen = max(self._max_seq_seen, seq)
+        f.device_frames += 1
+        if isinstance(msg, (gen.Ack, gen.Nack)):
+            self._on_verdict(time_us, seq, msg)
+        elif isinstance(msg, gen.Telemetry):
+            self._on_telemetry(time_us, seq, msg)
+        elif isinstance(msg, gen.Event):
+            self._on_event(time_us, seq, msg)
+
+    def _on_to_host_fate(self, e) -> None:
+        frame = None if e.corrupted else gen.decode_frame(e.data)
+        if e.kind == "drop":
+            seq = self._unwrap(frame.seq)
+            if seq in self._seq_fate:
+                self._seq_fate[seq][3] += 1
+        elif e.corrupted:
+            seq = self._unwrap(gen.decode_frame(e.original).seq)
+            if seq in self._seq_fate:
+                self._seq_fate[seq][2] += 1
+        else:
+            seq = self._unwrap(frame.seq)
+            if seq in self._seq_fate:
+                self._seq_fate[seq][1] += 1
+
+    def _on_verdict(self, time_us: int, seq: int, msg: gen.Ack | gen.Nack) -> None:
+        f = self.figures
+        f.verdicts_checked += 1
+        while self._awaiting_verdict and self._awaiting_verdict[0][1]:
+            self._awaiting_verdict.popleft()  # heartbeats: no verdict
+        if not self._awaiting_verdict:
+            self._violation(f"t={time_us / 1e6:.3f}s verdict {msg} for no delivered frame")
+            return
+        key, _ = self._awaiting_verdict.popleft()
+        verdict = (isinstance(msg, gen.Ack), 0 if isinstance(msg, gen.Ack) else msg.reason,
+                   0 if isinstance(msg, gen.Ack) else msg.detail)
+        if key is None:
+            if not isinstance(msg, gen.Nack):
+                self._violation(f"t={time_us / 1e6:.3f}s a malformed or wrong-direction frame was ACKed: {msg}")
+            return
+        if (msg.cmd_msg_id, msg.cmd_seq) != key[:2]:
+            self._violation(f"t={time_us / 1e6:.3f}s verdict for {msg.cmd_msg_id}/{msg.cmd_seq}, expected {key[:2]}")
+            return
+        first = self._first_verdict.get(key)
+        if first is None:
+            self._first_verdict[key] = verdict
+            f.commands_executed += 1
+            f.commands_accepted += verdict[0]
+            f.commands_refused += not verdict[0]
+            if verdict[0] and key in self._key_params:
+                self._accepted_param_sets[self._key_params[key]] += 1
+        else:
+            self._repeat_verdict_seqs.append(seq)
+            if verdict != first:
+                self._violation(f"t={time_us / 1e6:.3f}s repeat of {key[:2]} answered {verdict}, first {first}: "
+                                "executed again?")
+
+    def _on_telemetry(self, time_us: int, seq: int, t: gen.Telemetry) -> None:
+        f = self.figures
+        f.telemetry_checked += 1
+        expected = bisect.bisect_left(self._repeat_verdict_seqs, seq)
+        if t.rx_duplicates != (expected + self._dup_offset) & 0xFFFF:
+            self._violation(f"t={time_us / 1e6:.3f}s rx_duplicates {t.rx_duplicates}, expected "
+                            f"{(expected + self._dup_offset) & 0xFFFF}: a repeated command was executed again")
+            self._dup_offset = t.rx_duplicates - expected  # one violation per incident, not per sample after it
+        f.duplicates_answered = expected
+        if seq > self._dev_state[0]:
+            self._dev_state = (seq, t.state)
+        guard_mmps = math.floor(P["tov_mps"].default * P["tov_margin"].default * 1000)
+        if t.state == gen.State.AIRBORNE and t.rope_speed_setpoint_mmps < guard_mmps - 1:
+            self._violation(f"t={time_us / 1e6:.3f}s AIRBORNE with the setpoint {t.rope_speed_setpoint_mmps} mm/s "
+                            f"under the guard {guard_mmps} mm/s")
+
+    def _on_event(self, time_us: int, seq: int, e: gen.Event) -> None:
+        kind = e.event
+        if kind == gen.EventKind.STATE_CHANGED and seq > self._dev_state[0]:
+            self._dev_state = (seq, e.state_to)
+        elif kind == gen.EventKind.PARAM_CHANGED:
+            self._param_changed[e.arg] += 1
+        elif kind == gen.EventKind.LOOP_COLLAPSED:
+            self._violation(f"t={time_us / 1e6:.3f}s LOOP_COLLAPSED at {e.arg} mm/s with nothing loading the rope")
+        elif kind == gen.EventKind.HEARTBEAT_LOST:
+            self.figures.heartbeat_losses += 1
+            timeout_ms = 1000 * gen.PARAMS_BY_NAME["heartbeat_timeout_s"].default
+            if not timeout_ms < e.arg <= timeout_ms + self.tick_ms:
+                self._violation(f"t={time_us / 1e6:.3f}s HEARTBEAT_LOST after {e.arg} ms of silence")
+
+    def _prune(self, *, final: bool = False) -> None:
+        """Judge device frames old enough that no copy can still be in flight: gap accounting."""
+        f = self.figures
+        horizon = self.sil.plant.time_us - self.max_delay_us
+        while self._seq_fate:
+            seq = min(self._seq_fate)  # frames leave slightly out of seq order (queued ones after replies)
+            first_us, clean, corrupted, dropped = self._seq_fate[seq]
+            if not final and first_us > horizon:
+                return
+            del self._seq_fate[seq]
+            if self._pruned_below is not None and seq != self._pruned_below:
+                for hole in range(self._pruned_below, min(seq, self._pruned_below + 5)):
+                    self._violation(f"device seq {hole} never left the firmware (outbox drop): unaccounted gap")
+            self._pruned_below = seq + 1
+            got = seq in self._host_seqs
+            self._host_seqs.discard(seq)
+            if got != (clean > 0):
+                self._violation(f"device seq {seq}: host {'got' if got else 'missed'} it, proxy delivered "
+                                f"{clean} clean copies ({corrupted} corrupted, {dropped} dropped)")
+            elif not got:
+                f.host_frames_missing += 1
+                if corrupted + dropped == 0:
+                    self._violation(f"device seq {seq} missing at the host with no drop or corruption")
+
+    # ------------------------------------------------------------------------------------------ checks
+    def _check_plant(self) -> None:
+        plant = self.sil.plant
+        if not (math.isfinite(plant.rope_speed_mps) and math.isfinite(plant.battery_v)):
+            self._violation(f"t={plant.time_us / 1e6:.3f}s plant not finite: {plant.rope_speed_mps}, {plant.battery_v}")
+        if self._dev_state[1] == gen.State.AIRBORNE:
+            guard_mps = P["tov_mps"].default * P["tov_margin"].default
+            f = self.figures
+            f.airborne_ticks += 1
+            margin = plant.rope_speed_mps - guard_mps
+            f.min_airborne_margin_mps = min(f.min_airborne_margin_mps, margin)
+            if margin < -SPEED_TOLERANCE_MPS:
+                self._violation(f"t={plant.time_us / 1e6:.3f}s AIRBORNE at {plant.rope_speed_mps:.3f} m/s, "
+                                f"under the guard {guard_mps:.3f} m/s")
+
+    def _check_final(self) -> None:
+        if self._param_changed != self._accepted_param_sets:
+            self._violation(f"PARAM_CHANGED events {dict(self._param_changed)} != accepted PARAM_SETs "
+                            f"{dict(self._accepted_param_sets)}")
+        if self.sil._firmware.poll() is not None:  # noqa: SLF001 - the process is the thing under test
+            self._violation("the firmware process has exited")
+
+
+def run_soak(config: SoakConfig, *, progress: Callable[[SoakFigures], None] | None = None,
+             progress_every_s: float = 60.0) -> SoakFigures:
+    """Start a SIL session, run the soak on it, stop it; returns the figures."""
+    with SilSession(speedup=None, seed=config.seed, trace_every=0) as sil:
+        return Soak(sil, config).run(progress=progress, progress_every_s=progress_every_s)
