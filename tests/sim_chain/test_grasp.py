@@ -55,3 +55,19 @@ def test_grasp_is_deterministic(default_table):
     a = run_grasp("mug", table=default_table, seed=3)
     b = run_grasp("mug", table=default_table, seed=3)
     assert a.secured == b.secured and np.array_equal(a.object_displacement_m, b.object_displacement_m)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, secured, min_agree", [("chips_can", True, 10), ("mug", True, 12),
+                                                      ("tennis_ball", False, 12)])
+def test_grasp_outcome_is_robust_to_placement_inclination_and_chain_size(default_table, name, secured, min_agree):
+    from robowrangler_sim.chain.params import ChainParams
+
+    agree = 0
+    for frac in (0.7, 0.75, 0.8):
+        for phi in (0.0, 10.0):
+            for n_links in (20, 40):
+                out = run_grasp(name, table=default_table, params=ChainParams(n_links=n_links),
+                                script=GraspScript(object_x_frac=frac, phi_deg=phi))
+                agree += out.secured is secured
+    assert agree >= min_agree
