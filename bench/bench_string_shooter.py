@@ -24,9 +24,9 @@ from robowrangler_sim.string_shooter import (ModuleMotion, NumericsParams, Shoot
                                              takeoff_speed_estimate_mps)
 from robowrangler_sim.string_shooter.shape import reach_m, roundness
 from robowrangler_sim.string_shooter.takeoff import find_takeoff_speed, no_air
-from robowrangler_sim.string_shooter.waves import measure_wave_speeds
+from robowrangler_sim.string_shooter.waves import measure_wave_speeds, measure_waves_on_loop
 
-SECTIONS = ("takeoff", "length", "angle", "vacuum", "shape", "waves", "speed")
+SECTIONS = ("takeoff", "length", "angle", "vacuum", "shape", "waves", "speed", "sensitivity")
 
 
 def log(msg: str) -> None:
@@ -129,6 +129,16 @@ def bench_waves(args, plots):
         print(f"  v = {v:3.1f}, c = sqrt(T/lambda) = {r.wave_speed_mps:.3f} m/s: measured "
               f"{r.measured_mps[0]:+.3f} / {r.measured_mps[1]:+.3f}, predicted v-c {r.predicted_mps[0]:+.3f} / "
               f"v+c {r.predicted_mps[1]:+.3f} m/s, error {100 * r.relative_error.max():.2f} % of v+c")
+    print("  pluck on the flying 2 m loop (phi 0), out of plane, followed along the loop; prediction integrates"
+          " ds/dt = v -+ sqrt(T(s)/lambda) over the loop's steady tension profile:")
+    for v, frac in ((5.0, 0.6), (5.0, 0.75), (8.0, 0.6), (8.0, 0.75)):
+        log(f"waves on the loop v {v} at {frac}")
+        r = measure_waves_on_loop(rope_speed_mps=v, start_fraction=frac)
+        c0 = math.sqrt(r.tension_n / ShooterParams().rope.linear_density_kg_per_m)
+        err = np.abs(r.measured_mps - r.predicted_mps).max() / (v + c0)
+        print(f"    v = {v}, pluck at s = {r.start_arc_m:.2f} m (T = {1e3 * r.tension_n:.1f} mN, c = {c0:.2f} m/s): "
+              f"measured {r.measured_mps[0]:+.2f} / {r.measured_mps[1]:+.2f}, predicted {r.predicted_mps[0]:+.2f} / "
+              f"{r.predicted_mps[1]:+.2f} m/s, error {100 * err:.1f} % of v+c")
 
 
 def _steady(sim, tol_m=2e-3):
@@ -177,6 +187,51 @@ def bench_speed(args, plots):
               f"{len(rec.frames)} frames")
     print("  limit: explicit step dt = 0.4 ds / sqrt(EA/lambda) (axial wave 150 m/s); cost ~ nodes x steps, so"
           " halving ds costs 4x")
+
+
+def bench_sensitivity(args, plots):
+    """Takeoff (1 m loop, phi 0) when the numerical and secondary physical choices change."""
+    print("\n## Sensitivity of the takeoff speed (1 m loop, phi 0) to choices that should not matter")
+    base = ShooterParams()
+    rope = base.rope
+    cases = [
+        ("defaults", base),
+        ("bending B x 0.2", base.with_(rope=rope.with_(bending_stiffness_n_m2=rope.bending_stiffness_n_m2 * 0.2))),
+        ("bending B x 5", base.with_(rope=rope.with_(bending_stiffness_n_m2=rope.bending_stiffness_n_m2 * 5))),
+        ("normal drag C_n x 0.5", base.with_(rope=rope.with_(normal_drag_coeff=rope.normal_drag_coeff * 0.5))),
+        ("normal drag C_n x 2", base.with_(rope=rope.with_(normal_drag_coeff=rope.normal_drag_coeff * 2))),
+        ("axial stiffness EA x 0.5", base.with_(rope=rope.with_(axial_stiffness_n=rope.axial_stiffness_n * 0.5))),
+        ("axial stiffness EA x 4", base.with_(rope=rope.with_(axial_stiffness_n=rope.axial_stiffness_n * 4))),
+        ("no compression stiffness", base.with_(rope=rope.with_(compression_stiffness_ratio=0.0))),
+        ("bending damping off", base.with_(rope=rope.with_(bending_damping_s=0.0))),
+        ("segment 1.25 cm", base.with_(numerics=NumericsParams(segment_length_m=0.0125))),
+        ("segment 5 cm", base.with_(numerics=NumericsParams(segment_length_m=0.05))),
+    ]
+    for name, params in cases:
+        log(f"sensitivity: {name}")
+        try:
+            v = find_takeoff_speed(params, loop_length_m=1.0, speeds_mps=speeds(True), settle_s=4.0).speed_mps
+        except Exception as exc:  # noqa: BLE001
+            log(f"failed: {exc}")
+            v = float("nan")
+        print(f"  {name:28s}: v* = {v:.3f} m/s")
+    from robowrangler_sim.string_shooter.shape_export import steady_contour_xz_m
+    print("  shape (2 m loop, phi 0) when the exit cannot push (compression stiffness 0) versus the default 1 %:")
+    for v in (5.0, 8.0):
+        row = []
+        for ratio in (0.01, 0.1, 0.0):
+            p = base.with_(rope=rope.with_(compression_stiffness_ratio=ratio))
+            sim = StringShooter(p, loop_length_m=2.0, motion=ModuleMotion(wheel_speed_mps=v))
+            sim.step_for(4.0)
+            c = steady_contour_xz_m(p, phi_deg=0.0, rope_speed_mps=v, loop_length_m=2.0, n_points=80, settle_s=5.0)
+            row.append(f"{ratio:g}: reach {reach_m(c):.2f} m, roundness {roundness(c):.2f}, exit tension "
+                       f"{1e3 * sim.segment_tensions_n()[0]:+.1f} mN")
+        print(f"    v = {v} m/s  " + " | ".join(row))
+    sim = StringShooter(base, loop_length_m=2.0, motion=ModuleMotion(wheel_speed_mps=8.0))
+    sim.step_for(4.0)
+    ten = sim.segment_tensions_n()
+    print(f"  (2 m loop at 8 m/s: tension {1e3 * ten.min():.1f} .. {1e3 * ten.max():.1f} mN, max strain "
+          f"{100 * ten.max() / base.rope.axial_stiffness_n:.2f} % at EA = {base.rope.axial_stiffness_n} N)")
 
 
 def save_plots(plots, plot_dir: Path) -> None:

@@ -132,3 +132,95 @@ def _peak_x(x: np.ndarray, y: np.ndarray, i: int) -> float:
             if -1 < off < 1:
                 return float(x[i] + off * 0.5 * (x[i + 1] - x[i - 1]))
     return float(x[i])
+
+
+@dataclass(frozen=True)
+class LoopWaveResult:
+    """A pluck on the airborne loop: mean lab speeds along the loop, measured and predicted, m/s.
+
+    Attributes:
+        start_arc_m: arc length from the exit where the pluck was centred.
+        tension_n: local tension there before the pluck.
+        measured_mps: shape (2,), mean speeds (along the loop, from the exit) of the slow and fast pulse
+            over the tracking window.
+        predicted_mps: shape (2,), the same from integrating ds/dt = v -+ sqrt(T(s)/lambda) over the
+            steady tension profile T(s) measured before the pluck.
+        window_s: (start, end) of the tracking window after the pluck, seconds.
+    """
+
+    start_arc_m: float
+    tension_n: float
+    rope_speed_mps: float
+    measured_mps: np.ndarray
+    predicted_mps: np.ndarray
+    window_s: tuple
+
+
+def _arc(points: np.ndarray) -> np.ndarray:
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+
+
+def measure_waves_on_loop(params: ShooterParams | None = None, *, rope_speed_mps: float = 5.0,
+                          loop_length_m: float = 2.0, start_fraction: float = 0.6, width_m: float = 0.04,
+                          window_s: tuple | None = None, settle_s: float = 4.0) -> LoopWaveResult:
+    """Pluck the flying loop out of its plane and follow the two pulses along it.
+
+    The loop flies at phi = 0 with gravity and air; the pluck (5 mm, sideways) is centred at
+    ``start_fraction`` of the loop's arc length from the exit (on the returning branch by default).
+    ``window_s`` (start, end) after the pluck; by default from when the pulses are three widths apart
+    until the fast one would be 80 % of the way to the return eyelet.
+    """
+    params = params or ShooterParams()
+    if not 0.1 <= start_fraction <= 0.9:
+        raise StringShooterParamError(f"start_fraction: expected in [0.1, 0.9], got {start_fraction!r}")
+    sim = StringShooter(params, loop_length_m=loop_length_m, motion=ModuleMotion(wheel_speed_mps=rope_speed_mps))
+    sim.step_for(settle_s)
+    frame = sim.frame()
+    s_nodes = _arc(frame.points_m)[1:-1]
+    ten = sim.segment_tensions_n()  # flow order, segment k between node k and k+1 (exit side first)
+    s_seg = 0.5 * (s_nodes[:-1] + s_nodes[1:])
+    lam = params.rope.linear_density_kg_per_m
+    s0 = start_fraction * s_nodes[-1]
+    t0_n = float(np.interp(s0, s_seg, ten))
+    label0 = float(np.interp(s0, s_nodes, frame.labels_m))
+    if window_s is None:
+        c0 = np.sqrt(max(t0_n, 1e-9) / lam)
+        window_s = (3.0 * width_m / c0, 0.8 * (s_nodes[-1] - s0) / (rope_speed_mps + c0))
+    sim.pluck(label_m=label0, amplitude_m=0.005, direction=(0.0, 1.0, 0.0), width_m=width_m)
+    t_start = sim.time_s
+    frames_dt = 0.001
+    n_frames = int(round(window_s[1] / frames_dt))
+    times, slow, fast = [], [], []
+    for _ in range(n_frames):
+        sim.step_for(frames_dt)
+        f = sim.frame()
+        t = f.time_s - t_start
+        if t < window_s[0] - 1e-9:
+            continue
+        s = _arc(f.points_m)
+        y = f.points_m[:, 1] - f.points_m[0, 1]
+        pair = _two_pulses(s, np.abs(y), min_gap_m=3.0 * width_m)
+        if pair is None:
+            continue
+        times.append(t)
+        slow.append(_peak_x(s, np.abs(y), pair[0]))
+        fast.append(_peak_x(s, np.abs(y), pair[1]))
+    if len(times) < 5:
+        raise StringShooterParamError("window_s: expected a window in which both pulses can be followed")
+    times = np.asarray(times)
+    measured = np.array([np.polyfit(times, slow, 1)[0], np.polyfit(times, fast, 1)[0]])
+    # prediction: integrate both characteristics through the steady tension profile
+    c_of_s = lambda s: np.sqrt(max(float(np.interp(s, s_seg, ten)), 0.0) / lam)  # noqa: E731
+    dt = 1e-4
+    pred = []
+    for sign in (-1.0, 1.0):
+        s, path_t, path_s = s0, [], []
+        for i in range(int(round(window_s[1] / dt))):
+            s += dt * (rope_speed_mps + sign * c_of_s(s))
+            tt = (i + 1) * dt
+            if tt >= window_s[0] - 1e-12:
+                path_t.append(tt)
+                path_s.append(s)
+        pred.append(np.polyfit(path_t, path_s, 1)[0])
+    return LoopWaveResult(start_arc_m=float(s0), tension_n=t0_n, rope_speed_mps=rope_speed_mps,
+                          measured_mps=measured, predicted_mps=np.array(pred), window_s=tuple(window_s))
