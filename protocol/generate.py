@@ -31,6 +31,9 @@ OUT_DOC = ROOT / "protocol" / "docs" / "messages.md"
 
 HEADER_LEN = 7
 CHECKSUM_LEN = 2
+FLAG_SIGNED = 0x01
+SIGNATURE_LEN = 20  # session_id u32 + counter u64 + tag u64
+KEY_LEN = 16
 
 # type name -> (C type, struct format char, size in bytes, min, max)
 TYPES = {
@@ -43,7 +46,7 @@ TYPES = {
     "uint64": ("uint64_t", "Q", 8, 0, 0xFFFFFFFFFFFFFFFF),
     "float": ("float", "f", 4, None, None),
 }
-KINDS = ("command", "heartbeat", "reply", "telemetry", "event", "sil")
+KINDS = ("command", "heartbeat", "reply", "telemetry", "event", "sil", "hello", "provision")
 NAME_RE = re.compile(r"^[A-Z][A-Z0-9_]*$")
 FIELD_RE = re.compile(r"^[a-z][a-z0-9_]*$")
 
@@ -57,8 +60,18 @@ def crc16(data: bytes, crc: int = 0xFFFF) -> int:
     return binascii.crc_hqx(data, crc)
 
 
+ARRAY_RE = re.compile(r"^(uint8|char)\[(\d+)\]$")
+
+
+def is_valid_type(type_name: str) -> bool:
+    m = ARRAY_RE.match(type_name)
+    return type_name in TYPES or (m is not None and 1 <= int(m.group(2)) <= 255)
+
+
 @dataclass
 class Field:
+    """A message field: a scalar of TYPES, or an array uint8[N] (bytes) / char[N] (NUL-terminated UTF-8)."""
+
     name: str
     type: str
     units: str
@@ -66,12 +79,42 @@ class Field:
     description: str
 
     @property
+    def array(self) -> tuple[str, int] | None:
+        m = ARRAY_RE.match(self.type)
+        return (m.group(1), int(m.group(2))) if m else None
+
+    @property
     def c_type(self) -> str:
+        if self.array:
+            return "char" if self.array[0] == "char" else "uint8_t"
         return TYPES[self.type][0]
 
     @property
+    def c_decl(self) -> str:
+        return f"{self.c_type} {self.name}[{self.array[1]}]" if self.array else f"{self.c_type} {self.name}"
+
+    @property
     def size(self) -> int:
-        return TYPES[self.type][2]
+        return self.array[1] if self.array else TYPES[self.type][2]
+
+    @property
+    def struct_fmt(self) -> str:
+        return f"{self.array[1]}s" if self.array else TYPES[self.type][1]
+
+    @property
+    def py_type(self) -> str:
+        if self.array:
+            return "str" if self.array[0] == "char" else "bytes"
+        return "float" if self.type == "float" else "int"
+
+    @property
+    def py_range(self) -> str:
+        """What Message.pack checks: None (float), ('bytes', N), ('str', N), or (min, max)."""
+        if self.array:
+            return f"({'str' if self.array[0] == 'char' else 'bytes'!r}, {self.array[1]})"
+        if self.type == "float":
+            return "None"
+        return f"({TYPES[self.type][3]}, {TYPES[self.type][4]})"
 
 
 @dataclass
@@ -192,7 +235,8 @@ def load_spec(path: Path = SPEC_PATH) -> Spec:
         for f in m.get("fields", []):
             fwhere = f"{where} field {f.get('name')!r}"
             _require(FIELD_RE.match(f.get("name", "")) is not None, fwhere, "name must be lower_snake_case")
-            _require(f.get("type") in TYPES, fwhere, f"type must be one of {sorted(TYPES)}")
+            _require(is_valid_type(f.get("type", "")), fwhere,
+                     f"type must be one of {sorted(TYPES)} or uint8[N] / char[N] with N in 1..255")
             _require(f.get("enum", "") in enum_names | {""}, fwhere, f"unknown enum {f.get('enum')!r}")
             fields.append(Field(f["name"], f["type"], f.get("units", ""), f.get("enum", ""), f.get("description", "")))
         _require(len({f.name for f in fields}) == len(fields), where, "duplicate field name")
@@ -258,7 +302,10 @@ def gen_c_header(spec: Spec) -> str:
     w(f"#define RW_FRAME_HEADER_LEN {HEADER_LEN}u")
     w(f"#define RW_FRAME_CHECKSUM_LEN {CHECKSUM_LEN}u")
     w(f"#define RW_MAX_PAYLOAD_LEN {spec.max_payload_len}u")
-    w(f"#define RW_MAX_FRAME_LEN {HEADER_LEN + spec.max_payload_len + CHECKSUM_LEN}u")
+    w(f"#define RW_FRAME_FLAG_SIGNED 0x{FLAG_SIGNED:02X}u /* a signature block follows the checksum */")
+    w(f"#define RW_SIGNATURE_LEN {SIGNATURE_LEN}u /* session_id u32, counter u64, tag u64 (SipHash-2-4) */")
+    w(f"#define RW_KEY_LEN {KEY_LEN}u")
+    w(f"#define RW_MAX_FRAME_LEN {HEADER_LEN + spec.max_payload_len + CHECKSUM_LEN + SIGNATURE_LEN}u")
     w("#define RW_MSG_ID_UNREADABLE 255u")
     w("")
     for e in spec.enums:
@@ -293,7 +340,7 @@ def gen_c_header(spec: Spec) -> str:
         for f in m.fields:
             unit = f" [{f.units}]" if f.units else ""
             enum = f" (rw_{f.enum})" if f.enum else ""
-            w(f"    {f.c_type} {f.name}; /*{unit}{enum} {_c_comment(f.description)} */")
+            w(f"    {f.c_decl}; /*{unit}{enum} {_c_comment(f.description)} */")
         w(f"}} rw_msg_{m.c_name};")
         w(f"void rw_msg_{m.c_name}_pack(const rw_msg_{m.c_name} *msg, uint8_t *payload);")
         w(f"void rw_msg_{m.c_name}_unpack(rw_msg_{m.c_name} *msg, const uint8_t *payload);")
@@ -308,13 +355,21 @@ def gen_c_header(spec: Spec) -> str:
     w("} rw_msg_info;")
     w("")
     w("/* A decoded frame. msg_id and seq are valid once the header was read (else 255 and 0);")
-    w("   payload points into the caller's buffer. */")
+    w("   payload and bytes point into the caller's buffer. session_id, counter and tag are set for a signed")
+    w("   frame (flags & RW_FRAME_FLAG_SIGNED); rw_frame_decode checks the structure and the checksum only,")
+    w("   rw_frame_tag_valid checks the signature. */")
     w("typedef struct {")
     w("    uint8_t flags;")
     w("    uint8_t msg_id;")
     w("    uint16_t seq;")
     w("    uint8_t payload_len;")
     w("    const uint8_t *payload;")
+    w("    const uint8_t *bytes;   /* the frame */")
+    w("    uint16_t checksum;")
+    w("    uint32_t session_id;")
+    w("    uint64_t counter;")
+    w("    uint64_t tag;")
+    w("    size_t signed_len;      /* bytes the tag covers: from magic to the end of counter */")
     w("} rw_frame;")
     w("")
     w("/* CRC-16/CCITT-FALSE step: poly 0x1021, init 0xFFFF, no reflection. */")
@@ -327,6 +382,13 @@ def gen_c_header(spec: Spec) -> str:
     w("   message's size or out_cap is too small. */")
     w("size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uint8_t payload_len,")
     w("                       uint8_t *out, size_t out_cap);")
+    w("/* Sign an unsigned frame of len bytes in place: set the flag, recompute the checksum, append session_id,")
+    w("   counter and the SipHash-2-4 tag. Returns the new length, 0 if it does not fit in cap or is not an")
+    w("   unsigned frame. */")
+    w("size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,")
+    w("                     const uint8_t key[RW_KEY_LEN]);")
+    w("/* True if a decoded signed frame's tag is right for key (constant-time comparison). */")
+    w("int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN]);")
     w("")
     w("/* Parameters (SI units, float32 on the wire). */")
     w(f"#define RW_PARAM_COUNT {len(spec.params)}u")
@@ -357,6 +419,8 @@ def gen_c_header(spec: Spec) -> str:
 
 
 def _c_put(f: Field, off: int) -> list[str]:
+    if f.array:
+        return [f"    memcpy(payload + {off}, msg->{f.name}, {f.size}u);"]
     if f.type == "float":
         return [f"    {{ uint32_t bits_; memcpy(&bits_, &msg->{f.name}, 4); put_u32(payload + {off}, bits_); }}"]
     if f.size == 1:
@@ -365,6 +429,11 @@ def _c_put(f: Field, off: int) -> list[str]:
 
 
 def _c_get(f: Field, off: int) -> list[str]:
+    if f.array:
+        lines = [f"    memcpy(msg->{f.name}, payload + {off}, {f.size}u);"]
+        if f.array[0] == "char":
+            lines.append(f"    msg->{f.name}[{f.size - 1}] = '\\0'; /* always terminated */")
+        return lines
     if f.type == "float":
         return [f"    {{ uint32_t bits_ = get_u32(payload + {off}); memcpy(&msg->{f.name}, &bits_, 4); }}"]
     if f.size == 1:
@@ -379,6 +448,8 @@ def gen_c_source(spec: Spec) -> str:
     w('#include "rw_protocol.h"')
     w("")
     w("#include <string.h>")
+    w("")
+    w('#include "rw_siphash.h"')
     w("")
     w("static void put_u16(uint8_t *p, uint16_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }")
     w("static void put_u32(uint8_t *p, uint32_t v) { put_u16(p, (uint16_t)v); put_u16(p + 2, (uint16_t)(v >> 16)); }")
@@ -433,11 +504,8 @@ def gen_c_source(spec: Spec) -> str:
     w("")
     w("int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out)")
     w("{")
-    w("    out->flags = 0u;")
+    w("    memset(out, 0, sizeof *out);")
     w("    out->msg_id = (uint8_t)RW_MSG_ID_UNREADABLE;")
-    w("    out->seq = 0u;")
-    w("    out->payload_len = 0u;")
-    w("    out->payload = NULL;")
     w("    if (buf == NULL || len < RW_FRAME_HEADER_LEN) {")
     w("        return RW_NACK_REASON_TRUNCATED;")
     w("    }")
@@ -451,13 +519,14 @@ def gen_c_source(spec: Spec) -> str:
     w("    if (buf[1] != RW_PROTOCOL_VERSION) {")
     w("        return RW_NACK_REASON_BAD_VERSION;")
     w("    }")
-    w("    if (out->flags != 0u) {")
+    w("    if ((out->flags & (uint8_t)~RW_FRAME_FLAG_SIGNED) != 0u) {")
     w("        return RW_NACK_REASON_UNSUPPORTED_FLAGS;")
     w("    }")
+    w("    size_t signature_len = (out->flags & RW_FRAME_FLAG_SIGNED) != 0u ? RW_SIGNATURE_LEN : 0u;")
     w("    if (out->payload_len > RW_MAX_PAYLOAD_LEN) {")
     w("        return RW_NACK_REASON_OVERSIZE;")
     w("    }")
-    w("    size_t frame_len = RW_FRAME_HEADER_LEN + (size_t)out->payload_len + RW_FRAME_CHECKSUM_LEN;")
+    w("    size_t frame_len = RW_FRAME_HEADER_LEN + (size_t)out->payload_len + RW_FRAME_CHECKSUM_LEN + signature_len;")
     w("    if (len < frame_len) {")
     w("        return RW_NACK_REASON_TRUNCATED;")
     w("    }")
@@ -476,7 +545,47 @@ def gen_c_source(spec: Spec) -> str:
     w("        return RW_NACK_REASON_BAD_LENGTH;")
     w("    }")
     w("    out->payload = buf + RW_FRAME_HEADER_LEN;")
+    w("    out->bytes = buf;")
+    w("    out->checksum = get_u16(buf + body_len);")
+    w("    if (signature_len != 0u) {")
+    w("        const uint8_t *sig = buf + body_len + RW_FRAME_CHECKSUM_LEN;")
+    w("        out->session_id = get_u32(sig);")
+    w("        out->counter = get_u64(sig + 4);")
+    w("        out->tag = get_u64(sig + 12);")
+    w("        out->signed_len = body_len + RW_FRAME_CHECKSUM_LEN + 12u;")
+    w("    }")
     w("    return RW_DECODE_OK;")
+    w("}")
+    w("")
+    w("size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,")
+    w("                     const uint8_t key[RW_KEY_LEN])")
+    w("{")
+    w("    if (frame == NULL || len < RW_FRAME_HEADER_LEN + RW_FRAME_CHECKSUM_LEN || frame[2] != 0u ||")
+    w("        len != RW_FRAME_HEADER_LEN + (size_t)frame[6] + RW_FRAME_CHECKSUM_LEN || cap < len + RW_SIGNATURE_LEN) {")
+    w("        return 0u;")
+    w("    }")
+    w("    const rw_msg_info *info = rw_msg_info_find(frame[3]);")
+    w("    if (info == NULL) {")
+    w("        return 0u;")
+    w("    }")
+    w("    size_t body_len = len - RW_FRAME_CHECKSUM_LEN;")
+    w("    frame[2] = RW_FRAME_FLAG_SIGNED;")
+    w("    put_u16(frame + body_len, frame_checksum(frame, body_len, info->crc_extra));")
+    w("    put_u32(frame + len, session_id);")
+    w("    put_u64(frame + len + 4u, counter);")
+    w("    put_u64(frame + len + 12u, rw_siphash24(key, frame, len + 12u));")
+    w("    return len + RW_SIGNATURE_LEN;")
+    w("}")
+    w("")
+    w("int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN])")
+    w("{")
+    w("    if ((frame->flags & RW_FRAME_FLAG_SIGNED) == 0u || frame->bytes == NULL) {")
+    w("        return 0;")
+    w("    }")
+    w("    /* constant time: every bit of the difference is folded in, no early exit */")
+    w("    uint64_t diff = rw_siphash24(key, frame->bytes, frame->signed_len) ^ frame->tag;")
+    w("    uint32_t folded = (uint32_t)diff | (uint32_t)(diff >> 32);")
+    w("    return (int)(1u & ((folded - 1u) >> 31) & ~(folded >> 31));")
     w("}")
     w("")
     w("size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uint8_t payload_len,")
@@ -547,7 +656,7 @@ def gen_c_source(spec: Spec) -> str:
     return "\n".join(o) + "\n"
 
 
-def gen_c_vectors(spec: Spec, vectors: list[dict]) -> str:
+def gen_c_vectors(spec: Spec, vectors: list[dict], key_hex: str) -> str:
     """The golden vectors as C data, with per-vector field checks, for the C test and the Unity test."""
     by_name = {m.name: m for m in spec.messages}
     o: list[str] = []
@@ -555,6 +664,8 @@ def gen_c_vectors(spec: Spec, vectors: list[dict]) -> str:
     w(f"/* {BANNER} Source: protocol/vectors/vectors.json. */")
     w("#ifndef RW_PROTOCOL_VECTORS_H")
     w("#define RW_PROTOCOL_VECTORS_H")
+    w("")
+    w('#include <string.h>')
     w("")
     w('#include "rw_protocol.h"')
     w("")
@@ -565,6 +676,9 @@ def gen_c_vectors(spec: Spec, vectors: list[dict]) -> str:
     w("    int expect_result;   /* RW_DECODE_OK or an rw_nack_reason */")
     w("    uint8_t expect_msg_id;")
     w("    uint16_t expect_seq;")
+    w("    int expect_tag_valid;  /* -1 unsigned, else 1/0 under rw_protocol_vector_key */")
+    w("    uint32_t expect_session_id;")
+    w("    uint64_t expect_counter;")
     w("} rw_protocol_vector;")
     w("")
     for i, v in enumerate(vectors):
@@ -578,9 +692,13 @@ def gen_c_vectors(spec: Spec, vectors: list[dict]) -> str:
         result = "RW_DECODE_OK" if v["expect"] == "ok" else f"RW_NACK_REASON_{v['expect']}"
         msg_id = by_name[v["message"]].id if "message" in v else v.get("msg_id", 255)
         seq = v.get("seq", 0)
-        w(f'    {{ "{v["name"]}", rw_vector_{i}_bytes, {len(data)}u, {result}, {msg_id}u, {seq}u }},')
+        tag = -1 if "tag_valid" not in v else int(v["tag_valid"])
+        w(f'    {{ "{v["name"]}", rw_vector_{i}_bytes, {len(data)}u, {result}, {msg_id}u, {seq}u, {tag}, '
+          f'{v.get("session_id", 0)}u, {v.get("counter", 0)}ull }},')
     w("};")
     w(f"#define RW_PROTOCOL_VECTOR_COUNT {len(vectors)}u")
+    key = ", ".join(f"0x{b:02X}" for b in bytes.fromhex(key_hex))
+    w(f"static const uint8_t rw_protocol_vector_key[RW_KEY_LEN] = {{ {key} }}; /* test key, never a real one */")
     w("")
     w("/* Unpacks the payload of valid vector `index` and compares every field with the golden value;")
     w("   returns the number of mismatching fields (0 = all equal), -1 for a vector that is not valid. */")
@@ -598,6 +716,12 @@ def gen_c_vectors(spec: Spec, vectors: list[dict]) -> str:
         w(f"        rw_msg_{m.c_name}_unpack(&msg, payload);")
         for f in m.fields:
             value = v["fields"][f.name]
+            if f.array:
+                data = value.encode("utf-8") if f.array[0] == "char" else bytes.fromhex(value)
+                data = data.ljust(f.size, b"\0")
+                lit = "".join(f"\\x{b:02x}" for b in data)
+                w(f'        bad += (memcmp(msg.{f.name}, "{lit}", {f.size}u) != 0);')
+                continue
             if f.type == "float":
                 lit = _c_float(value)
             elif f.type.startswith("u"):
@@ -630,10 +754,13 @@ def gen_python(spec: Spec) -> str:
     w("from __future__ import annotations")
     w("")
     w("import binascii")
+    w("import hmac")
     w("import struct")
     w("from dataclasses import dataclass")
     w("from enum import IntEnum, IntFlag")
     w("from typing import ClassVar")
+    w("")
+    w("import siphash24 as _siphash")
     w("")
     w(f"PROTOCOL_VERSION = {spec.version}")
     w(f"MAGIC = 0x{spec.magic:02X}")
@@ -641,7 +768,10 @@ def gen_python(spec: Spec) -> str:
     w(f"HEADER_LEN = {HEADER_LEN}")
     w(f"CHECKSUM_LEN = {CHECKSUM_LEN}")
     w(f"MAX_PAYLOAD_LEN = {spec.max_payload_len}")
-    w(f"MAX_FRAME_LEN = {HEADER_LEN + spec.max_payload_len + CHECKSUM_LEN}")
+    w(f"FLAG_SIGNED = 0x{FLAG_SIGNED:02X}")
+    w(f"SIGNATURE_LEN = {SIGNATURE_LEN}")
+    w(f"KEY_LEN = {KEY_LEN}")
+    w(f"MAX_FRAME_LEN = {HEADER_LEN + spec.max_payload_len + CHECKSUM_LEN + SIGNATURE_LEN}")
     w("MSG_ID_UNREADABLE = 255")
     w("")
     w("")
@@ -688,19 +818,29 @@ def gen_python(spec: Spec) -> str:
     w("    PAYLOAD_LEN: ClassVar[int]")
     w("    FIELDS: ClassVar[tuple[FieldSpec, ...]]")
     w("    _STRUCT: ClassVar[struct.Struct]")
-    w("    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]]")
+    w("    _RANGES: ClassVar[tuple[tuple | None, ...]]")
     w("")
     w("    def pack(self) -> bytes:")
     w('        """The payload bytes; FieldRangeError if a value does not fit its type."""')
-    w("        values = tuple(getattr(self, f.name) for f in self.FIELDS)")
-    w("        for spec, rng, value in zip(self.FIELDS, self._RANGES, values):")
+    w("        values = []")
+    w("        for spec, rng, value in zip(self.FIELDS, self._RANGES, (getattr(self, f.name) for f in self.FIELDS)):")
     w("            if rng is None:")
-    w("                if not isinstance(value, (int, float)):")
+    w("                if isinstance(value, bool) or not isinstance(value, (int, float)):")
     w('                    raise FieldRangeError(f"{self.NAME}.{spec.name}: expected a number, got {value!r}")')
+    w('            elif rng[0] == "bytes":')
+    w("                if not isinstance(value, (bytes, bytearray)) or len(value) != rng[1]:")
+    w('                    raise FieldRangeError(f"{self.NAME}.{spec.name}: expected {rng[1]} bytes, got {value!r}")')
+    w('            elif rng[0] == "str":')
+    w('                encoded = value.encode("utf-8") if isinstance(value, str) else None')
+    w("                if encoded is None or len(encoded) >= rng[1] or 0 in encoded:")
+    w("                    raise FieldRangeError(f\"{self.NAME}.{spec.name}: expected text of at most {rng[1] - 1} UTF-8 \"")
+    w('                                          f"bytes without NUL, got {value!r}")')
+    w("                value = encoded")
     w("            elif isinstance(value, bool) or not isinstance(value, int) or not rng[0] <= value <= rng[1]:")
     w("                raise FieldRangeError(")
     w('                    f"{self.NAME}.{spec.name}: expected an integer in [{rng[0]}, {rng[1]}] ({spec.type}), got {value!r}"')
     w("                )")
+    w("            values.append(value)")
     w("        return self._STRUCT.pack(*values)")
     w("")
     w("    @classmethod")
@@ -708,11 +848,13 @@ def gen_python(spec: Spec) -> str:
     w("        if len(payload) != cls.PAYLOAD_LEN:")
     w("            raise FrameError(NackReason.BAD_LENGTH, cls.MSG_ID, None,")
     w('                             f"{cls.NAME}: expected {cls.PAYLOAD_LEN} payload bytes, got {len(payload)}")')
-    w("        return cls(*cls._STRUCT.unpack(payload))")
+    w("        values = [v.split(b\"\\0\", 1)[0].decode(\"utf-8\", \"replace\") if rng is not None and rng[0] == \"str\" else v")
+    w("                  for v, rng in zip(cls._STRUCT.unpack(payload), cls._RANGES)]")
+    w("        return cls(*values)")
     w("")
     w("")
     for m in spec.messages:
-        fmt = "<" + "".join(TYPES[f.type][1] for f in m.fields)
+        fmt = "<" + "".join(f.struct_fmt for f in m.fields)
         w("@dataclass(frozen=True)")
         w(f"class {m.py_name}(Message):")
         w(f'    """{m.name} (id {m.id}, {m.kind}): {m.description}')
@@ -731,8 +873,8 @@ def gen_python(spec: Spec) -> str:
         w(f"    CRC_EXTRA: ClassVar[int] = 0x{m.crc_extra:04X}")
         w(f"    PAYLOAD_LEN: ClassVar[int] = {m.payload_len}")
         w(f'    _STRUCT: ClassVar[struct.Struct] = struct.Struct("{fmt}")')
-        ranges = ", ".join("None" if f.type == "float" else f"({TYPES[f.type][3]}, {TYPES[f.type][4]})" for f in m.fields)
-        w(f"    _RANGES: ClassVar[tuple[tuple[int, int] | None, ...]] = ({ranges}{',' if len(m.fields) == 1 else ''})")
+        ranges = ", ".join(f.py_range for f in m.fields)
+        w(f"    _RANGES: ClassVar[tuple[tuple | None, ...]] = ({ranges}{',' if len(m.fields) == 1 else ''})")
         specs = "".join(
             f"\n        FieldSpec({f.name!r}, {f.type!r}, {f.units!r}, {f.enum!r}, {f.description!r}),"
             for f in m.fields
@@ -741,8 +883,7 @@ def gen_python(spec: Spec) -> str:
         if m.fields:
             w("")
             for f in m.fields:
-                py_t = "float" if f.type == "float" else "int"
-                w(f"    {f.name}: {py_t}")
+                w(f"    {f.name}: {f.py_type}")
         w("")
         w("")
     w("MESSAGES: dict[int, type[Message]] = {")
@@ -763,10 +904,22 @@ def gen_python(spec: Spec) -> str:
     w("")
     w("@dataclass(frozen=True)")
     w("class Frame:")
+    w('    """A decoded frame. For a signed frame (flags & FLAG_SIGNED) session_id, counter and tag are set and')
+    w('    signed_bytes is what the tag covers; decode_frame checks structure and checksum, tag_valid the tag."""')
+    w("")
     w("    msg_id: int")
     w("    seq: int")
     w("    flags: int")
     w("    payload: bytes")
+    w("    checksum: int = 0")
+    w("    session_id: int | None = None")
+    w("    counter: int | None = None")
+    w("    tag: bytes | None = None")
+    w('    signed_bytes: bytes = b""')
+    w("")
+    w("    @property")
+    w("    def signed(self) -> bool:")
+    w("        return bool(self.flags & FLAG_SIGNED)")
     w("")
     w("")
     w("def checksum(body_without_magic: bytes, crc_extra: int) -> int:")
@@ -774,13 +927,35 @@ def gen_python(spec: Spec) -> str:
     w('    return binascii.crc_hqx(crc_extra.to_bytes(2, "little"), binascii.crc_hqx(body_without_magic, 0xFFFF))')
     w("")
     w("")
-    w("def encode_frame(message: Message, seq: int) -> bytes:")
-    w('    """Frame a message with sequence number seq (0..65535)."""')
+    w("def siphash24(key: bytes, data: bytes) -> bytes:")
+    w('    """SipHash-2-4 of data under a 16-byte key: the 8-byte tag, little-endian (the siphash24 package)."""')
+    w("    return _siphash.siphash24(data, key=key).digest()")
+    w("")
+    w("")
+    w("def encode_frame(message: Message, seq: int, *, key: bytes | None = None, session_id: int = 0,")
+    w("                 counter: int = 0) -> bytes:")
+    w('    """Frame a message with sequence number seq (0..65535); signed with key (16 bytes) when given."""')
     w("    if not isinstance(seq, int) or not 0 <= seq <= 0xFFFF:")
     w('        raise FieldRangeError(f"seq: expected an integer in [0, 65535], got {seq!r}")')
     w("    payload = message.pack()")
-    w('    body = struct.pack("<BBBBHB", MAGIC, PROTOCOL_VERSION, 0, message.MSG_ID, seq, len(payload)) + payload')
-    w('    return body + checksum(body[1:], message.CRC_EXTRA).to_bytes(2, "little")')
+    w("    flags = 0 if key is None else FLAG_SIGNED")
+    w('    body = struct.pack("<BBBBHB", MAGIC, PROTOCOL_VERSION, flags, message.MSG_ID, seq, len(payload)) + payload')
+    w('    frame = body + checksum(body[1:], message.CRC_EXTRA).to_bytes(2, "little")')
+    w("    if key is None:")
+    w("        return frame")
+    w("    if not isinstance(key, (bytes, bytearray)) or len(key) != KEY_LEN:")
+    w('        raise FieldRangeError(f"key: expected {KEY_LEN} bytes, got {type(key).__name__} of length {len(key) if hasattr(key, \'__len__\') else \'?\'}")')
+    w("    if not isinstance(session_id, int) or not 0 <= session_id <= 0xFFFFFFFF:")
+    w('        raise FieldRangeError(f"session_id: expected an integer in [0, 2**32 - 1], got {session_id!r}")')
+    w("    if not isinstance(counter, int) or not 0 <= counter <= 0xFFFFFFFFFFFFFFFF:")
+    w('        raise FieldRangeError(f"counter: expected an integer in [0, 2**64 - 1], got {counter!r}")')
+    w('    frame += struct.pack("<IQ", session_id, counter)')
+    w("    return frame + siphash24(bytes(key), frame)")
+    w("")
+    w("")
+    w("def tag_valid(frame: Frame, key: bytes) -> bool:")
+    w('    """True if a signed frame\'s tag is right for key (constant-time comparison)."""')
+    w("    return frame.signed and frame.tag is not None and hmac.compare_digest(siphash24(bytes(key), frame.signed_bytes), frame.tag)")
     w("")
     w("")
     w("def decode_frame(data: bytes) -> Frame:")
@@ -793,11 +968,12 @@ def gen_python(spec: Spec) -> str:
     w('    _, version, flags, msg_id, seq, payload_len = struct.unpack_from("<BBBBHB", data)')
     w("    if version != PROTOCOL_VERSION:")
     w('        raise FrameError(NackReason.BAD_VERSION, msg_id, seq, f"version {version}, this side speaks {PROTOCOL_VERSION}")')
-    w("    if flags != 0:")
+    w("    if flags & ~FLAG_SIGNED:")
     w('        raise FrameError(NackReason.UNSUPPORTED_FLAGS, msg_id, seq, f"flags 0x{flags:02X} not supported by version {PROTOCOL_VERSION}")')
     w("    if payload_len > MAX_PAYLOAD_LEN:")
     w('        raise FrameError(NackReason.OVERSIZE, msg_id, seq, f"payload_len {payload_len} > {MAX_PAYLOAD_LEN}")')
-    w("    frame_len = HEADER_LEN + payload_len + CHECKSUM_LEN")
+    w("    signature_len = SIGNATURE_LEN if flags & FLAG_SIGNED else 0")
+    w("    frame_len = HEADER_LEN + payload_len + CHECKSUM_LEN + signature_len")
     w("    if len(data) < frame_len:")
     w('        raise FrameError(NackReason.TRUNCATED, msg_id, seq, f"{len(data)} bytes, the frame declares {frame_len}")')
     w("    if len(data) > frame_len:")
@@ -806,11 +982,17 @@ def gen_python(spec: Spec) -> str:
     w("    if cls is None:")
     w('        raise FrameError(NackReason.UNKNOWN_MESSAGE, msg_id, seq, f"message id {msg_id} not in schema 0x{SCHEMA_HASH:04X}")')
     w("    body_len = HEADER_LEN + payload_len")
-    w('    if checksum(data[1:body_len], cls.CRC_EXTRA) != int.from_bytes(data[body_len:frame_len], "little"):')
+    w('    crc = int.from_bytes(data[body_len:body_len + CHECKSUM_LEN], "little")')
+    w("    if checksum(data[1:body_len], cls.CRC_EXTRA) != crc:")
     w('        raise FrameError(NackReason.BAD_CHECKSUM, msg_id, seq, f"checksum mismatch for {cls.NAME}")')
     w("    if payload_len != cls.PAYLOAD_LEN:")
     w('        raise FrameError(NackReason.BAD_LENGTH, msg_id, seq, f"{cls.NAME} has {cls.PAYLOAD_LEN} payload bytes, frame has {payload_len}")')
-    w("    return Frame(msg_id, seq, flags, data[HEADER_LEN:body_len])")
+    w("    payload = data[HEADER_LEN:body_len]")
+    w("    if not signature_len:")
+    w("        return Frame(msg_id, seq, flags, payload, crc)")
+    w("    sig = body_len + CHECKSUM_LEN")
+    w('    session_id, counter = struct.unpack_from("<IQ", data, sig)')
+    w("    return Frame(msg_id, seq, flags, payload, crc, session_id, counter, data[sig + 12:frame_len], data[:sig + 12])")
     w("")
     w("")
     w("def decode_message(data: bytes) -> tuple[Frame, Message]:")
@@ -858,12 +1040,15 @@ def gen_doc(spec: Spec) -> str:
     w("|---|---|---|")
     w("| 0 | 1 | magic |")
     w("| 1 | 1 | version |")
-    w("| 2 | 1 | flags (0 in v1) |")
+    w("| 2 | 1 | flags (bit 0: signed; other bits must be 0) |")
     w("| 3 | 1 | msg_id |")
     w("| 4 | 2 | seq (u16, per sender) |")
     w("| 6 | 1 | payload_len |")
     w("| 7 | payload_len | payload (fields in the order below, packed, little-endian) |")
     w("| 7+payload_len | 2 | checksum |")
+    w("| 9+payload_len | 4 | session_id (signed frames only: flags bit 0) |")
+    w("| 13+payload_len | 8 | counter (signed frames only) |")
+    w("| 21+payload_len | 8 | tag: SipHash-2-4 over bytes 0..20+payload_len (signed frames only) |")
     w("")
     w("Decoding order (C and Python alike): length < 7 TRUNCATED; magic BAD_MAGIC; version BAD_VERSION; flags "
       "UNSUPPORTED_FLAGS; payload_len > max OVERSIZE; too few bytes TRUNCATED; trailing bytes BAD_LENGTH; unknown id "
@@ -929,7 +1114,7 @@ def vector_outputs(spec: Spec) -> dict[Path, str]:
         raise SpecError(f"{VECTORS_PATH.relative_to(ROOT)} was made for schema 0x{vectors.get('schema_hash', 0):04X}, "
                         f"the spec is now 0x{spec.schema_hash:04X}: if the change is on purpose, run "
                         "`uv run python protocol/make_vectors.py` and generate again")
-    return {OUT_C_VECTORS: gen_c_vectors(spec, vectors["vectors"])}
+    return {OUT_C_VECTORS: gen_c_vectors(spec, vectors["vectors"], vectors["test_key_hex"])}
 
 
 def _write(outputs: dict[Path, str]) -> None:

@@ -488,7 +488,7 @@ class CoreHarness:
 
 # ---- Helpers for raw (possibly malformed) frames -------------------------------------------------------
 
-def raw_frame(msg_id: int, seq: int, payload: bytes, *, crc_extra: int | None = None, version: int = 1,
+def raw_frame(msg_id: int, seq: int, payload: bytes, *, crc_extra: int | None = None, version: int = proto.PROTOCOL_VERSION,
               flags: int = 0, magic: int = proto.MAGIC) -> bytes:
     """A frame built byte by byte; the checksum uses crc_extra (default: the message's own, 0 if unknown)."""
     if crc_extra is None:

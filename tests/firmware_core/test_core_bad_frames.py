@@ -31,8 +31,8 @@ CASES = [
     ("one_byte", b"\xb7", NackReason.TRUNCATED, UNREAD),
     ("payload_cut_short", GOOD[:-1], NackReason.TRUNCATED, (SPEED_ID, SEQ)),
     ("bad_magic", _patched(GOOD, 0, 0x7B), NackReason.BAD_MAGIC, UNREAD),
-    ("bad_version", _patched(GOOD, 1, 2), NackReason.BAD_VERSION, (SPEED_ID, SEQ)),
-    ("flags_set", _patched(GOOD, 2, 0x01), NackReason.UNSUPPORTED_FLAGS, (SPEED_ID, SEQ)),
+    ("bad_version", _patched(GOOD, 1, proto.PROTOCOL_VERSION + 1), NackReason.BAD_VERSION, (SPEED_ID, SEQ)),
+    ("flags_set", _patched(GOOD, 2, 0x02), NackReason.UNSUPPORTED_FLAGS, (SPEED_ID, SEQ)),
     ("declared_payload_over_max", _patched(GOOD, 6, proto.MAX_PAYLOAD_LEN + 1), NackReason.OVERSIZE, (SPEED_ID, SEQ)),
     ("trailing_byte", GOOD + b"\x00", NackReason.BAD_LENGTH, (SPEED_ID, SEQ)),
     ("payload_len_not_the_messages", raw_frame(SPEED_ID, SEQ, b"\x70\x17\x00\x00\x00"), NackReason.BAD_LENGTH,
@@ -50,13 +50,13 @@ CASES = [
 
 # Datagrams longer than the longest frame: the link truncates them to RW_MAX_FRAME_LEN + 1 bytes and
 # reports cap + 1; the core refuses them as the decoder refuses the whole datagram (rw_hal_link.h).
-_LONG_HEADER = bytes([proto.MAGIC, 1, 0, SPEED_ID]) + SEQ.to_bytes(2, "little")
+_LONG_HEADER = bytes([proto.MAGIC, proto.PROTOCOL_VERSION, 0, SPEED_ID]) + SEQ.to_bytes(2, "little")
 LONG_CASES = [
     ("max_frame_plus_one_trailing", GOOD + bytes(proto.MAX_FRAME_LEN + 1 - len(GOOD)), NackReason.BAD_LENGTH,
      (SPEED_ID, SEQ)),
     ("two_hundred_bytes_trailing", GOOD + bytes(200 - len(GOOD)), NackReason.BAD_LENGTH, (SPEED_ID, SEQ)),
     ("two_hundred_bytes_declared", _LONG_HEADER + bytes([191]) + bytes(193), NackReason.OVERSIZE, (SPEED_ID, SEQ)),
-    ("max_plus_one_declared", _LONG_HEADER + bytes([proto.MAX_PAYLOAD_LEN + 1]) + bytes(proto.MAX_PAYLOAD_LEN + 3),
+    ("max_plus_one_declared", _LONG_HEADER + bytes([proto.MAX_PAYLOAD_LEN + 1]) + bytes(proto.MAX_FRAME_LEN),
      NackReason.OVERSIZE, (SPEED_ID, SEQ)),
     ("long_garbage", bytes(range(100)), NackReason.BAD_MAGIC, UNREAD),
 ]

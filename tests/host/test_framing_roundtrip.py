@@ -15,7 +15,14 @@ def _example(cls: type[gen.Message]) -> gen.Message:
     """An instance with every field at a distinct, non-trivial value (floats exact in float32)."""
     values = []
     for i, (spec, rng) in enumerate(zip(cls.FIELDS, cls._RANGES)):
-        values.append(1.5 + i if rng is None else min(rng[1], max(rng[0], 0xA5A5 + 37 * i)))
+        if rng is None:
+            values.append(1.5 + i)
+        elif rng[0] == "bytes":
+            values.append(bytes((0xA5 + 37 * i + k) & 0xFF for k in range(rng[1])))
+        elif rng[0] == "str":
+            values.append("ok-" * min(5, (rng[1] - 1) // 3))
+        else:
+            values.append(min(rng[1], max(rng[0], 0xA5A5 + 37 * i)))
     return cls(*values)
 
 

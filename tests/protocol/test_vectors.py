@@ -15,7 +15,9 @@ from hypothesis import strategies as st
 from robowrangler.protocol import generated as gen
 
 ROOT = Path(__file__).resolve().parents[2]
-VECTORS = json.loads((ROOT / "protocol" / "vectors" / "vectors.json").read_text())["vectors"]
+_DOC = json.loads((ROOT / "protocol" / "vectors" / "vectors.json").read_text())
+VECTORS = _DOC["vectors"]
+TEST_KEY = bytes.fromhex(_DOC["test_key_hex"])
 
 
 @pytest.mark.parametrize("vector", VECTORS, ids=[v["name"] for v in VECTORS])
@@ -27,8 +29,16 @@ def test_python_codec_matches_golden_vector(vector: dict) -> None:
         assert frame.seq == vector["seq"]
         for name, value in vector["fields"].items():
             got = getattr(msg, name)
+            got = got.hex() if isinstance(got, bytes) else got
             assert (math.isclose(got, value, rel_tol=0, abs_tol=0) if isinstance(value, float) else got == value), name
-        assert gen.encode_frame(msg, frame.seq) == data
+        if "tag_valid" not in vector:
+            assert not frame.signed and gen.encode_frame(msg, frame.seq) == data
+        else:
+            assert frame.signed and (frame.session_id, frame.counter) == (vector["session_id"], vector["counter"])
+            assert gen.tag_valid(frame, TEST_KEY) == vector["tag_valid"]
+            if vector["tag_valid"]:
+                assert gen.encode_frame(msg, frame.seq, key=TEST_KEY, session_id=frame.session_id,
+                                        counter=frame.counter) == data
     else:
         with pytest.raises(gen.FrameError) as info:
             gen.decode_frame(data)
@@ -109,3 +119,27 @@ def test_generator_rejects_a_bad_spec_with_a_precise_message(tmp_path: Path, edi
     assert bad.read_text() != spec_text, "the edit must apply"
     with pytest.raises(generate.SpecError, match=message):
         generate.load_spec(bad)
+
+
+def test_siphash_matches_the_reference_vectors() -> None:
+    key = bytes(range(16))
+    assert gen.siphash24(key, b"") == (0x726FDB47DD0E0E31).to_bytes(8, "little")
+    assert gen.siphash24(key, bytes(range(15))) == (0xA129CA6149BE45E5).to_bytes(8, "little")
+
+
+def test_signing_refuses_a_bad_key_session_or_counter() -> None:
+    with pytest.raises(gen.FieldRangeError, match="key: expected 16 bytes"):
+        gen.encode_frame(gen.Arm(), 1, key=b"short")
+    with pytest.raises(gen.FieldRangeError, match="session_id"):
+        gen.encode_frame(gen.Arm(), 1, key=TEST_KEY, session_id=-1)
+    with pytest.raises(gen.FieldRangeError, match="counter"):
+        gen.encode_frame(gen.Arm(), 1, key=TEST_KEY, counter=2**64)
+
+
+def test_text_fields_are_bounded_and_round_trip() -> None:
+    frame = gen.encode_frame(gen.ProvisionSetWifiSsid("réseau"), 3)
+    assert gen.decode_message(frame)[1].ssid == "réseau"
+    with pytest.raises(gen.FieldRangeError, match="at most 32 UTF-8 bytes"):
+        gen.encode_frame(gen.ProvisionSetWifiSsid("x" * 33), 3)
+    with pytest.raises(gen.FieldRangeError, match="16 bytes"):
+        gen.encode_frame(gen.ProvisionSetKey(b"\x00" * 15), 3)

@@ -3,6 +3,8 @@
 
 #include <string.h>
 
+#include "rw_siphash.h"
+
 static void put_u16(uint8_t *p, uint16_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
 static void put_u32(uint8_t *p, uint32_t v) { put_u16(p, (uint16_t)v); put_u16(p + 2, (uint16_t)(v >> 16)); }
 static void put_u64(uint8_t *p, uint64_t v) { put_u32(p, (uint32_t)v); put_u32(p + 4, (uint32_t)(v >> 32)); }
@@ -58,9 +60,11 @@ static const rw_msg_info msg_infos[] = {
     { 0u, RW_MSG_KIND_HEARTBEAT, 4u, 0xAEABu, "HEARTBEAT" },
     { 1u, RW_MSG_KIND_REPLY, 4u, 0x2620u, "ACK" },
     { 2u, RW_MSG_KIND_REPLY, 9u, 0x9533u, "NACK" },
-    { 3u, RW_MSG_KIND_TELEMETRY, 46u, 0xF8B0u, "TELEMETRY" },
+    { 3u, RW_MSG_KIND_TELEMETRY, 50u, 0x343Au, "TELEMETRY" },
     { 4u, RW_MSG_KIND_EVENT, 13u, 0x69CAu, "EVENT" },
     { 5u, RW_MSG_KIND_REPLY, 6u, 0xDBDCu, "PARAM_VALUE" },
+    { 6u, RW_MSG_KIND_REPLY, 11u, 0xC5E6u, "SESSION_INFO" },
+    { 7u, RW_MSG_KIND_REPLY, 46u, 0x1E2Cu, "PROVISION_STATUS" },
     { 10u, RW_MSG_KIND_COMMAND, 0u, 0xF3B4u, "ARM" },
     { 11u, RW_MSG_KIND_COMMAND, 0u, 0x4382u, "DISARM" },
     { 12u, RW_MSG_KIND_COMMAND, 4u, 0x10BAu, "SET_ROPE_SPEED" },
@@ -74,6 +78,12 @@ static const rw_msg_info msg_infos[] = {
     { 20u, RW_MSG_KIND_COMMAND, 0u, 0xC89Bu, "GRASP" },
     { 21u, RW_MSG_KIND_COMMAND, 0u, 0x4B96u, "RELEASE" },
     { 22u, RW_MSG_KIND_COMMAND, 0u, 0x319Cu, "HOME" },
+    { 23u, RW_MSG_KIND_HELLO, 4u, 0x1C38u, "HELLO" },
+    { 30u, RW_MSG_KIND_PROVISION, 16u, 0xE014u, "PROVISION_SET_KEY" },
+    { 31u, RW_MSG_KIND_PROVISION, 33u, 0x5F44u, "PROVISION_SET_WIFI_SSID" },
+    { 32u, RW_MSG_KIND_PROVISION, 64u, 0xE069u, "PROVISION_SET_WIFI_PASSWORD" },
+    { 33u, RW_MSG_KIND_PROVISION, 0u, 0xAAD1u, "PROVISION_COMMIT" },
+    { 34u, RW_MSG_KIND_PROVISION, 0u, 0x9719u, "PROVISION_GET" },
     { 100u, RW_MSG_KIND_SIL, 26u, 0x06DBu, "SIL_SENSORS" },
     { 101u, RW_MSG_KIND_SIL, 8u, 0x01BFu, "SIL_ACTUATORS" },
 };
@@ -98,11 +108,8 @@ static uint16_t frame_checksum(const uint8_t *frame, size_t body_len, uint16_t c
 
 int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out)
 {
-    out->flags = 0u;
+    memset(out, 0, sizeof *out);
     out->msg_id = (uint8_t)RW_MSG_ID_UNREADABLE;
-    out->seq = 0u;
-    out->payload_len = 0u;
-    out->payload = NULL;
     if (buf == NULL || len < RW_FRAME_HEADER_LEN) {
         return RW_NACK_REASON_TRUNCATED;
     }
@@ -116,13 +123,14 @@ int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out)
     if (buf[1] != RW_PROTOCOL_VERSION) {
         return RW_NACK_REASON_BAD_VERSION;
     }
-    if (out->flags != 0u) {
+    if ((out->flags & (uint8_t)~RW_FRAME_FLAG_SIGNED) != 0u) {
         return RW_NACK_REASON_UNSUPPORTED_FLAGS;
     }
+    size_t signature_len = (out->flags & RW_FRAME_FLAG_SIGNED) != 0u ? RW_SIGNATURE_LEN : 0u;
     if (out->payload_len > RW_MAX_PAYLOAD_LEN) {
         return RW_NACK_REASON_OVERSIZE;
     }
-    size_t frame_len = RW_FRAME_HEADER_LEN + (size_t)out->payload_len + RW_FRAME_CHECKSUM_LEN;
+    size_t frame_len = RW_FRAME_HEADER_LEN + (size_t)out->payload_len + RW_FRAME_CHECKSUM_LEN + signature_len;
     if (len < frame_len) {
         return RW_NACK_REASON_TRUNCATED;
     }
@@ -141,7 +149,47 @@ int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out)
         return RW_NACK_REASON_BAD_LENGTH;
     }
     out->payload = buf + RW_FRAME_HEADER_LEN;
+    out->bytes = buf;
+    out->checksum = get_u16(buf + body_len);
+    if (signature_len != 0u) {
+        const uint8_t *sig = buf + body_len + RW_FRAME_CHECKSUM_LEN;
+        out->session_id = get_u32(sig);
+        out->counter = get_u64(sig + 4);
+        out->tag = get_u64(sig + 12);
+        out->signed_len = body_len + RW_FRAME_CHECKSUM_LEN + 12u;
+    }
     return RW_DECODE_OK;
+}
+
+size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,
+                     const uint8_t key[RW_KEY_LEN])
+{
+    if (frame == NULL || len < RW_FRAME_HEADER_LEN + RW_FRAME_CHECKSUM_LEN || frame[2] != 0u ||
+        len != RW_FRAME_HEADER_LEN + (size_t)frame[6] + RW_FRAME_CHECKSUM_LEN || cap < len + RW_SIGNATURE_LEN) {
+        return 0u;
+    }
+    const rw_msg_info *info = rw_msg_info_find(frame[3]);
+    if (info == NULL) {
+        return 0u;
+    }
+    size_t body_len = len - RW_FRAME_CHECKSUM_LEN;
+    frame[2] = RW_FRAME_FLAG_SIGNED;
+    put_u16(frame + body_len, frame_checksum(frame, body_len, info->crc_extra));
+    put_u32(frame + len, session_id);
+    put_u64(frame + len + 4u, counter);
+    put_u64(frame + len + 12u, rw_siphash24(key, frame, len + 12u));
+    return len + RW_SIGNATURE_LEN;
+}
+
+int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN])
+{
+    if ((frame->flags & RW_FRAME_FLAG_SIGNED) == 0u || frame->bytes == NULL) {
+        return 0;
+    }
+    /* constant time: every bit of the difference is folded in, no early exit */
+    uint64_t diff = rw_siphash24(key, frame->bytes, frame->signed_len) ^ frame->tag;
+    uint32_t folded = (uint32_t)diff | (uint32_t)(diff >> 32);
+    return (int)(1u & ((folded - 1u) >> 31) & ~(folded >> 31));
 }
 
 size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uint8_t payload_len,
@@ -252,6 +300,8 @@ void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload)
     put_u16(payload + 41, (uint16_t)msg->spindle_load_permille);
     payload[43] = (uint8_t)msg->spindle_flags;
     put_u16(payload + 44, (uint16_t)msg->spindle_rejected);
+    put_u16(payload + 46, (uint16_t)msg->rx_auth_failed);
+    put_u16(payload + 48, (uint16_t)msg->rx_replayed);
 }
 
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
@@ -277,6 +327,8 @@ void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
     msg->spindle_load_permille = (int16_t)get_u16(payload + 41);
     msg->spindle_flags = (uint8_t)payload[43];
     msg->spindle_rejected = (uint16_t)get_u16(payload + 44);
+    msg->rx_auth_failed = (uint16_t)get_u16(payload + 46);
+    msg->rx_replayed = (uint16_t)get_u16(payload + 48);
 }
 
 size_t rw_msg_telemetry_encode(const rw_msg_telemetry *msg, uint16_t seq, uint8_t *out, size_t out_cap)
@@ -332,6 +384,59 @@ size_t rw_msg_param_value_encode(const rw_msg_param_value *msg, uint16_t seq, ui
     uint8_t payload[RW_MSG_PARAM_VALUE_LEN + 1u] = { 0u };
     rw_msg_param_value_pack(msg, payload);
     return rw_frame_encode(RW_MSG_ID_PARAM_VALUE, seq, payload, RW_MSG_PARAM_VALUE_LEN, out, out_cap);
+}
+
+void rw_msg_session_info_pack(const rw_msg_session_info *msg, uint8_t *payload)
+{
+    put_u32(payload + 0, (uint32_t)msg->host_nonce);
+    put_u32(payload + 4, (uint32_t)msg->session_id);
+    payload[8] = (uint8_t)msg->key_set;
+    put_u16(payload + 9, (uint16_t)msg->schema_hash);
+}
+
+void rw_msg_session_info_unpack(rw_msg_session_info *msg, const uint8_t *payload)
+{
+    msg->host_nonce = (uint32_t)get_u32(payload + 0);
+    msg->session_id = (uint32_t)get_u32(payload + 4);
+    msg->key_set = (uint8_t)payload[8];
+    msg->schema_hash = (uint16_t)get_u16(payload + 9);
+}
+
+size_t rw_msg_session_info_encode(const rw_msg_session_info *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_SESSION_INFO_LEN + 1u] = { 0u };
+    rw_msg_session_info_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_SESSION_INFO, seq, payload, RW_MSG_SESSION_INFO_LEN, out, out_cap);
+}
+
+void rw_msg_provision_status_pack(const rw_msg_provision_status *msg, uint8_t *payload)
+{
+    payload[0] = (uint8_t)msg->key_set;
+    payload[1] = (uint8_t)msg->password_set;
+    memcpy(payload + 2, msg->wifi_ssid, 33u);
+    put_u32(payload + 35, (uint32_t)msg->boot_counter);
+    put_u32(payload + 39, (uint32_t)msg->commits);
+    put_u16(payload + 43, (uint16_t)msg->config_version);
+    payload[45] = (uint8_t)msg->dirty;
+}
+
+void rw_msg_provision_status_unpack(rw_msg_provision_status *msg, const uint8_t *payload)
+{
+    msg->key_set = (uint8_t)payload[0];
+    msg->password_set = (uint8_t)payload[1];
+    memcpy(msg->wifi_ssid, payload + 2, 33u);
+    msg->wifi_ssid[32] = '\0'; /* always terminated */
+    msg->boot_counter = (uint32_t)get_u32(payload + 35);
+    msg->commits = (uint32_t)get_u32(payload + 39);
+    msg->config_version = (uint16_t)get_u16(payload + 43);
+    msg->dirty = (uint8_t)payload[45];
+}
+
+size_t rw_msg_provision_status_encode(const rw_msg_provision_status *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_PROVISION_STATUS_LEN + 1u] = { 0u };
+    rw_msg_provision_status_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_PROVISION_STATUS, seq, payload, RW_MSG_PROVISION_STATUS_LEN, out, out_cap);
 }
 
 void rw_msg_arm_pack(const rw_msg_arm *msg, uint8_t *payload)
@@ -573,6 +678,114 @@ size_t rw_msg_home_encode(const rw_msg_home *msg, uint16_t seq, uint8_t *out, si
     uint8_t payload[RW_MSG_HOME_LEN + 1u] = { 0u };
     rw_msg_home_pack(msg, payload);
     return rw_frame_encode(RW_MSG_ID_HOME, seq, payload, RW_MSG_HOME_LEN, out, out_cap);
+}
+
+void rw_msg_hello_pack(const rw_msg_hello *msg, uint8_t *payload)
+{
+    put_u32(payload + 0, (uint32_t)msg->host_nonce);
+}
+
+void rw_msg_hello_unpack(rw_msg_hello *msg, const uint8_t *payload)
+{
+    msg->host_nonce = (uint32_t)get_u32(payload + 0);
+}
+
+size_t rw_msg_hello_encode(const rw_msg_hello *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_HELLO_LEN + 1u] = { 0u };
+    rw_msg_hello_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_HELLO, seq, payload, RW_MSG_HELLO_LEN, out, out_cap);
+}
+
+void rw_msg_provision_set_key_pack(const rw_msg_provision_set_key *msg, uint8_t *payload)
+{
+    memcpy(payload + 0, msg->key, 16u);
+}
+
+void rw_msg_provision_set_key_unpack(rw_msg_provision_set_key *msg, const uint8_t *payload)
+{
+    memcpy(msg->key, payload + 0, 16u);
+}
+
+size_t rw_msg_provision_set_key_encode(const rw_msg_provision_set_key *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_PROVISION_SET_KEY_LEN + 1u] = { 0u };
+    rw_msg_provision_set_key_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_PROVISION_SET_KEY, seq, payload, RW_MSG_PROVISION_SET_KEY_LEN, out, out_cap);
+}
+
+void rw_msg_provision_set_wifi_ssid_pack(const rw_msg_provision_set_wifi_ssid *msg, uint8_t *payload)
+{
+    memcpy(payload + 0, msg->ssid, 33u);
+}
+
+void rw_msg_provision_set_wifi_ssid_unpack(rw_msg_provision_set_wifi_ssid *msg, const uint8_t *payload)
+{
+    memcpy(msg->ssid, payload + 0, 33u);
+    msg->ssid[32] = '\0'; /* always terminated */
+}
+
+size_t rw_msg_provision_set_wifi_ssid_encode(const rw_msg_provision_set_wifi_ssid *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_PROVISION_SET_WIFI_SSID_LEN + 1u] = { 0u };
+    rw_msg_provision_set_wifi_ssid_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_PROVISION_SET_WIFI_SSID, seq, payload, RW_MSG_PROVISION_SET_WIFI_SSID_LEN, out, out_cap);
+}
+
+void rw_msg_provision_set_wifi_password_pack(const rw_msg_provision_set_wifi_password *msg, uint8_t *payload)
+{
+    memcpy(payload + 0, msg->password, 64u);
+}
+
+void rw_msg_provision_set_wifi_password_unpack(rw_msg_provision_set_wifi_password *msg, const uint8_t *payload)
+{
+    memcpy(msg->password, payload + 0, 64u);
+    msg->password[63] = '\0'; /* always terminated */
+}
+
+size_t rw_msg_provision_set_wifi_password_encode(const rw_msg_provision_set_wifi_password *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_PROVISION_SET_WIFI_PASSWORD_LEN + 1u] = { 0u };
+    rw_msg_provision_set_wifi_password_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_PROVISION_SET_WIFI_PASSWORD, seq, payload, RW_MSG_PROVISION_SET_WIFI_PASSWORD_LEN, out, out_cap);
+}
+
+void rw_msg_provision_commit_pack(const rw_msg_provision_commit *msg, uint8_t *payload)
+{
+    (void)msg;
+    (void)payload;
+}
+
+void rw_msg_provision_commit_unpack(rw_msg_provision_commit *msg, const uint8_t *payload)
+{
+    msg->unused_ = 0u;
+    (void)payload;
+}
+
+size_t rw_msg_provision_commit_encode(const rw_msg_provision_commit *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_PROVISION_COMMIT_LEN + 1u] = { 0u };
+    rw_msg_provision_commit_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_PROVISION_COMMIT, seq, payload, RW_MSG_PROVISION_COMMIT_LEN, out, out_cap);
+}
+
+void rw_msg_provision_get_pack(const rw_msg_provision_get *msg, uint8_t *payload)
+{
+    (void)msg;
+    (void)payload;
+}
+
+void rw_msg_provision_get_unpack(rw_msg_provision_get *msg, const uint8_t *payload)
+{
+    msg->unused_ = 0u;
+    (void)payload;
+}
+
+size_t rw_msg_provision_get_encode(const rw_msg_provision_get *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_PROVISION_GET_LEN + 1u] = { 0u };
+    rw_msg_provision_get_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_PROVISION_GET, seq, payload, RW_MSG_PROVISION_GET_LEN, out, out_cap);
 }
 
 void rw_msg_sil_sensors_pack(const rw_msg_sil_sensors *msg, uint8_t *payload)

@@ -9,13 +9,16 @@
 extern "C" {
 #endif
 
-#define RW_PROTOCOL_VERSION 1u
+#define RW_PROTOCOL_VERSION 2u
 #define RW_PROTOCOL_MAGIC 0xB7u
-#define RW_PROTOCOL_SCHEMA_HASH 0xDD3Au
+#define RW_PROTOCOL_SCHEMA_HASH 0x1B44u
 #define RW_FRAME_HEADER_LEN 7u
 #define RW_FRAME_CHECKSUM_LEN 2u
 #define RW_MAX_PAYLOAD_LEN 64u
-#define RW_MAX_FRAME_LEN 73u
+#define RW_FRAME_FLAG_SIGNED 0x01u /* a signature block follows the checksum */
+#define RW_SIGNATURE_LEN 20u /* session_id u32, counter u64, tag u64 (SipHash-2-4) */
+#define RW_KEY_LEN 16u
+#define RW_MAX_FRAME_LEN 93u
 #define RW_MSG_ID_UNREADABLE 255u
 
 /* Device state machine. */
@@ -52,8 +55,13 @@ typedef enum {
     RW_NACK_REASON_NOT_A_COMMAND = 15, /* A device-to-host message (ACK, TELEMETRY, ...) was sent to the device. */
     RW_NACK_REASON_NOT_HOMED = 16, /* The spindle has not been homed since boot: command HOME first. */
     RW_NACK_REASON_SPINDLE_UNAVAILABLE = 17, /* The spindle servo does not answer or is in fault; NACK.detail = fault bits. */
+    RW_NACK_REASON_NOT_ON_THIS_LINK = 18, /* PROVISION_* messages are taken on the USB serial link only. */
+    RW_NACK_REASON_UNSIGNED = 19, /* Never sent: an unsigned frame where a signed one is required is dropped and counted (rx_auth_failed). */
+    RW_NACK_REASON_AUTH_FAILED = 20, /* Never sent: a frame whose tag is wrong for the key is dropped and counted (rx_auth_failed). */
+    RW_NACK_REASON_REPLAYED = 21, /* Never sent: a frame from another session, or whose counter is not above the last accepted, is dropped and counted (rx_replayed). */
+    RW_NACK_REASON_NO_KEY = 22, /* The device has no key provisioned: it takes no command over WiFi until one is set over USB serial. */
 } rw_nack_reason;
-#define RW_NACK_REASON_COUNT 18u
+#define RW_NACK_REASON_COUNT 23u
 
 /* Event kinds (EVENT.event). */
 typedef enum {
@@ -111,6 +119,8 @@ typedef enum {
     RW_MSG_ID_TELEMETRY = 3,
     RW_MSG_ID_EVENT = 4,
     RW_MSG_ID_PARAM_VALUE = 5,
+    RW_MSG_ID_SESSION_INFO = 6,
+    RW_MSG_ID_PROVISION_STATUS = 7,
     RW_MSG_ID_ARM = 10,
     RW_MSG_ID_DISARM = 11,
     RW_MSG_ID_SET_ROPE_SPEED = 12,
@@ -124,6 +134,12 @@ typedef enum {
     RW_MSG_ID_GRASP = 20,
     RW_MSG_ID_RELEASE = 21,
     RW_MSG_ID_HOME = 22,
+    RW_MSG_ID_HELLO = 23,
+    RW_MSG_ID_PROVISION_SET_KEY = 30,
+    RW_MSG_ID_PROVISION_SET_WIFI_SSID = 31,
+    RW_MSG_ID_PROVISION_SET_WIFI_PASSWORD = 32,
+    RW_MSG_ID_PROVISION_COMMIT = 33,
+    RW_MSG_ID_PROVISION_GET = 34,
     RW_MSG_ID_SIL_SENSORS = 100,
     RW_MSG_ID_SIL_ACTUATORS = 101,
 } rw_msg_id;
@@ -135,6 +151,8 @@ typedef enum {
     RW_MSG_KIND_TELEMETRY = 3,
     RW_MSG_KIND_EVENT = 4,
     RW_MSG_KIND_SIL = 5,
+    RW_MSG_KIND_HELLO = 6,
+    RW_MSG_KIND_PROVISION = 7,
 } rw_msg_kind;
 
 /* HEARTBEAT (id 0, heartbeat): Host is alive. Any valid frame from the host also counts; a host sends at least this at 5-10 Hz. */
@@ -174,8 +192,8 @@ void rw_msg_nack_unpack(rw_msg_nack *msg, const uint8_t *payload);
 size_t rw_msg_nack_encode(const rw_msg_nack *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
 /* TELEMETRY (id 3, telemetry): Device state at telemetry_rate_hz, unicast to the host that last sent a valid frame. */
-#define RW_MSG_TELEMETRY_LEN 46u
-#define RW_MSG_TELEMETRY_CRC_EXTRA 0xF8B0u
+#define RW_MSG_TELEMETRY_LEN 50u
+#define RW_MSG_TELEMETRY_CRC_EXTRA 0x343Au
 typedef struct {
     uint32_t time_ms; /* [ms] Device time since boot. */
     uint8_t state; /* (rw_state) State machine state. */
@@ -198,6 +216,8 @@ typedef struct {
     int16_t spindle_load_permille; /* [permille] AX-12A present load, per mille of its maximum torque, + = resisting retraction (rope tension). */
     uint8_t spindle_flags; /* (rw_spindle_flag) Spindle status. */
     uint16_t spindle_rejected; /* Spindle position readings rejected as impossible jumps (wraps). */
+    uint16_t rx_auth_failed; /* Frames dropped for a missing or wrong signature (wraps). */
+    uint16_t rx_replayed; /* Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps). */
 } rw_msg_telemetry;
 void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload);
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload);
@@ -229,6 +249,35 @@ typedef struct {
 void rw_msg_param_value_pack(const rw_msg_param_value *msg, uint8_t *payload);
 void rw_msg_param_value_unpack(rw_msg_param_value *msg, const uint8_t *payload);
 size_t rw_msg_param_value_encode(const rw_msg_param_value *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the device's boot counter, kept in flash, so it grows with every boot and frames of an earlier boot never count again. */
+#define RW_MSG_SESSION_INFO_LEN 11u
+#define RW_MSG_SESSION_INFO_CRC_EXTRA 0xC5E6u
+typedef struct {
+    uint32_t host_nonce; /* Echo of HELLO.host_nonce (fresh answer, not a replay). */
+    uint32_t session_id; /* The device's current session (boot counter). */
+    uint8_t key_set; /* 1 when a key is provisioned; 0: the device takes no command over WiFi (provision over USB serial). */
+    uint16_t schema_hash; /* The device's protocol schema hash. */
+} rw_msg_session_info;
+void rw_msg_session_info_pack(const rw_msg_session_info *msg, uint8_t *payload);
+void rw_msg_session_info_unpack(rw_msg_session_info *msg, const uint8_t *payload);
+size_t rw_msg_session_info_encode(const rw_msg_session_info *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* PROVISION_STATUS (id 7, reply): Answer to PROVISION_GET (USB serial): what is provisioned. The key and the password are never sent back. */
+#define RW_MSG_PROVISION_STATUS_LEN 46u
+#define RW_MSG_PROVISION_STATUS_CRC_EXTRA 0x1E2Cu
+typedef struct {
+    uint8_t key_set; /* 1 when a link key is stored. */
+    uint8_t password_set; /* 1 when a WiFi password is stored. */
+    char wifi_ssid[33]; /* WiFi network name. */
+    uint32_t boot_counter; /* Boots since the configuration was first written (the session id). */
+    uint32_t commits; /* Configuration writes since first written (flash wear). */
+    uint16_t config_version; /* Layout version of the stored configuration. */
+    uint8_t dirty; /* 1 when something changed since the last PROVISION_COMMIT. */
+} rw_msg_provision_status;
+void rw_msg_provision_status_pack(const rw_msg_provision_status *msg, uint8_t *payload);
+void rw_msg_provision_status_unpack(rw_msg_provision_status *msg, const uint8_t *payload);
+size_t rw_msg_provision_status_encode(const rw_msg_provision_status *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
 /* ARM (id 10, command): DISARMED -> ARMED. Refused (NOT_READY) during the ESC arming hold after boot. */
 #define RW_MSG_ARM_LEN 0u
@@ -361,6 +410,66 @@ void rw_msg_home_pack(const rw_msg_home *msg, uint8_t *payload);
 void rw_msg_home_unpack(rw_msg_home *msg, const uint8_t *payload);
 size_t rw_msg_home_encode(const rw_msg_home *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
+/* HELLO (id 23, hello): Host asks for the session: answered by SESSION_INFO. Taken unsigned (it changes nothing), from any sender; it does not make the sender the telemetry peer. */
+#define RW_MSG_HELLO_LEN 4u
+#define RW_MSG_HELLO_CRC_EXTRA 0x1C38u
+typedef struct {
+    uint32_t host_nonce; /* Random number echoed in SESSION_INFO. */
+} rw_msg_hello;
+void rw_msg_hello_pack(const rw_msg_hello *msg, uint8_t *payload);
+void rw_msg_hello_unpack(rw_msg_hello *msg, const uint8_t *payload);
+size_t rw_msg_hello_encode(const rw_msg_hello *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* PROVISION_SET_KEY (id 30, provision): USB serial only: the 128-bit link key (SipHash-2-4). Never sent over WiFi, never printed, never recorded. Takes effect at PROVISION_COMMIT. */
+#define RW_MSG_PROVISION_SET_KEY_LEN 16u
+#define RW_MSG_PROVISION_SET_KEY_CRC_EXTRA 0xE014u
+typedef struct {
+    uint8_t key[16]; /* The key. */
+} rw_msg_provision_set_key;
+void rw_msg_provision_set_key_pack(const rw_msg_provision_set_key *msg, uint8_t *payload);
+void rw_msg_provision_set_key_unpack(rw_msg_provision_set_key *msg, const uint8_t *payload);
+size_t rw_msg_provision_set_key_encode(const rw_msg_provision_set_key *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* PROVISION_SET_WIFI_SSID (id 31, provision): USB serial only: the WiFi network name. */
+#define RW_MSG_PROVISION_SET_WIFI_SSID_LEN 33u
+#define RW_MSG_PROVISION_SET_WIFI_SSID_CRC_EXTRA 0x5F44u
+typedef struct {
+    char ssid[33]; /* Network name, at most 32 bytes of UTF-8. */
+} rw_msg_provision_set_wifi_ssid;
+void rw_msg_provision_set_wifi_ssid_pack(const rw_msg_provision_set_wifi_ssid *msg, uint8_t *payload);
+void rw_msg_provision_set_wifi_ssid_unpack(rw_msg_provision_set_wifi_ssid *msg, const uint8_t *payload);
+size_t rw_msg_provision_set_wifi_ssid_encode(const rw_msg_provision_set_wifi_ssid *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* PROVISION_SET_WIFI_PASSWORD (id 32, provision): USB serial only: the WiFi password (WPA2, 8-63 characters; empty for an open network). */
+#define RW_MSG_PROVISION_SET_WIFI_PASSWORD_LEN 64u
+#define RW_MSG_PROVISION_SET_WIFI_PASSWORD_CRC_EXTRA 0xE069u
+typedef struct {
+    char password[64]; /* Password, at most 63 bytes. */
+} rw_msg_provision_set_wifi_password;
+void rw_msg_provision_set_wifi_password_pack(const rw_msg_provision_set_wifi_password *msg, uint8_t *payload);
+void rw_msg_provision_set_wifi_password_unpack(rw_msg_provision_set_wifi_password *msg, const uint8_t *payload);
+size_t rw_msg_provision_set_wifi_password_encode(const rw_msg_provision_set_wifi_password *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters) to flash as one versioned record with a CRC. */
+#define RW_MSG_PROVISION_COMMIT_LEN 0u
+#define RW_MSG_PROVISION_COMMIT_CRC_EXTRA 0xAAD1u
+typedef struct {
+    uint8_t unused_; /* no fields */
+} rw_msg_provision_commit;
+void rw_msg_provision_commit_pack(const rw_msg_provision_commit *msg, uint8_t *payload);
+void rw_msg_provision_commit_unpack(rw_msg_provision_commit *msg, const uint8_t *payload);
+size_t rw_msg_provision_commit_encode(const rw_msg_provision_commit *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
+/* PROVISION_GET (id 34, provision): USB serial only: answered by ACK then PROVISION_STATUS. */
+#define RW_MSG_PROVISION_GET_LEN 0u
+#define RW_MSG_PROVISION_GET_CRC_EXTRA 0x9719u
+typedef struct {
+    uint8_t unused_; /* no fields */
+} rw_msg_provision_get;
+void rw_msg_provision_get_pack(const rw_msg_provision_get *msg, uint8_t *payload);
+void rw_msg_provision_get_unpack(rw_msg_provision_get *msg, const uint8_t *payload);
+size_t rw_msg_provision_get_encode(const rw_msg_provision_get *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
 /* SIL_SENSORS (id 100, sil): Plant -> SIL firmware, once per control tick: the plant's clock and the sensor values the board's HAL would read. */
 #define RW_MSG_SIL_SENSORS_LEN 26u
 #define RW_MSG_SIL_SENSORS_CRC_EXTRA 0x06DBu
@@ -401,13 +510,21 @@ typedef struct {
 } rw_msg_info;
 
 /* A decoded frame. msg_id and seq are valid once the header was read (else 255 and 0);
-   payload points into the caller's buffer. */
+   payload and bytes point into the caller's buffer. session_id, counter and tag are set for a signed
+   frame (flags & RW_FRAME_FLAG_SIGNED); rw_frame_decode checks the structure and the checksum only,
+   rw_frame_tag_valid checks the signature. */
 typedef struct {
     uint8_t flags;
     uint8_t msg_id;
     uint16_t seq;
     uint8_t payload_len;
     const uint8_t *payload;
+    const uint8_t *bytes;   /* the frame */
+    uint16_t checksum;
+    uint32_t session_id;
+    uint64_t counter;
+    uint64_t tag;
+    size_t signed_len;      /* bytes the tag covers: from magic to the end of counter */
 } rw_frame;
 
 /* CRC-16/CCITT-FALSE step: poly 0x1021, init 0xFFFF, no reflection. */
@@ -420,6 +537,13 @@ int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out);
    message's size or out_cap is too small. */
 size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uint8_t payload_len,
                        uint8_t *out, size_t out_cap);
+/* Sign an unsigned frame of len bytes in place: set the flag, recompute the checksum, append session_id,
+   counter and the SipHash-2-4 tag. Returns the new length, 0 if it does not fit in cap or is not an
+   unsigned frame. */
+size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,
+                     const uint8_t key[RW_KEY_LEN]);
+/* True if a decoded signed frame's tag is right for key (constant-time comparison). */
+int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN]);
 
 /* Parameters (SI units, float32 on the wire). */
 #define RW_PARAM_COUNT 33u

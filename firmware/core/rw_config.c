@@ -1,0 +1,40 @@
+#include "rw_config.h"
+
+#include <stddef.h>
+#include <string.h>
+
+uint32_t rw_crc32(const void *data, uint32_t len)
+{
+    const uint8_t *p = data;
+    uint32_t crc = 0xFFFFFFFFu;
+    for (uint32_t i = 0; i < len; ++i) {
+        crc ^= p[i];
+        for (int bit = 0; bit < 8; ++bit) {
+            crc = (crc & 1u) != 0u ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
+        }
+    }
+    return ~crc;
+}
+
+void rw_config_defaults(rw_config *c)
+{
+    memset(c, 0, sizeof *c);
+    c->magic = RW_CONFIG_MAGIC;
+    c->version = RW_CONFIG_VERSION;
+    c->size = (uint16_t)sizeof *c;
+    for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
+        c->params[i] = rw_param_table[i].default_value;
+    }
+    rw_config_seal(c);
+}
+
+void rw_config_seal(rw_config *c)
+{
+    c->crc32 = rw_crc32(c, (uint32_t)offsetof(rw_config, crc32));
+}
+
+bool rw_config_valid(const rw_config *c)
+{
+    return c->magic == RW_CONFIG_MAGIC && c->version == RW_CONFIG_VERSION && c->size == sizeof *c &&
+           c->crc32 == rw_crc32(c, (uint32_t)offsetof(rw_config, crc32));
+}
