@@ -208,22 +208,25 @@ def command_schema(spec: generate.Spec) -> tuple[dict, dict[str, list[dict]]]:
 def gap_schema() -> dict:
     nullable_int = {"type": ["integer", "null"], "minimum": 0, "maximum": 65535}
     props = {
-        "stream": {"const": "/device/telemetry", "description": "Channel whose frame sequence numbers have the gap."},
+        "stream": {"const": "device", "description": "Whose frame sequence numbers have the gap: 'device', the "
+                   "frames the device sent to this host. The device numbers TELEMETRY, EVENT, ACK, NACK and "
+                   "PARAM_VALUE from one counter, so every received frame counts, not only telemetry."},
         "from_seq": dict(SEQ_SCHEMA, description="First missing sequence number."),
         "to_seq": dict(nullable_int, description="Last missing sequence number (inclusive, may be < from_seq "
                        "across the uint16 wrap); null if the link was still silent when the recording ended."),
         "missing": {"type": ["integer", "null"], "minimum": 1, "maximum": 32767,
                     "description": "Number of missing frames, (to_seq - from_seq) mod 65536 + 1; null with to_seq."},
         "last_time_s": {"type": ["number", "null"], "minimum": 0,
-                        "description": "Device time of the last frame before the gap [s]; null if none."},
+                        "description": "Device time of the last TELEMETRY/EVENT before the gap [s]; null if none."},
         "resume_time_s": {"type": ["number", "null"], "minimum": 0,
-                          "description": "Device time of the first frame after the gap [s]; null if none came."},
+                          "description": "Device time of the frame after the gap [s]; null if none came or it "
+                                         "carries no time (ACK, NACK, PARAM_VALUE)."},
         "silent_s": {"type": "number", "minimum": 0,
                      "description": "Host time between the frames either side of the gap (or until the recording "
                                     "ended) [s]."},
     }
-    return _object("/link/gap", "A gap in the sequence numbers of received frames (frames lost on the link, or "
-                   "the link silent). log_time: when the gap was detected (the first frame after it, or the end "
+    return _object("/link/gap", "A gap in the sequence numbers of frames received from the device (frames lost "
+                   "on the link, the link silent, or frames the device sent to another host). log_time: when the gap was detected (the first frame after it, or the end "
                    "of the recording).", props, list(props))
 
 

@@ -17,7 +17,7 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param, sil
+from robowrangler.cli import monitor, motion, param, record, sil
 from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext, OutputClosed
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
@@ -30,6 +30,7 @@ COMMANDS: list[click.Command] = [
     monitor.status, monitor.watch,
     param.param,
     sil.sil_command, sil.demo_command,
+    record.record, record.inspect, record.replay,
 ]
 
 _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStatus) + "."

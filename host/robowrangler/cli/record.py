@@ -1,0 +1,196 @@
+"""Recording commands: record (a live link to an MCAP file), inspect (what a file holds), replay (plot it).
+
+The file format is protocol/recording/schema.md; the work is done by robowrangler.recorder.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import click
+
+from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.client import Client
+from robowrangler.errors import LinkTimeout, RoboWranglerError
+from robowrangler.recorder.link import LinkRecorder, RecordingTransport
+from robowrangler.recorder.plot import plot_recording
+from robowrangler.recorder.reader import read_recording
+from robowrangler.recorder.summary import format_summary, summarize
+from robowrangler.recorder.writer import RecordingWriter
+from robowrangler.transport import UdpUrl, open_transport, parse_url
+
+PROGRESS_PERIOD_S = 2.0  # a progress line on stderr this often (a live line on a terminal)
+TICK_S = 0.1
+LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+
+
+def _default_source(url: str) -> str:
+    parsed = parse_url(url)
+    return "sil" if isinstance(parsed, UdpUrl) and parsed.host in LOOPBACK_HOSTS else "board"
+
+
+def _json_option(f):
+    """A local --json (same as the global one), so that `wrangler inspect FILE --json` works too."""
+    def callback(click_ctx: click.Context, _param: click.Parameter, value: bool) -> bool:
+        if value:
+            click_ctx.find_object(CliContext).json_mode = True
+        return value
+    return click.option("--json", "json_local", is_flag=True, expose_value=False, callback=callback,
+                        help="Machine output on stdout (same as the global --json).")(f)
+
+
+class _Progress:
+    """Progress on stderr: a live line on a terminal, else a line every PROGRESS_PERIOD_S."""
+
+    def __init__(self, ctx: CliContext) -> None:
+        self.ctx = ctx
+        self.tty = bool(getattr(ctx.env.stderr, "isatty", lambda: False)())
+        self.last_s = -1e9
+        self.live = False
+
+    def show(self, text: str, now_s: float) -> None:
+        period_s = 0.25 if self.tty else PROGRESS_PERIOD_S
+        if now_s - self.last_s < period_s:
+            return
+        self.last_s = now_s
+        if self.tty:
+            self.ctx.env.stderr.write(f"\rwrangler: {text}\033[K")
+            self.ctx.env.stderr.flush()
+            self.live = True
+        else:
+            self.ctx.note(text)
+
+    def note(self, text: str) -> None:
+        self.end_line()
+        self.ctx.note(text)
+
+    def end_line(self) -> None:
+        if self.live:
+            self.ctx.env.stderr.write("\n")
+            self.ctx.env.stderr.flush()
+            self.live = False
+
+
+@click.command("record")
+@click.argument("out", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--duration", "duration_s", type=click.FloatRange(min=0.0, min_open=True), default=None,
+              metavar="SECONDS", help="Stop after this long (default: until Ctrl-C).")
+@click.option("--source", type=click.Choice(["board", "sil", "other"]), default=None,
+              help="What is recorded (meta source) [default: sil for a loopback UDP URL, else board].")
+@click.option("--seed", type=int, default=None, help="Seed of the SIL run, stored in the meta record.")
+@click.option("--description", default="", help="Free text stored in the meta record.")
+@click.option("--no-params", is_flag=True, help="Do not read the device parameters into /device/params.")
+@_json_option
+@pass_context
+def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | None, seed: int | None,
+           description: str, no_params: bool) -> ExitStatus:
+    """Record telemetry, events and commands to OUT (MCAP) until Ctrl-C or --duration.
+
+    On link loss the gap is recorded and the recording goes on, waiting for the device; if no telemetry
+    came at all the file is still written and the exit status is LINK_TIMEOUT.
+    """
+    start_s = time.monotonic()
+    deadline_s = None if duration_s is None else start_s + duration_s
+    writer = RecordingWriter(out, source=source or _default_source(ctx.url), seed=seed, device_url=ctx.url,
+                             description=description)
+    recorder = LinkRecorder(writer)
+    progress = _Progress(ctx)
+    client: Client | None = None
+    waiting_noted = lost = interrupted = False
+    try:
+        while True:
+            now_s = time.monotonic()
+            remaining_s = None if deadline_s is None else deadline_s - now_s
+            if remaining_s is not None and remaining_s <= 0:
+                break
+            if client is None:
+                connect_s = ctx.timeout_s if remaining_s is None else min(ctx.timeout_s, remaining_s)
+                try:
+                    client = Client(ctx.url, connect_timeout_s=connect_s,
+                                    transport=RecordingTransport(open_transport(ctx.url), recorder)).connect()
+                except LinkTimeout:
+                    if not waiting_noted:
+                        progress.note(f"no telemetry from {ctx.url} yet; recording goes on, waiting for the device")
+                        waiting_noted = True
+                    continue
+                progress.note(f"recording {ctx.url} to {out}" + ("" if duration_s is None else f" for {duration_s:g} s")
+                              + " (Ctrl-C ends it)")
+                if not no_params:
+                    _record_params(ctx, client, writer, progress)
+                continue
+            time.sleep(TICK_S if remaining_s is None else max(0.0, min(TICK_S, remaining_s)))
+            now_s = time.monotonic()
+            last_s = recorder.last_telemetry_host_s
+            silent_s = 0.0 if last_s is None else now_s - last_s
+            if not lost and silent_s > ctx.timeout_s:
+                lost = True
+                progress.note(f"link lost: no telemetry for {silent_s:.1f} s; still recording, waiting for it")
+            elif lost and silent_s < ctx.timeout_s:
+                lost = False
+                progress.note(f"link back: telemetry again ({recorder.gap_detector.missing} frames missing so far)")
+            progress.show(f"{out.name}: {now_s - start_s:6.1f} s, {recorder.telemetry_count} telemetry, "
+                          f"{recorder.event_count} events, {recorder.command_count} commands, "
+                          f"{recorder.gap_detector.gaps} gaps, state {recorder.latest_state or '-'}", now_s)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        progress.end_line()
+        if client is not None:
+            client.close()
+        recorder.finish()
+        writer.close()
+    elapsed_s = time.monotonic() - start_s
+    if recorder.telemetry_count == 0:
+        raise LinkTimeout(f"no TELEMETRY from {ctx.url} during the whole recording ({elapsed_s:.1f} s); {out} was "
+                          "written but holds none", url=ctx.url, waited_s=elapsed_s)
+    counts = {"telemetry": recorder.telemetry_count, "events": recorder.event_count,
+              "commands": recorder.command_count, "gaps": recorder.gap_detector.gaps,
+              "missing_frames": recorder.gap_detector.missing}
+    ctx.result({"command": "record", "path": str(out), "duration_s": round(elapsed_s, 3),
+                "interrupted": interrupted, **counts},
+               f"recorded {elapsed_s:.1f} s to {out}: " + ", ".join(f"{v} {k}" for k, v in counts.items()))
+    return ExitStatus.OK
+
+
+def _record_params(ctx: CliContext, client: Client, writer: RecordingWriter, progress: _Progress) -> None:
+    """Read every device parameter into the "/device/params" metadata record (best effort)."""
+    try:
+        params = client.params()
+    except RoboWranglerError as err:
+        progress.note(f"device parameters not recorded: {err}")
+        return
+    writer.add_metadata("/device/params", {name: json.dumps(value) for name, value in params.items()})
+
+
+@click.command("inspect")
+@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@_json_option
+@pass_context
+def inspect(ctx: CliContext, file: Path) -> ExitStatus:
+    """Summarise a recording: channels, message counts, duration, gaps, truncation."""
+    rec = read_recording(file)
+    if rec.truncated:
+        ctx.note(f"{file} is truncated ({rec.truncation_reason})")
+    summary = summarize(rec)
+    ctx.result({"command": "inspect", **summary}, format_summary(summary))
+    return ExitStatus.OK
+
+
+@click.command("replay")
+@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              metavar="OUT.png", help="Write the plot here (PNG).")
+@_json_option
+@pass_context
+def replay(ctx: CliContext, file: Path, plot_path: Path) -> ExitStatus:
+    """Plot a recording: rope speed with setpoint and ToV, ESC pulse, battery, state timeline, gaps."""
+    rec = read_recording(file)
+    if rec.truncated:
+        ctx.note(f"{file} is truncated ({rec.truncation_reason}); plotting what it holds")
+    out = plot_recording(rec, plot_path)
+    ctx.result({"command": "replay", "path": str(file), "plot": str(out),
+                "telemetry": len(rec.telemetry["log_time_ns"])}, f"wrote {out}")
+    return ExitStatus.OK

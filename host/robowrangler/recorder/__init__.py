@@ -1,0 +1,18 @@
+"""Recordings: the MCAP files of protocol/recording/schema.md - write, record a live link, read, summarise, plot.
+
+- writer.RecordingWriter: JSON messages with JSON Schemas per channel, small chunks flushed often.
+- link.LinkRecorder / RecordingTransport: records what a Client sends and receives (telemetry with seq,
+  events, commands with their ACK/NACK, sequence gaps).
+- reader.read_recording: per-channel records and numpy columns; tolerant of truncation, strict otherwise.
+- gaps: uint16 sequence-gap detection; summary: `wrangler inspect`; plot: `wrangler replay --plot`.
+"""
+
+from robowrangler.recorder.errors import CorruptRecording, NotARecording, RecordingError, RecordingSchemaError
+from robowrangler.recorder.gaps import SeqGap, SeqGapDetector, find_gaps
+from robowrangler.recorder.link import LinkRecorder, RecordingTransport
+from robowrangler.recorder.reader import Record, Recording, read_recording
+from robowrangler.recorder.writer import RecordingWriter
+
+__all__ = ["CorruptRecording", "LinkRecorder", "NotARecording", "Record", "Recording", "RecordingError",
+           "RecordingSchemaError", "RecordingTransport", "RecordingWriter", "SeqGap", "SeqGapDetector",
+           "find_gaps", "read_recording"]
