@@ -25,7 +25,7 @@ import secrets
 import struct
 import threading
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 
 from robowrangler import units
@@ -256,6 +256,39 @@ class Client:
         """Emergency stop: ESC minimum at once, latched until disarm(). Accepted in every state."""
         return State(self._command(gen.Estop()).state)
 
+    def set_loop(self, guide_position_m: float) -> State:
+        """Move the rope guide to guide_position_m [m] from home (larger = more rope inside = smaller loop).
+
+        Needs a homed spindle (NOT_HOMED) and ARMED, SPINUP or AIRBORNE; the device checks the soft
+        limits guide_min_mm..guide_max_mm (OUT_OF_RANGE). Returns when accepted, not when reached: wait
+        with wait_for(lambda s: ...) or for the SPINDLE_TARGET_REACHED event.
+        """
+        um = units.m_to_um(guide_position_m)
+        return State(self._command(gen.SetLoop(um), value=float(guide_position_m)).state)
+
+    def relax(self) -> State:
+        """SPINUP or AIRBORNE -> RELAX: the rope ramps to a stop so the loop settles onto the object."""
+        return State(self._command(gen.Relax()).state)
+
+    def retract(self) -> State:
+        """ARMED, or RELAX with the rope stopped -> RETRACT: reel in until the load secures the object
+        (-> HOLD) or the stroke ends (-> ARMED). Needs a homed spindle."""
+        return State(self._command(gen.Retract()).state)
+
+    def grasp(self) -> State:
+        """AIRBORNE -> RELAX -> RETRACT -> HOLD in one command. Returns when accepted: wait for HOLD (or
+        ARMED, the stroke end without a load) with wait_for_state."""
+        return State(self._command(gen.Grasp()).state)
+
+    def release(self) -> State:
+        """HOLD -> extend the guide by release_mm to let the object go -> ARMED."""
+        return State(self._command(gen.Release()).state)
+
+    def home(self) -> State:
+        """DISARMED or ARMED with the rope stopped: drive the guide to the home end (stall or limit
+        switch), position 0 there. Returns when accepted; telemetry spindle_flags gets HOMED when done."""
+        return State(self._command(gen.Home()).state)
+
     def get_param(self, name: str) -> float:
         """A parameter's value on the device, in its SI unit (see robowrangler.protocol PARAMS)."""
         spec = param_spec(name)
@@ -336,6 +369,18 @@ class Client:
             raise InvalidArgument("state", "a State or an iterable of States", state) from None
         if not wanted:
             raise InvalidArgument("state", "at least one State", state)
+        return self.wait_for(lambda s: s.state in wanted, timeout_s=timeout_s, expected=wanted)
+
+    def wait_for(self, predicate: Callable[[TelemetrySample], bool], *, timeout_s: float,
+                 expected: tuple[State, ...] | str = "the awaited condition") -> TelemetrySample:
+        """Wait for a TELEMETRY sample received after this call for which predicate(sample) is true.
+
+        Returns that sample. StateTimeout if none comes within timeout_s (`expected` names what was
+        awaited in its message); LinkTimeout if no telemetry arrives for connect_timeout_s.
+        """
+        if not callable(predicate):
+            raise InvalidArgument("predicate", "a callable taking a TelemetrySample", predicate)
+        wanted = expected
         limit_s = _check_positive("timeout_s", timeout_s)
         self._require_connected()
         deadline = time.monotonic() + limit_s
@@ -355,7 +400,7 @@ class Client:
                 if item is _CLOSED:
                     raise NotConnected("the client was closed while waiting for a state")
                 last_sample_s, last = time.monotonic(), item
-                if item.state in wanted:
+                if predicate(item):
                     return item
         finally:
             self._unsubscribe(q)

@@ -66,10 +66,11 @@ class LinkError(RoboWranglerError, OSError):
 
 
 class StateTimeout(RoboWranglerError, TimeoutError):
-    """Telemetry kept arriving but the device did not reach the awaited state in time."""
+    """Telemetry kept arriving but the device did not reach the awaited state (or condition) in time.
+    `expected` is a tuple of States or a description of the condition."""
 
-    def __init__(self, *, expected: tuple[State, ...], actual: State | None, waited_s: float) -> None:
-        names = " or ".join(s.name for s in expected)
+    def __init__(self, *, expected: tuple[State, ...] | str, actual: State | None, waited_s: float) -> None:
+        names = expected if isinstance(expected, str) else " or ".join(s.name for s in expected)
         got = actual.name if actual is not None else "no telemetry"
         super().__init__(f"state: expected {names} within {waited_s:g} s, still {got}")
         self.expected = expected
@@ -113,6 +114,11 @@ class CommandRefused(RoboWranglerError):
                 limit = units.mmps_to_mps(self.detail)
                 return (f"rope speed {_fmt(self.value)} m/s is out of range (limit crossed: {limit:g} m/s; "
                         "valid: 0 < v <= max_rope_speed_mps)")
+            if cmd == MsgId.SET_LOOP:
+                limit_mm = units.m_to_mm(units.um_to_m(self.detail))
+                where = "" if self.value is None else f"{units.m_to_mm(self.value):g} mm "
+                return (f"guide position {where}is outside the soft limits (limit crossed: {limit_mm:g} mm; "
+                        "valid: guide_min_mm..guide_max_mm)")
             spec = PARAMS_BY_NAME.get(self.param or "")
             if spec is not None:
                 return (f"{spec.name} = {_fmt(self.value)} is outside [{spec.min:g}, {spec.max:g}] {spec.units}"
@@ -127,6 +133,11 @@ class CommandRefused(RoboWranglerError):
                     "differ; update one of them")
         if r == NackReason.PARAM_LOCKED:
             return f"{self.param} can only be set while DISARMED (state is {st}); disarm first"
+        if r == NackReason.NOT_HOMED:
+            return "the spindle has not been homed since boot; command home first"
+        if r == NackReason.SPINDLE_UNAVAILABLE:
+            return (f"the spindle servo does not answer or is in fault (fault bits 0x{self.detail & 0xFFFF:X}); "
+                    "check the AX-12A's power and bus, then disarm to clear the fault")
         if r == NackReason.NOT_A_COMMAND:
             return "the device does not accept this message from a host"
         if r == NackReason.UNKNOWN_MESSAGE:
@@ -146,6 +157,16 @@ def _bad_state_advice(cmd: int, state: State | int) -> str:
         return "the device is already armed or the rope still moves"
     if cmd == MsgId.SPINDOWN:
         return "nothing to spin down"
+    needs = {
+        MsgId.SET_LOOP: "the loop size can be set in ARMED, SPINUP or AIRBORNE",
+        MsgId.RELAX: "relax needs a spinning rope (SPINUP or AIRBORNE)",
+        MsgId.RETRACT: "retract needs ARMED, or RELAX once the rope has stopped",
+        MsgId.GRASP: "grasp needs AIRBORNE: spin up above the ToV guard first",
+        MsgId.RELEASE: "release needs HOLD (an object held)",
+        MsgId.HOME: "home needs DISARMED or ARMED with the rope stopped",
+    }
+    if cmd in needs:
+        return needs[cmd]
     return "check the state with `wrangler status`"
 
 

@@ -8,7 +8,7 @@ from typing import Any
 
 from robowrangler import units
 from robowrangler.protocol import generated as gen
-from robowrangler.protocol.generated import Cause, EventKind, Fault, State
+from robowrangler.protocol.generated import Cause, EventKind, Fault, SpindleFlag, State
 
 
 
@@ -25,7 +25,9 @@ class TelemetrySample:
     """One TELEMETRY message in SI units.
 
     time_s: device time since boot [s]; received_s: host time.monotonic() at reception [s].
-    Speeds in m/s at the wheel surface; counters are the device's wrapping uint16 counters.
+    Speeds in m/s at the wheel surface; guide positions in m from home (valid when spindle_flags has
+    HOMED); spindle_load_pct in % of the AX-12A's maximum torque, + = resisting retraction; counters are
+    the device's wrapping uint16 counters.
     """
 
     time_s: float
@@ -44,6 +46,11 @@ class TelemetrySample:
     nacks: int
     events: int
     tick_overruns: int
+    guide_position_m: float
+    guide_target_m: float
+    spindle_load_pct: float
+    spindle_flags: SpindleFlag
+    spindle_rejected: int
     received_s: float
 
     @classmethod
@@ -65,6 +72,11 @@ class TelemetrySample:
             nacks=msg.nacks,
             events=msg.events,
             tick_overruns=msg.tick_overruns,
+            guide_position_m=units.um_to_m(msg.guide_position_um),
+            guide_target_m=units.um_to_m(msg.guide_target_um),
+            spindle_load_pct=units.permille_to_pct(msg.spindle_load_permille),
+            spindle_flags=SpindleFlag(msg.spindle_flags),
+            spindle_rejected=msg.spindle_rejected,
             received_s=received_s,
         )
 
@@ -73,14 +85,16 @@ class TelemetrySample:
         d = asdict(self)
         d["state"] = _name(self.state)
         d["fault_bits"] = [f.name for f in Fault if f in self.fault_bits]
+        d["spindle_flags"] = [f.name for f in SpindleFlag if f in self.spindle_flags]
         return d
 
 
 @dataclass(frozen=True)
 class DeviceEvent:
-    """One EVENT message. `arg` is the raw argument; `cause` (STATE_CHANGED), `fault` (FAULT_RAISED),
-    `speed_mps` (LOOP_COLLAPSED), `silence_s` (HEARTBEAT_LOST) and `param` (PARAM_CHANGED) give it in SI
-    or as an enum where the event kind defines one, else None."""
+    """One EVENT message. `arg` is the raw argument; `cause` (STATE_CHANGED), `fault` (FAULT_RAISED,
+    FAULT_CLEARED), `speed_mps` (LOOP_COLLAPSED), `silence_s` (HEARTBEAT_LOST), `param` (PARAM_CHANGED),
+    `guide_position_m` (SPINDLE_TARGET_REACHED) and `homed_by` (SPINDLE_HOMED) give it in SI or as an enum
+    where the event kind defines one, else None."""
 
     time_s: float
     event_seq: int
@@ -108,7 +122,22 @@ class DeviceEvent:
 
     @property
     def fault(self) -> Fault | None:
-        return Fault(self.arg & 0xFFFF) if self.kind == EventKind.FAULT_RAISED else None
+        """The fault bits raised (FAULT_RAISED) or cleared (FAULT_CLEARED)."""
+        if self.kind in (EventKind.FAULT_RAISED, EventKind.FAULT_CLEARED):
+            return Fault(self.arg & 0xFFFF)
+        return None
+
+    @property
+    def guide_position_m(self) -> float | None:
+        """Where the guide stopped (SPINDLE_TARGET_REACHED)."""
+        return units.um_to_m(self.arg) if self.kind == EventKind.SPINDLE_TARGET_REACHED else None
+
+    @property
+    def homed_by(self) -> str | None:
+        """SPINDLE_HOMED: 'stall' or 'limit_switch'."""
+        if self.kind != EventKind.SPINDLE_HOMED:
+            return None
+        return {1: "stall", 2: "limit_switch"}.get(self.arg, str(self.arg))
 
     @property
     def speed_mps(self) -> float | None:
@@ -129,7 +158,10 @@ class DeviceEvent:
         text = f"{_name(self.kind)} {_name(self.state_from)} -> {_name(self.state_to)}"
         extra = {
             EventKind.STATE_CHANGED: lambda: _name(self.cause),
-            EventKind.FAULT_RAISED: lambda: str(self.fault.name if self.fault else self.arg),
+            EventKind.FAULT_RAISED: lambda: _flags(self.fault),
+            EventKind.FAULT_CLEARED: lambda: _flags(self.fault),
+            EventKind.SPINDLE_TARGET_REACHED: lambda: f"guide at {units.m_to_mm(self.guide_position_m):.1f} mm",
+            EventKind.SPINDLE_HOMED: lambda: f"by {self.homed_by}",
             EventKind.LOOP_COLLAPSED: lambda: f"{self.speed_mps:.2f} m/s",
             EventKind.HEARTBEAT_LOST: lambda: f"silent {self.silence_s:.3f} s",
             EventKind.PARAM_CHANGED: lambda: str(self.param),
@@ -141,13 +173,17 @@ class DeviceEvent:
         d = asdict(self)
         for key in ("kind", "state_from", "state_to"):
             d[key] = _name(d[key])
-        for key in ("cause", "speed_mps", "silence_s", "param"):
+        for key in ("cause", "speed_mps", "silence_s", "param", "guide_position_m", "homed_by"):
             value = getattr(self, key)
             if value is not None:
                 d[key] = _name(value)
         if self.fault is not None:
             d["fault"] = [f.name for f in Fault if f in self.fault]
         return d
+
+
+def _flags(bits: Fault | None) -> str:
+    return "|".join(f.name for f in Fault if bits is not None and f in bits) or "none"
 
 
 def _name(value: Any) -> Any:

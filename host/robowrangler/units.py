@@ -1,7 +1,7 @@
 """The one place where SI values (host side) and integer wire units (protocol) are converted.
 
-Wire units are those of protocol/spec/robowrangler.toml: mm/s, ms, mV, us, rpm; parameters travel as
-float32 in their SI unit. Host code uses SI only (m/s, s, V) and calls these functions at the
+Wire units are those of protocol/spec/robowrangler.toml: mm/s, um, ms, mV, us, rpm, per mille;
+parameters travel as float32 in their own unit (SI, or mm / % where the parameter name says so). Host code uses SI only (m/s, s, V) and calls these functions at the
 boundary; nothing else in the package multiplies by 1000.
 """
 
@@ -45,6 +45,35 @@ def mps_to_mmps(rope_speed_mps: object, *, argument: str = "rope_speed_mps") -> 
 def mmps_to_mps(mmps: int) -> float:
     """mm/s (wire) -> m/s."""
     return mmps / 1000.0
+
+
+def m_to_um(guide_position_m: object, *, argument: str = "guide_position_m") -> int:
+    """Guide position m -> int32 um on the wire (rounded); only what cannot be encoded is refused."""
+    x = check_real(argument, guide_position_m, allow_inf=False)
+    um = round(x * 1e6)
+    if not INT32_MIN <= um <= INT32_MAX:
+        raise InvalidArgument(argument, f"a position encodable as int32 um (|x| <= {INT32_MAX / 1e6:g} m)", x)
+    return um
+
+
+def um_to_m(um: int) -> float:
+    """um (wire) -> m."""
+    return um / 1e6
+
+
+def mm_to_m(mm: float) -> float:
+    """mm (CLI arguments, the device's mm parameters) -> m."""
+    return mm / 1000.0
+
+
+def m_to_mm(m: float) -> float:
+    """m -> mm (human output next to the device's mm parameters)."""
+    return m * 1000.0
+
+
+def permille_to_pct(permille: int) -> float:
+    """Per mille (wire) -> percent (the unit of the device's load parameters)."""
+    return permille / 10.0
 
 
 def ms_to_s(ms: int) -> float:
