@@ -183,6 +183,7 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
             rw_core_emit_event(core, RW_EVENT_KIND_HEARTBEAT_LOST, st, st, (int32_t)silence_ms);
         }
         if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
+            core->state.target_mps = 0.0f;
             rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_HEARTBEAT_LOST);
         } else if (st == RW_STATE_RETRACT) {
             rw_spindle_stop(&core->state.spindle);
@@ -199,6 +200,7 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
             rw_core_raise_fault(core, RW_FAULT_BATTERY_LOW);
             st = core->state.state;
             if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
+                core->state.target_mps = 0.0f;
                 rw_core_set_state(core, RW_STATE_SPINDOWN, RW_CAUSE_BATTERY_LOW);
             }
         }
@@ -394,9 +396,14 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     /* 3. supervision, 4. control */
     supervise(core, dt_s, dt_ms, primed ? counts_delta : 1u);
     if ((int32_t)(core->state.uptime_ms - core->state.spindle_due_ms) >= 0) {
-        uint32_t period_ms = RW_CORE_SPINDLE_PERIOD_MS;
-        spindle_tick(core, hal, (float)period_ms * 1.0e-3f);
-        core->state.spindle_due_ms = core->state.uptime_ms + period_ms;
+        /* the real time since the last spindle step: after a tick gap the dead reckoning must cover it */
+        uint32_t elapsed_ms = core->state.uptime_ms - core->state.spindle_last_ms;
+        if (elapsed_ms == 0u || elapsed_ms > 60000u) {
+            elapsed_ms = RW_CORE_SPINDLE_PERIOD_MS; /* first step */
+        }
+        spindle_tick(core, hal, (float)elapsed_ms * 1.0e-3f);
+        core->state.spindle_last_ms = core->state.uptime_ms;
+        core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
     }
     control(core, dt_s);
     hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);

@@ -74,6 +74,7 @@ typedef struct rw_core {
         uint32_t encoder_silent_ms;
         uint32_t telemetry_due_ms;
         uint32_t spindle_due_ms;
+        uint32_t spindle_last_ms;
         uint32_t battery_low_ms;
         bool grasp_pending;       /* GRASP: RELAX goes on to RETRACT once the rope has stopped */
         uint16_t tx_seq;

@@ -131,6 +131,17 @@ static verdict cmd_estop(rw_core *core)
 
 static verdict cmd_param_set(rw_core *core, const rw_msg_param_set *msg)
 {
+    /* While airborne the guard may not rise over the current target: land or raise the target first. */
+    if (core->state.state == RW_STATE_AIRBORNE &&
+        (msg->param_id == RW_PARAM_TOV_MPS || msg->param_id == RW_PARAM_TOV_MARGIN) &&
+        rw_params_check(&core->params, msg->param_id, msg->value, false) == RW_DECODE_OK) {
+        float tov = msg->param_id == RW_PARAM_TOV_MPS ? msg->value : rw_params_get(&core->params, RW_PARAM_TOV_MPS);
+        float margin = msg->param_id == RW_PARAM_TOV_MARGIN ? msg->value : rw_params_get(&core->params, RW_PARAM_TOV_MARGIN);
+        float guard_mps = tov * margin;
+        if (core->state.target_mps < guard_mps) {
+            return refuse(RW_NACK_REASON_BELOW_TOV_GUARD, (int32_t)ceilf(guard_mps * 1000.0f));
+        }
+    }
     int result = rw_core_set_param(core, msg->param_id, msg->value);
     if (result != RW_DECODE_OK) {
         return refuse((uint8_t)result, msg->param_id);

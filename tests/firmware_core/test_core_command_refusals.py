@@ -189,10 +189,6 @@ def test_not_ready_is_counted_and_arms_nothing(rw_core):
     assert set(h.hal.pulses_us) == {1000}
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: PARAM_SET tov_mps / tov_margin while AIRBORNE is accepted even when the current target is then "
-    "under the new guard (rw_core_commands.c cmd_param_set checks only the table), so the airborne setpoint "
-    "sits below ToV x margin without a landing having been commanded"))
 @pytest.mark.parametrize("name, value", [("tov_margin", 1.6), ("tov_mps", 3.8)])
 def test_raising_the_guard_while_airborne_never_leaves_the_target_under_it(rw_core, name, value):
     a, _ = _airborne_twins(rw_core)  # target 4 m/s, guard 2.99 m/s

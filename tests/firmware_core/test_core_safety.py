@@ -59,10 +59,6 @@ def test_heartbeat_loss_spins_down_exactly_after_the_timeout(rw_core, state, tim
     assert len(h.events(EventKind.HEARTBEAT_LOST)) == 1, "reported once per silence"
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_core.c supervise() enters SPINDOWN on heartbeat loss (and battery low) without zeroing "
-    "target_mps, unlike cmd_spindown/cmd_relax/cmd_estop; TELEMETRY.rope_speed_target_mmps keeps the old "
-    "target through the landing and in ARMED afterwards"))
 def test_forced_spindown_reports_a_zero_target(rw_core):
     h = CoreHarness(rw_core)
     h.boot_and_arm()

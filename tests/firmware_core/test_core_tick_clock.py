@@ -119,11 +119,6 @@ def test_spindown_after_a_pause_lands_normally(rw_core):
     assert h.pulse_us == 1000
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_core.c calls spindle_tick with a fixed dt of RW_CORE_SPINDLE_PERIOD_MS whatever time has "
-    "passed, so after a tick gap the multi-turn prediction lags the servo by more than max_jump_deg (25 deg); "
-    "rw_multiturn then rejects every later reading (spindle_rejected grows without end) and the guide "
-    "position is dead-reckoned with the offset for good"))
 @pytest.mark.parametrize("gap_ms", [200, 1000])
 def test_tick_gap_while_the_spindle_moves_keeps_the_guide_position(rw_core, gap_ms):
     h = CoreHarness(rw_core, params={"homing_speed_mmps": 10.0, "heartbeat_timeout_s": 10.0},
