@@ -1,6 +1,6 @@
 /* rw_sil: the firmware core with the sil HAL, as its own process.
  *
- *   rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S]
+ *   rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N]
  *
  * Binds the command link (the host's UDP port, as the board's WiFi) and the plant port on 127.0.0.1
  * (0 = any free port), prints "rw_sil ready cmd_port=N plant_port=N" on stdout, then runs one core tick
@@ -24,10 +24,29 @@ static void on_signal(int sig)
     stop_requested = 1;
 }
 
+/* The sil scheduler: the plant owns the clock, so a tick is late when the plant's time jumped by more than
+ * one period (the plant skipped ticks, as a stalled main loop would); each missed period counts once. */
+typedef struct sil_scheduler {
+    uint32_t tick_us;
+    uint32_t last_time_us;
+    uint32_t overruns;
+    int started;
+} sil_scheduler;
+
+static void sil_scheduler_on_tick(sil_scheduler *s, uint32_t time_us)
+{
+    uint32_t dt = time_us - s->last_time_us;
+    if (s->started && dt > s->tick_us + s->tick_us / 2u) {
+        s->overruns += (dt - s->tick_us / 2u) / s->tick_us;
+    }
+    s->last_time_us = time_us;
+    s->started = 1;
+}
+
 static uint32_t tick_overruns(void *ctx)
 {
-    (void)ctx;
-    return 0u; /* lockstep: the plant waits for every tick, none can overrun */
+    const sil_scheduler *s = ctx;
+    return s->overruns;
 }
 
 static int parse_uint(const char *text, long max, long *out)
@@ -44,13 +63,13 @@ static int parse_uint(const char *text, long max, long *out)
 
 static int usage(const char *msg)
 {
-    fprintf(stderr, "rw_sil: %s\nusage: rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S]\n", msg);
+    fprintf(stderr, "rw_sil: %s\nusage: rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N]\n", msg);
     return 2;
 }
 
 int main(int argc, char **argv)
 {
-    long cmd_port = 14550, plant_port = 14560, plant_timeout_s = 10;
+    long cmd_port = 14550, plant_port = 14560, plant_timeout_s = 10, tick_us = 1000;
     for (int i = 1; i < argc; ++i) {
         long *target = NULL;
         long max = 65535;
@@ -61,6 +80,9 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--plant-timeout-s") == 0) {
             target = &plant_timeout_s;
             max = 3600;
+        } else if (strcmp(argv[i], "--tick-us") == 0) {
+            target = &tick_us;
+            max = 100000;
         } else {
             return usage("unknown argument");
         }
@@ -91,7 +113,9 @@ int main(int argc, char **argv)
     rw_hal_encoder encoder_hal = sil_lockstep_encoder(&lockstep);
     rw_hal_battery battery_hal = sil_lockstep_battery(&lockstep);
     rw_hal_esc_output esc_hal = sil_lockstep_esc(&lockstep);
-    rw_hal_scheduler scheduler_hal = { .ctx = NULL, .tick_overruns = tick_overruns };
+    static sil_scheduler scheduler = { 0 };
+    scheduler.tick_us = tick_us > 0 ? (uint32_t)tick_us : 1000u;
+    rw_hal_scheduler scheduler_hal = { .ctx = &scheduler, .tick_overruns = tick_overruns };
     rw_hal_spindle spindle_hal = sil_lockstep_spindle(&lockstep);
     rw_hal hal = {
         .esc = &esc_hal, .encoder = &encoder_hal, .battery = &battery_hal, .link = &link_hal, .scheduler = &scheduler_hal,
@@ -121,6 +145,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "rw_sil: lockstep barrier: %u host frames announced, %u received\n",
                     (unsigned)lockstep.sensors.host_frames_sent, (unsigned)link.received_total);
         }
+        sil_scheduler_on_tick(&scheduler, lockstep.sensors.time_us);
         rw_core_tick(&core, &hal, lockstep.sensors.time_us);
         sil_lockstep_send_actuators(&lockstep);
     }

@@ -32,14 +32,14 @@ def find_sil_binary() -> Path:
 class FirmwareProcess:
     """``rw_sil`` as a child process. Ports 0 pick free ones; the bound ports are read from its ready line."""
 
-    def __init__(self, *, cmd_port: int = 0, plant_port: int = 0, plant_timeout_s: int = 10,
+    def __init__(self, *, cmd_port: int = 0, plant_port: int = 0, plant_timeout_s: int = 10, tick_us: int = 1000,
                  binary: Path | None = None, start_timeout_s: float = 5.0) -> None:
         for name, port in (("cmd_port", cmd_port), ("plant_port", plant_port)):
             if not isinstance(port, int) or not 0 <= port <= 65535:
                 raise ValueError(f"{name}: expected a UDP port 0..65535, got {port!r}")
         self.binary = Path(binary) if binary is not None else find_sil_binary()
         self._args = [str(self.binary), "--cmd-port", str(cmd_port), "--plant-port", str(plant_port),
-                      "--plant-timeout-s", str(int(plant_timeout_s))]
+                      "--plant-timeout-s", str(int(plant_timeout_s)), "--tick-us", str(int(tick_us))]
         self._start_timeout_s = start_timeout_s
         self._proc: subprocess.Popen[str] | None = None
         self.cmd_port = 0

@@ -98,7 +98,7 @@ class SilSession:
         self.last_esc_pulse_us = 0
         self.sensor_filters: list[SensorFilter] = []
         self.actuator_filters: list[ActuatorFilter] = []
-        self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s)
+        self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s, tick_us=tick_us)
         self._link: LockstepLink | None = None
         self._actions: list[tuple[int, int, Callable[[], None]]] = []
         self._action_counter = itertools.count()
