@@ -20,12 +20,13 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
-from mcap.exceptions import EndOfFile, McapError, RecordLengthLimitExceeded
+from mcap.exceptions import McapError
 from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
 from mcap.stream_reader import CRCValidationError, StreamReader, breakup_chunk
 
@@ -74,7 +75,7 @@ class Recording:
 
         Integer fields -> int64; numbers (null -> NaN) -> float64; booleans -> bool; anything else
         (names, lists, null mixed with text) -> object arrays. Every array has one entry per message.
-        A channel absent from the file gives only the two time columns, empty.
+        A channel absent from the file gives the same columns (its schema's fields), empty.
         """
         rows = self.records.get(topic, [])
         cols: dict[str, np.ndarray] = {
@@ -89,12 +90,13 @@ class Recording:
                 names.setdefault(name, None)
         props = _SCHEMAS.get(topic, {}).get("properties", {})
         for name in names:
-            if not rows:
-                continue
-            values = [r.data.get(name) for r in rows]
             types = props.get(name, {}).get("type", ())
-            numeric = "number" in ([types] if isinstance(types, str) else types)
-            cols[name] = _column(values, numeric=numeric)
+            types = [types] if isinstance(types, str) else list(types)
+            if not rows:  # same columns, empty
+                cols[name] = np.array([], dtype=np.float64 if "number" in types else
+                                      np.int64 if types == ["integer"] else object)
+                continue
+            cols[name] = _column([r.data.get(name) for r in rows], numeric="number" in types)
         return cols
 
     @property
@@ -190,14 +192,12 @@ class _Loader:
                 record = next(records)
             except StopIteration:
                 break
-            except (EndOfFile, RecordLengthLimitExceeded) as err:
-                truncated, reason = self._classify_cut(position, err)
-                break
             except CRCValidationError as err:
                 raise CorruptRecording(self.path, f"CRC mismatch in the data section ({err})") from err
-            except (McapError, ValueError, UnicodeDecodeError, OverflowError, MemoryError) as err:
-                raise CorruptRecording(self.path, f"unreadable record at byte {position}: "
-                                       f"{type(err).__name__}: {err}") from err
+            except (McapError, struct.error, ValueError, UnicodeDecodeError, OverflowError, MemoryError) as err:
+                # a record that cannot be read whole: truncation if it runs past the end, else damage
+                truncated, reason = self._classify_cut(position, err)
+                break
             position = self.f.tell()
             if isinstance(record, Chunk):
                 try:

@@ -1,0 +1,117 @@
+"""Files that are not usable recordings: a typed RecordingError naming the file and the reason, and
+`wrangler inspect` / `wrangler replay` exit 1 (ERROR) with one line on stderr."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.writer import CompressionType, Writer
+
+from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.protocol import generated as gen
+from robowrangler.recorder import (CorruptRecording, LinkRecorder, NotARecording, RecordingSchemaError,
+                                   RecordingWriter, read_recording)
+from robowrangler.recorder import schemas_generated as sg
+from robowrangler.recorder.errors import RecordingError
+
+
+def _good_recording(path: Path, n: int = 50) -> Path:
+    with RecordingWriter(path, source="other") as w:
+        rec = LinkRecorder(w)
+        for i in range(n):
+            msg = gen.Telemetry(**{f.name: 0 for f in gen.Telemetry.FIELDS})
+            rec.on_received(gen.encode_frame(msg, i))
+    return path
+
+
+def _mcap(path: Path, *, meta: dict | None, topic: str, schema_name: str, schema: bytes, messages: list[bytes]) -> Path:
+    with open(path, "wb") as f:
+        w = Writer(f, compression=CompressionType.NONE)
+        w.start()
+        if meta is not None:
+            w.add_metadata("/meta", meta)
+        sid = w.register_schema(name=schema_name, encoding="jsonschema", data=schema)
+        cid = w.register_channel(topic=topic, message_encoding="json", schema_id=sid)
+        for i, data in enumerate(messages):
+            w.add_message(cid, log_time=i * 1000, publish_time=i * 1000, data=data)
+        w.finish()
+    return path
+
+
+META = {"format": sg.FORMAT, "format_version": "1", "source": "board", "schema_hash": f"0x{sg.SCHEMA_HASH:04X}",
+        "units": sg.UNITS_CONVENTION, "time_base": "unix"}
+
+
+def bad_files(tmp: Path) -> dict[str, tuple[Path, type, str]]:
+    """name -> (file, expected error class, text the message must contain)."""
+    rng = np.random.default_rng(3)
+    random_bytes = tmp / "random.mcap"
+    random_bytes.write_bytes(rng.integers(0, 256, 4096, dtype=np.uint8).tobytes())
+    empty = tmp / "empty.mcap"
+    empty.write_bytes(b"")
+    foreign = _mcap(tmp / "foreign.mcap", meta=None, topic="/imu", schema_name="Imu", schema=b"{}",
+                    messages=[b'{"ax": 0.1}'] * 5)
+    name, fname, text = sg.CHANNELS["/link/gap"]
+    violating = _mcap(tmp / "violating.mcap", meta=META, topic="/link/gap", schema_name=name, schema=text.encode(),
+                      messages=[json.dumps({"stream": "device", "from_seq": 1, "to_seq": 2, "missing": 2,
+                                            "last_time_s": 1.0, "resume_time_s": 1.1, "silent_s": -0.5}).encode()])
+    wrong_schema = _mcap(tmp / "wrong_schema.mcap", meta=META, topic="/device/telemetry", schema_name="my.Telemetry",
+                         schema=b"{}", messages=[b"{}"])
+    not_json = _mcap(tmp / "not_json.mcap", meta=META, topic="/link/gap", schema_name=name, schema=text.encode(),
+                     messages=[b"\x00\x01 not json"])
+    bad_meta = _mcap(tmp / "bad_meta.mcap", meta={**META, "source": "robot"}, topic="/link/gap", schema_name=name,
+                     schema=text.encode(), messages=[])
+    damaged = _good_recording(tmp / "damaged.mcap")
+    data = bytearray(damaged.read_bytes())
+    at = data.index(b'"rope_speed_mps"')
+    data[at + 3] ^= 0x20  # one flipped bit inside the first chunk: its CRC no longer matches
+    damaged.write_bytes(bytes(data))
+    return {
+        "random bytes": (random_bytes, NotARecording, "not an MCAP file"),
+        "empty file": (empty, NotARecording, "the file is empty"),
+        "foreign MCAP": (foreign, NotARecording, "no /meta metadata record"),
+        "schema violation": (violating, RecordingSchemaError, "/link/gap message #1"),
+        "wrong channel schema": (wrong_schema, RecordingSchemaError, "schema 'my.Telemetry'"),
+        "not JSON": (not_json, RecordingSchemaError, "is not JSON"),
+        "bad meta": (bad_meta, RecordingSchemaError, "/source"),
+        "damaged chunk": (damaged, CorruptRecording, "CRC mismatch"),
+    }
+
+
+CASES = ["random bytes", "empty file", "foreign MCAP", "schema violation", "wrong channel schema", "not JSON",
+         "bad meta", "damaged chunk"]
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_reader_raises_a_typed_error_naming_file_and_reason(tmp_path: Path, case: str) -> None:
+    path, cls, text = bad_files(tmp_path)[case]
+    with pytest.raises(cls) as raised:
+        read_recording(path)
+    assert isinstance(raised.value, RecordingError)
+    assert str(path) in str(raised.value) and text in str(raised.value)
+    assert raised.value.path == str(path)
+
+
+def test_schema_violation_names_the_field_expected_and_actual(tmp_path: Path) -> None:
+    path, _, _ = bad_files(tmp_path)["schema violation"]
+    with pytest.raises(RecordingSchemaError, match=r"/silent_s: expected >= 0, got -0\.5"):
+        read_recording(path)
+
+
+@pytest.mark.parametrize("case", ["random bytes", "foreign MCAP", "schema violation", "damaged chunk"])
+def test_cli_exits_error_with_one_line_on_stderr(tmp_path: Path, wrangler, case: str) -> None:
+    path, _, text = bad_files(tmp_path)[case]
+    for argv in (["inspect", str(path)], ["replay", str(path), "--plot", str(tmp_path / "p.png")]):
+        status, out, err = wrangler(*argv)
+        assert status == ExitStatus.ERROR, (argv, err)
+        assert err.count("\n") == 1 and text in err and str(path) in err
+        assert out == ""
+    assert not (tmp_path / "p.png").exists()
+
+
+def test_cli_missing_file_is_a_usage_error(tmp_path: Path, wrangler) -> None:
+    status, _, err = wrangler("inspect", str(tmp_path / "nope.mcap"))
+    assert status == ExitStatus.USAGE and "does not exist" in err
