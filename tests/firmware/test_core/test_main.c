@@ -475,8 +475,8 @@ static void test_frame_level_nack_reasons_are_counted_and_harmless(void)
         { -1, 0u, -(int)n + 6, RW_NACK_REASON_TRUNCATED },
         { -1, 0u, -1, RW_NACK_REASON_TRUNCATED },
         { 0, 0x7Bu, 0, RW_NACK_REASON_BAD_MAGIC },
-        { 1, 2u, 0, RW_NACK_REASON_BAD_VERSION },
-        { 2, 1u, 0, RW_NACK_REASON_UNSUPPORTED_FLAGS },
+        { 1, (uint8_t)(RW_PROTOCOL_VERSION + 1u), 0, RW_NACK_REASON_BAD_VERSION },
+        { 2, 0x02u, 0, RW_NACK_REASON_UNSUPPORTED_FLAGS }, /* a flag bit this version does not define */
         { 6, RW_MAX_PAYLOAD_LEN + 1u, 0, RW_NACK_REASON_OVERSIZE },
         { -1, 0u, 1, RW_NACK_REASON_BAD_LENGTH },
         { -1, 0u, 100, RW_NACK_REASON_BAD_LENGTH }, /* longer than any frame */
@@ -495,7 +495,7 @@ static void test_frame_level_nack_reasons_are_counted_and_harmless(void)
         uint16_t nacks = core.state.counters.nacks;
         unsigned peers = fake.accept_peer_calls;
         verdict v = command(data, len);
-        TEST_ASSERT_FALSE(v.ack);
+        TEST_ASSERT_FALSE_MESSAGE(v.ack, "a malformed datagram is never executed");
         TEST_ASSERT_EQUAL_UINT8_MESSAGE(cases[c].reason, v.reason, "NACK reason");
         TEST_ASSERT_EQUAL_UINT16(rx_bad + 1u, core.state.counters.rx_bad);
         TEST_ASSERT_EQUAL_UINT16(nacks + 1u, core.state.counters.nacks);
