@@ -8,7 +8,7 @@ import pytest
 from robowrangler_sim.string_shooter import ModuleMotion, ShooterParams, StringShooter, takeoff_speed_estimate_mps
 from robowrangler_sim.string_shooter.takeoff import find_takeoff_speed, no_air, steady_depth_fraction
 
-SPEEDS = np.arange(1.6, 3.25, 0.1)
+SPEEDS = np.arange(1.65, 3.2, 0.15)
 
 
 @pytest.fixture(scope="module")
