@@ -21,7 +21,9 @@ from robowrangler.protocol.generated import MsgId, NackReason, PARAMS, State
 
 EVENT_MSG = gen.Event
 EV_STATE_CHANGED, EV_PARAM_CHANGED, EV_ARMING_HOLD_DONE = 1, 5, 6
-CAUSE_COMMAND, CAUSE_SPEED_REACHED = 0, 1
+CAUSE_COMMAND, CAUSE_SPEED_REACHED, CAUSE_LOAD_SECURED, CAUSE_STROKE_END = 0, 1, 6, 7
+EV_SPINDLE_HOMED, EV_SPINDLE_TARGET_REACHED = 7, 8
+P_GUIDE_MIN_MM, P_GUIDE_MAX_MM, P_RELEASE_MM = 18, 19, 28
 TRANSIT_REASONS = {int(r) for r in NackReason if r <= NackReason.UNSUPPORTED_FLAGS and r != NackReason.UNKNOWN_MESSAGE}
 
 
@@ -48,6 +50,8 @@ class ScriptedDevice:
             (frame-level reasons such as BAD_CHECKSUM play a frame damaged on the way: not cached).
         arm_hold_s: ARM is refused with NOT_READY this long after start.
         drop_event_seqs: event_seq values whose EVENT is not sent (to test lost-event counting).
+        guide_speed_mps, object_at_m: spindle speed; guide position where RETRACT secures a load (None: none).
+        spindle_unavailable: spindle commands are refused SPINDLE_UNAVAILABLE.
         stale_param_values: PARAM_VALUEs with these values are sent around each parameter answer, as late
             duplicates of older answers would arrive (before the ACK; for PARAM_SET also after it).
     Records: received (frames with msg), executed (msg name, seq) per executed command,
@@ -70,6 +74,16 @@ class ScriptedDevice:
         self.nack_script: dict[int, list[tuple[NackReason, int]]] = defaultdict(list)
         self.drop_event_seqs: set[int] = set()
         self.stale_param_values: list[float] = []
+        # spindle: the guide moves at guide_speed_mps; a retract secures a load when it reaches object_at_m
+        self.guide_speed_mps = 0.5
+        self.object_at_m: float | None = None
+        self.spindle_unavailable = False
+        self.homed = False
+        self.homing = False
+        self.guide_m = 0.05
+        self.guide_target_m = 0.05
+        self.grasp_pending = False
+        self.load_permille = 0
         self.params = {p.id: _f32(p.default) for p in PARAMS}
         self.received: list[tuple[gen.Frame, gen.Message]] = []
         self.executed: list[tuple[str, int]] = []
@@ -268,10 +282,78 @@ class ScriptedDevice:
             if mid == MsgId.PARAM_SET:  # late duplicates of older answers on both sides of the ACK
                 return stale + [ack] + stale + [value] + events
             return stale + [ack, value] + events
+        elif mid in (MsgId.HOME, MsgId.SET_LOOP, MsgId.RELAX, MsgId.RETRACT, MsgId.GRASP, MsgId.RELEASE):
+            refusal = self._spindle_refusal(mid, msg, s)
+            if refusal is not None:
+                return self._nack(frame, *refusal)
+            events = []
+            if mid == MsgId.HOME:
+                self.homing, self.guide_target_m = True, -1.0  # towards the end stop, wherever it is
+            elif mid == MsgId.SET_LOOP:
+                self.guide_target_m = msg.guide_position_um / 1e6
+            elif mid == MsgId.RELAX or mid == MsgId.GRASP:
+                self.target_mps, self.grasp_pending = 0.0, mid == MsgId.GRASP
+                events = self._set_state(State.RELAX, CAUSE_COMMAND)
+            elif mid == MsgId.RETRACT:
+                events = self._start_retract(CAUSE_COMMAND)
+            elif mid == MsgId.RELEASE:
+                self.guide_target_m = max(0.0, self.guide_m - self.params[P_RELEASE_MM] / 1000)
+                self.load_permille = 0
+                events = self._set_state(State.ARMED, CAUSE_COMMAND)
         else:
             return self._nack(frame, NackReason.NOT_A_COMMAND)
         self.executed.append((msg.NAME, frame.seq))
         return [self._ack(frame)] + events
+
+    def _spindle_refusal(self, mid: int, msg: gen.Message, s: State) -> tuple[NackReason, int] | None:
+        stopped = self.setpoint_mps == 0.0
+        allowed = {
+            MsgId.HOME: s in (State.DISARMED, State.ARMED) and stopped,
+            MsgId.SET_LOOP: s in (State.ARMED, State.SPINUP, State.AIRBORNE),
+            MsgId.RELAX: s in (State.SPINUP, State.AIRBORNE),
+            MsgId.RETRACT: s == State.ARMED or (s == State.RELAX and stopped),
+            MsgId.GRASP: s == State.AIRBORNE,
+            MsgId.RELEASE: s == State.HOLD,
+        }[mid]
+        if not allowed:
+            return NackReason.BAD_STATE, 0
+        if mid in (MsgId.HOME, MsgId.SET_LOOP, MsgId.RETRACT, MsgId.GRASP) and self.spindle_unavailable:
+            return NackReason.SPINDLE_UNAVAILABLE, 0x10
+        if mid in (MsgId.SET_LOOP, MsgId.RETRACT, MsgId.GRASP) and not self.homed:
+            return NackReason.NOT_HOMED, 0
+        if mid == MsgId.SET_LOOP:
+            lo_um, hi_um = round(self.params[P_GUIDE_MIN_MM] * 1000), round(self.params[P_GUIDE_MAX_MM] * 1000)
+            if not lo_um <= msg.guide_position_um <= hi_um:
+                return NackReason.OUT_OF_RANGE, lo_um if msg.guide_position_um < lo_um else hi_um
+        return None
+
+    def _start_retract(self, cause: int) -> list[bytes]:
+        self.grasp_pending = False
+        self.guide_target_m = self.params[P_GUIDE_MAX_MM] / 1000
+        return self._set_state(State.RETRACT, cause)
+
+    def _spindle_tick(self, dt_s: float) -> list[bytes]:
+        out: list[bytes] = []
+        if self.state == State.RELAX and self.grasp_pending and self.setpoint_mps == 0.0:
+            out += self._start_retract(CAUSE_SPEED_REACHED)
+        if self.state == State.HOLD:
+            return out
+        step = self.guide_speed_mps * dt_s
+        before = self.guide_m
+        self.guide_m += max(-step, min(step, self.guide_target_m - self.guide_m))
+        if self.homing and self.guide_m <= 0.0:  # the end stop
+            self.guide_m = self.guide_target_m = 0.0
+            self.homed, self.homing = True, False
+            out += self._event(EV_SPINDLE_HOMED, self.state, self.state, 1)
+        elif self.state == State.RETRACT:
+            if self.object_at_m is not None and self.guide_m >= self.object_at_m:
+                self.guide_target_m, self.load_permille = self.guide_m, 150
+                out += self._set_state(State.HOLD, CAUSE_LOAD_SECURED)
+            elif self.guide_m >= self.guide_target_m:
+                out += self._set_state(State.ARMED, CAUSE_STROKE_END)
+        elif before != self.guide_m and self.guide_m == self.guide_target_m and self.homed:
+            out += self._event(EV_SPINDLE_TARGET_REACHED, self.state, self.state, round(self.guide_m * 1e6))
+        return out
 
     def _tick(self, dt_s: float) -> None:
         step = self.ramp_mps2 * dt_s
@@ -281,6 +363,9 @@ class ScriptedDevice:
             out += self._set_state(State.AIRBORNE, CAUSE_SPEED_REACHED)
         if self.state == State.SPINDOWN and self.setpoint_mps <= 0.0:
             out += self._set_state(State.ARMED, CAUSE_SPEED_REACHED)
+        out += self._spindle_tick(dt_s)
+        flags = (0x01 if self.homed else 0) | 0x02 | (0x08 if self.guide_m != self.guide_target_m else 0) | \
+            (0x10 if self.homing else 0)
         age_ms = 65535 if self._last_host_frame_s is None else int((time.monotonic() - self._last_host_frame_s) * 1000)
         mmps = round(self.setpoint_mps * 1000)
         out.append(self._send(make(
@@ -289,5 +374,7 @@ class ScriptedDevice:
             motor_rpm=round(self.setpoint_mps / (2 * math.pi * 0.015) * 60), esc_pulse_us=1000 + min(1000, mmps // 20),
             battery_mv=12600, heartbeat_age_ms=min(age_ms, 65535), rx_ok=len(self.received) & 0xFFFF,
             rx_bad=self.bad_frames & 0xFFFF, rx_duplicates=self.duplicates & 0xFFFF, nacks=self.nacks_sent & 0xFFFF,
-            events=self._event_seq & 0xFFFF)))
+            events=self._event_seq & 0xFFFF, guide_position_um=round(self.guide_m * 1e6),
+            guide_target_um=round(max(self.guide_target_m, 0.0) * 1e6), spindle_load_permille=self.load_permille,
+            spindle_flags=flags)))
         self._emit(out)
