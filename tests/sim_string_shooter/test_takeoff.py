@@ -68,3 +68,16 @@ def test_without_air_the_loop_hangs_at_any_speed(speed_mps):
         flying = steady_depth_fraction(ShooterParams(), rope_speed_mps=speed_mps, loop_length_m=1.0, phi_rad=0.0,
                                        settle_s=3.0)
         assert flying < 0.4
+
+
+def test_loop_collapses_when_the_speed_falls_below_takeoff_and_lifts_again_above_it():
+    """Ramp 5 -> 1.8 -> 5 m/s: the loop comes down below v* and goes back up above it (no lasting hysteresis)."""
+    def wheel(t):
+        return np.interp(t, [0.0, 2.0, 3.0, 6.0, 7.0, 10.0], [5.0, 5.0, 1.8, 1.8, 5.0, 5.0])
+
+    sim = StringShooter(ShooterParams(), loop_length_m=1.0, motion=ModuleMotion(wheel_speed_mps=wheel))
+    rec = sim.run(10.0, frame_interval_s=0.1)
+    depth = {round(f.time_s, 1): -f.loop_plane_xz_m()[:, 1].min() / 0.5 for f in rec.frames}
+    assert depth[2.0] < 0.5  # flying at 5 m/s
+    assert depth[6.0] > 0.85  # hanging after 3 s at 1.8 m/s
+    assert depth[10.0] == pytest.approx(depth[2.0], abs=0.03)  # flying again, same shape

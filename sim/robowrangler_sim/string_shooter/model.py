@@ -91,25 +91,24 @@ def _circle_curve(exit_m, return_m, e1, e3, length_m, n_samples=4000):
 
 
 def _hanging_curve(exit_m, return_m, e1, e3, length_m, n_samples=4000):
-    """Initial loop: two strands hanging straight down from the eyelet, joined by a small U."""
+    """Initial loop: two strands hanging straight down, 4 cm apart (ahead of and behind the eyelet),
+    joined at the bottom by a semicircle."""
     down = np.array([0.0, 0.0, -1.0])
-    lateral = exit_m - return_m
-    gap = np.linalg.norm(lateral)
-    side = lateral / gap if gap > 1e-9 else e1
-    w = 0.02
-    rr = w / 2
-    straight = max((length_m - math.pi * rr - gap) / 2, 0.0)
-    a = exit_m + side * rr
-    b = return_m - side * 0.0
-    t = np.linspace(0, 1, n_samples // 3)
-    leg1 = exit_m[None] + t[:, None] * (a + down * straight - exit_m)
-    bottom_c = 0.5 * (a + b) + down * straight
-    th = np.linspace(0, math.pi, n_samples // 3)
-    half = 0.5 * np.linalg.norm(a - b) + 1e-9
-    u = (a - b) / (2 * half)
-    arc = bottom_c[None] + half * (np.cos(th)[:, None] * u + np.sin(th)[:, None] * down)
-    leg2 = (b + down * straight)[None] + t[:, None] * (return_m - (b + down * straight))
-    return np.vstack([leg1, arc, leg2])
+    heading = np.array([e1[0], e1[1], 0.0])
+    heading = heading / np.linalg.norm(heading) if np.linalg.norm(heading) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    r = 0.02
+    top_out = exit_m + r * heading
+    top_back = return_m - r * heading
+    straight = max((length_m - math.pi * r - 2 * r - abs(top_out[2] - top_back[2])) / 2, 0.01)
+    bottom_out = top_out + straight * down
+    bottom_back = np.array([top_back[0], top_back[1], bottom_out[2]])
+    center = 0.5 * (bottom_out + bottom_back)
+    th = np.linspace(0.0, math.pi, n_samples // 4)
+    arc = center[None] + r * (np.cos(th)[:, None] * heading[None] + np.sin(th)[:, None] * down[None])
+    t = np.linspace(0.0, 1.0, n_samples // 4)[:, None]
+    pieces = [exit_m + t * (top_out - exit_m), top_out + t * (bottom_out - top_out), arc,
+              bottom_back + t * (top_back - bottom_back), top_back + t * (return_m - top_back)]
+    return np.vstack(pieces)
 
 
 def _straight_curve(exit_m, return_m, e1, e3, length_m, n_samples=4000):
@@ -136,7 +135,7 @@ class StringShooter:
         loop_length_m: rope length outside the eyelet at start (the loop), metres, 0.1 .. 20.
         motion: wheel speed and module pose over time.
         obstacles: Sphere / Cylinder / Box / HalfSpace objects (contact.py), static, outside the initial loop.
-        initial_shape: "circle" (standing loop), "hanging" (two strands down) or "straight" (the line from
+        initial_shape: "circle" (standing loop), "hanging" (two strands down, 4 cm apart) or "straight" (the line from
             exit to return, stretched or compressed to the loop length; for the span test rig).
         initial_rope_speed_mps: rope speed at t = 0 (None: the wheel speed at t = 0).
     """
