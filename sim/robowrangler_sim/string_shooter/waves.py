@@ -1,12 +1,15 @@
-"""Waves on the moving rope: a pluck on a straight moving span splits into two pulses that travel at
-v - c and v + c in the lab, c = sqrt(T / lambda) (transport plus waves).
+"""Waves on the moving rope: a pluck splits into two pulses that travel at v - c and v + c in the lab,
+c = sqrt(T / lambda) (transport plus waves).
 
-The rig (ModuleGeometry.span_m > 0): the rope leaves the exit eyelet along e1 and runs straight to a
-second eyelet ``span_m`` ahead, without gravity and air, at tension T set by how much shorter the rope
-is than the span. The pluck is a sideways Gaussian bump (out of the loop plane) that leaves the material velocity
-unchanged, so it splits into two equal halves. The two pulses are the two largest separated maxima of
-the sideways displacement, and its lab speed is the slope of a straight
-line fitted to its positions.
+Two experiments. ``measure_wave_speeds``: the span rig (ModuleGeometry.span_m > 0), where the rope
+leaves the exit eyelet along e1 and runs straight to a second eyelet ``span_m`` ahead, without
+gravity and air, at a tension T set by how much shorter the rope is than the span.
+``measure_waves_on_loop``: the flying loop itself, where T varies along the rope.
+
+The pluck is a sideways Gaussian bump (out of the loop plane) that leaves the material velocity
+unchanged, so in the material frame it splits into two equal halves. The pulses are the two largest
+separated maxima of the sideways displacement; a pulse's lab speed is the slope of a straight line
+fitted to its positions.
 """
 
 from __future__ import annotations
@@ -109,7 +112,8 @@ def measure_wave_speeds(*, rope_speed_mps: float, wave_speed_mps: float, span_m:
 
 
 def _two_pulses(x: np.ndarray, a: np.ndarray, *, min_gap_m: float):
-    """Indices of the two largest local maxima of a at least min_gap_m apart, upstream one first."""
+    """Indices of the two largest local maxima of a (at least min_gap_m apart in x, the smaller one at
+    least a fifth of the larger), upstream one first; x must grow with the index."""
     inner = np.arange(1, a.size - 1)
     peaks = inner[(a[inner] >= a[inner - 1]) & (a[inner] >= a[inner + 1])]
     if peaks.size < 2:
@@ -118,7 +122,7 @@ def _two_pulses(x: np.ndarray, a: np.ndarray, *, min_gap_m: float):
     first = order[0]
     for p in order[1:]:
         if abs(x[p] - x[first]) >= min_gap_m and a[p] > 0.2 * a[first]:
-            return (min(first, p), max(first, p)) if x[min(first, p)] <= x[max(first, p)] else (p, first)
+            return (int(min(first, p)), int(max(first, p)))  # x grows with the index
     return None
 
 
