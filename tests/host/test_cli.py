@@ -209,3 +209,32 @@ def test_a_link_that_cannot_be_opened_exits_1_with_the_reason() -> None:
     run = wrangler("--json", "--url", "serial:///dev/robowrangler-does-not-exist", "status")
     assert run.status == ExitStatus.ERROR and run.json["error"] == "LinkError"
     assert run.stderr.startswith("wrangler: cannot open serial:///dev/robowrangler-does-not-exist: ")
+
+
+def test_home_loop_grasp_release_from_the_shell(device: ScriptedDevice) -> None:
+    device.object_at_m = 0.1
+    url = ("--url", device.url)
+    assert wrangler(*url, "arm").status == ExitStatus.OK
+    not_homed = wrangler(*url, "--json", "loop", "50")
+    assert not_homed.status == ExitStatus.NACK and not_homed.json["reason"] == "NOT_HOMED"
+    homed = wrangler(*url, "--json", "home")
+    assert homed.status == ExitStatus.OK and homed.json["guide_mm"] == 0.0
+    moved = wrangler(*url, "loop", "62.5")
+    assert moved.status == ExitStatus.OK and moved.stdout == "guide at 62.5 mm (target 62.5 mm, state ARMED)\n"
+    assert wrangler(*url, "--json", "loop", "500").json["reason"] == "OUT_OF_RANGE"
+    assert wrangler(*url, "spin", "5").status == ExitStatus.OK
+    assert wrangler(*url, "watch", "--duration", "0.2").status == ExitStatus.OK  # airborne by then
+    held = wrangler(*url, "--json", "grasp")
+    assert held.status == ExitStatus.OK, held.stderr
+    assert held.json["state"] == "HOLD" and held.json["guide_mm"] >= 100.0 and held.json["spindle_load_pct"] == 15.0
+    assert wrangler(*url, "--json", "release").json["state"] == "ARMED"
+    assert [n for n in device.executed_names() if n != "SET_ROPE_SPEED"] == [
+        "ARM", "HOME", "SET_LOOP", "GRASP", "RELEASE"]
+
+
+def test_a_retract_that_secures_nothing_exits_1(device: ScriptedDevice) -> None:
+    wrangler("--url", device.url, "arm")
+    wrangler("--url", device.url, "home")
+    run = wrangler("--url", device.url, "--json", "retract")
+    assert run.status == ExitStatus.ERROR and run.json["error"] == "NothingGrasped"
+    assert "end of the stroke (180 mm) without securing a load" in run.stderr

@@ -17,7 +17,7 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param, record, sil
+from robowrangler.cli import monitor, motion, param, record, sil, spindle
 from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext, OutputClosed
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
@@ -27,6 +27,7 @@ from robowrangler.transport import DEFAULT_URL, parse_url
 
 COMMANDS: list[click.Command] = [
     motion.arm, motion.disarm, motion.spin, motion.spindown, motion.estop,
+    spindle.home, spindle.loop, spindle.relax, spindle.retract, spindle.grasp, spindle.release,
     monitor.status, monitor.watch,
     param.param,
     sil.sil_command, sil.demo_command,

@@ -1,0 +1,108 @@
+"""Spindle and grasp commands: home, loop, relax, retract, grasp, release.
+
+Guide positions are given and shown in mm from home (as the device's guide_min_mm/guide_max_mm
+parameters are); the Python API takes metres.
+"""
+
+from __future__ import annotations
+
+import click
+
+from robowrangler import units
+from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.errors import RoboWranglerError
+from robowrangler.protocol.generated import SpindleFlag, State
+
+_WITHIN = dict(type=click.FloatRange(min=0.0, min_open=True), metavar="SECONDS", show_default=True)
+_HEARTBEAT_NOTE = "the device stops the spindle heartbeat_timeout_s after this command exits"
+
+
+class NothingGrasped(RoboWranglerError):
+    """A grasp or retract reached the end of the stroke without the load that secures an object."""
+
+
+def _guide_mm(sample) -> float:
+    return round(units.m_to_mm(sample.guide_position_m), 3)
+
+
+@click.command()
+@click.option("--within", "within_s", default=60.0, help="Wait this long for the end stop.", **_WITHIN)
+@pass_context
+def home(ctx: CliContext, within_s: float) -> None:
+    """Drive the guide to the home end (stall or limit switch) and set position 0 there."""
+    with ctx.client() as rw:
+        rw.home()
+        done = rw.wait_for(lambda s: SpindleFlag.HOMED in s.spindle_flags and SpindleFlag.HOMING not in s.spindle_flags,
+                           timeout_s=within_s, expected="a homed spindle")
+    ctx.result({"command": "home", "state": done.state.name, "guide_mm": _guide_mm(done)},
+               f"homed (guide at {_guide_mm(done):g} mm, state {done.state.name})")
+
+
+@click.command()
+@click.argument("guide_mm", type=float, metavar="GUIDE_MM")
+@click.option("--within", "within_s", default=30.0, help="Wait this long for the guide to get there.", **_WITHIN)
+@click.option("--no-wait", is_flag=True, help="Return once the device accepted the target.")
+@pass_context
+def loop(ctx: CliContext, guide_mm: float, within_s: float, no_wait: bool) -> None:
+    """Move the rope guide to GUIDE_MM from home (larger = smaller loop); needs a homed spindle."""
+    target_m = units.mm_to_m(guide_mm)
+    units.m_to_um(target_m, argument="GUIDE_MM")  # NaN/inf fail before connecting
+    with ctx.client() as rw:
+        state = rw.set_loop(target_m)
+        if no_wait:
+            ctx.result({"command": "loop", "guide_target_mm": guide_mm, "state": state.name},
+                       f"guide target {guide_mm:g} mm (state {state.name})")
+            return
+        done = rw.wait_for(lambda s: abs(s.guide_target_m - target_m) < 1e-6 and SpindleFlag.MOVING not in s.spindle_flags,
+                           timeout_s=within_s, expected=f"the guide at {guide_mm:g} mm")
+    ctx.result({"command": "loop", "guide_target_mm": guide_mm, "guide_mm": _guide_mm(done), "state": done.state.name},
+               f"guide at {_guide_mm(done):g} mm (target {guide_mm:g} mm, state {done.state.name})")
+
+
+@click.command()
+@pass_context
+def relax(ctx: CliContext) -> None:
+    """SPINUP or AIRBORNE -> RELAX: stop the rope so the loop settles onto the object."""
+    with ctx.client() as rw:
+        state = rw.relax()
+    ctx.result({"command": "relax", "state": state.name}, f"relaxing (state {state.name})")
+
+
+def _until_held(ctx: CliContext, rw, command: str, within_s: float) -> None:
+    end = rw.wait_for_state([State.HOLD, State.ARMED], timeout_s=within_s)
+    if end.state != State.HOLD:
+        raise NothingGrasped(f"{command}: the guide reached the end of the stroke ({_guide_mm(end):g} mm) without "
+                             "securing a load; nothing is held (state ARMED)")
+    ctx.note(_HEARTBEAT_NOTE)
+    ctx.result({"command": command, "state": end.state.name, "guide_mm": _guide_mm(end),
+                "spindle_load_pct": end.spindle_load_pct},
+               f"holding at {_guide_mm(end):g} mm, load {end.spindle_load_pct:g} % (state HOLD)")
+
+
+@click.command()
+@click.option("--within", "within_s", default=30.0, help="Wait this long for HOLD.", **_WITHIN)
+@pass_context
+def retract(ctx: CliContext, within_s: float) -> None:
+    """Reel the loop in until the load secures the object (HOLD); exit 1 if the stroke ends first."""
+    with ctx.client() as rw:
+        rw.retract()
+        _until_held(ctx, rw, "retract", within_s)
+
+
+@click.command()
+@click.option("--within", "within_s", default=30.0, help="Wait this long for HOLD.", **_WITHIN)
+@pass_context
+def grasp(ctx: CliContext, within_s: float) -> None:
+    """AIRBORNE -> relax onto the object -> retract -> HOLD; exit 1 if the stroke ends first."""
+    with ctx.client() as rw:
+        rw.grasp()
+        _until_held(ctx, rw, "grasp", within_s)
+
+
+@click.command()
+@pass_context
+def release(ctx: CliContext) -> None:
+    """HOLD -> extend the guide by release_mm to let the object go -> ARMED."""
+    with ctx.client() as rw:
+        state = rw.release()
+    ctx.result({"command": "release", "state": state.name}, f"released (state {state.name})")
