@@ -330,6 +330,55 @@ static uint8_t spindle_flags(const rw_spindle *sp)
     return flags;
 }
 
+static const rw_hal_link *link_of(const rw_hal *hal, rw_link_id link)
+{
+    return link == RW_LINK_SERIAL ? hal->serial : (link == RW_LINK_WIFI ? hal->link : NULL);
+}
+
+void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len)
+{
+    const rw_hal_link *l = link_of(hal, link);
+    if (l == NULL || len == 0u) {
+        return;
+    }
+    if (link == RW_LINK_WIFI && core->state.config.key_set != 0u) {
+        uint8_t signed_frame[RW_MAX_FRAME_LEN];
+        memcpy(signed_frame, frame, len);
+        len = rw_frame_sign(signed_frame, len, sizeof signed_frame, rw_core_session_id(core), ++core->state.tx_counter,
+                            core->state.config.key);
+        if (len == 0u) {
+            return;
+        }
+        (reply ? l->reply : l->send)(l->ctx, signed_frame, len);
+        return;
+    }
+    (reply ? l->reply : l->send)(l->ctx, frame, len);
+}
+
+/* First tick: the stored configuration (key, parameters) and a new session: the boot counter goes up and is
+ * written back at once, so that no later boot can reuse this session id. */
+static void load_config(rw_core *core, const rw_hal *hal)
+{
+    rw_config *c = &core->state.config;
+    bool stored = hal->config != NULL && hal->config->load(hal->config->ctx, c, sizeof *c) && rw_config_valid(c);
+    if (stored) {
+        for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
+            if (rw_params_check(&core->params, (uint8_t)i, c->params[i], true) == RW_DECODE_OK) {
+                core->params.value[i] = c->params[i];
+            }
+        }
+        rw_core_apply_params(core);
+    } else {
+        rw_config_defaults(c);
+        memcpy(c->params, core->params.value, sizeof c->params);
+    }
+    c->boot_counter += 1u;
+    rw_config_seal(c);
+    if (hal->config != NULL) {
+        (void)hal->config->save(hal->config->ctx, c, sizeof *c);
+    }
+}
+
 static void queue_telemetry(rw_core *core, const rw_hal *hal)
 {
     const rw_core_counters *c = &core->state.counters;
@@ -356,6 +405,8 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
         .spindle_load_permille = core->state.spindle.state.load_permille,
         .spindle_flags = spindle_flags(&core->state.spindle),
         .spindle_rejected = core->state.spindle.state.turns.state.rejected,
+        .rx_auth_failed = c->rx_auth_failed,
+        .rx_replayed = c->rx_replayed,
     };
     uint8_t frame[RW_MAX_FRAME_LEN];
     size_t len = rw_msg_telemetry_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
@@ -367,6 +418,7 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     if (!core->state.started) {
         core->state.started = true;
         core->state.last_now_us = now_us;
+        load_config(core, hal);
         rw_core_emit_event(core, RW_EVENT_KIND_BOOT, core->state.state, core->state.state, (int32_t)core->reset_cause);
     }
     uint32_t dt_us = now_us - core->state.last_now_us;
@@ -390,8 +442,9 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     core->state.battery_mv = hal->battery->read_mv(hal->battery->ctx);
     core->state.battery_v = (float)core->state.battery_mv * 1.0e-3f;
 
-    /* 2. at most one received datagram */
-    bool sent = rw_core_handle_datagram(core, hal);
+    /* 2. at most one received datagram per link (USB serial first: it is where provisioning happens) */
+    bool sent = hal->serial != NULL && rw_core_handle_datagram(core, hal, RW_LINK_SERIAL);
+    sent = rw_core_handle_datagram(core, hal, RW_LINK_WIFI) || sent;
 
     /* 3. supervision, 4. control */
     supervise(core, dt_s, dt_ms, primed ? counts_delta : 1u);
@@ -417,7 +470,7 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     if (!sent) {
         const rw_outbox_slot *slot = rw_outbox_peek(&core->state.outbox);
         if (slot != NULL) {
-            hal->link->send(hal->link->ctx, slot->bytes, slot->len);
+            rw_core_link_send(core, hal, (rw_link_id)core->state.peer_link, false, slot->bytes, slot->len);
             rw_outbox_pop(&core->state.outbox, slot);
         }
     }

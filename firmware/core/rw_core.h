@@ -3,7 +3,12 @@
  * Portable C: no Arduino header, no clock reads, no heap. The caller owns an rw_core, calls rw_core_init
  * once, then rw_core_tick once per control period with the HAL (by reference) and the tick time. Every
  * output goes through the HAL: the ESC pulse, replies, events and telemetry (at most one datagram
- * received and one sent per tick).
+ * received per link and one sent per tick).
+ *
+ * Link security: over WiFi every frame but HELLO must be signed (SipHash-2-4 with the provisioned key) for
+ * the current session (the boot counter, kept in the configuration record) with a counter above the last
+ * accepted one; anything else is dropped and counted (rx_auth_failed, rx_replayed). Without a key nothing
+ * is accepted over WiFi. USB serial is trusted: unsigned frames and the PROVISION_* messages.
  *
  * Tick (period = the time between calls, 1 ms on the board and in SIL; the spindle every 10 ms):
  *   1. encoder -> M/T estimator -> rope speed (m/s);  battery (V)
@@ -20,6 +25,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rw_config.h"
 #include "rw_duplicate_cache.h"
 #include "rw_hal.h"
 #include "rw_mt_speed_estimator.h"
@@ -45,7 +51,16 @@ typedef struct rw_core_counters {
     uint16_t rx_duplicates;
     uint16_t nacks;
     uint16_t events;
+    uint16_t rx_auth_failed;
+    uint16_t rx_replayed;
 } rw_core_counters;
+
+/* Which link a frame came in on / the peer is on. WiFi frames must be signed; USB serial is trusted. */
+typedef enum {
+    RW_LINK_NONE = 0,
+    RW_LINK_WIFI = 1,
+    RW_LINK_SERIAL = 2,
+} rw_link_id;
 
 typedef struct rw_core {
     rw_params params; /* public: read through rw_params_get; set through PARAM_SET or rw_core_set_param */
@@ -60,6 +75,13 @@ typedef struct rw_core {
         rw_duplicate_cache duplicates;
         rw_outbox outbox;
         rw_core_counters counters;
+        rw_config config;         /* the stored record (RAM copy): key, WiFi, boot counter; staged changes */
+        bool config_dirty;        /* provisioning changed it since the last PROVISION_COMMIT */
+        bool key_staged;          /* PROVISION_SET_KEY received; active from the next commit */
+        uint8_t staged_key[RW_KEY_LEN];
+        uint64_t host_counter;    /* last accepted signed-frame counter of this session */
+        uint64_t tx_counter;      /* counter of the device's own signed frames */
+        uint8_t peer_link;        /* rw_link_id of the host telemetry and events go to */
 
         uint8_t state;            /* rw_state */
         uint8_t spindown_cause;   /* rw_cause of the current SPINDOWN */
@@ -104,6 +126,12 @@ int rw_core_set_param(rw_core *core, uint8_t param_id, float value);
 
 /* sizeof(rw_core), for bindings that allocate the core themselves (the pytest suites use ctypes). */
 size_t rw_core_sizeof(void);
+
+/* The session id of this boot (valid from the first tick). */
+static inline uint32_t rw_core_session_id(const rw_core *core)
+{
+    return core->state.config.boot_counter;
+}
 
 static inline uint8_t rw_core_state(const rw_core *core)
 {

@@ -5,6 +5,7 @@
  * within RW_DUPLICATE_WINDOW_MS) gets the cached verdict again and is counted in rx_duplicates. Nothing
  * is ever clamped: a value out of range is refused with OUT_OF_RANGE and the limit in NACK.detail. */
 #include <math.h>
+#include <string.h>
 
 #include "rw_core_internal.h"
 
@@ -295,7 +296,7 @@ static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
     }
 }
 
-static void send_verdict(rw_core *core, const rw_hal *hal, uint8_t msg_id, uint16_t seq, verdict v)
+static void send_verdict(rw_core *core, const rw_hal *hal, rw_link_id link, uint8_t msg_id, uint16_t seq, verdict v)
 {
     uint8_t frame[RW_MAX_FRAME_LEN];
     size_t len;
@@ -309,7 +310,108 @@ static void send_verdict(rw_core *core, const rw_hal *hal, uint8_t msg_id, uint1
         len = rw_msg_nack_encode(&nack, core->state.tx_seq++, frame, sizeof frame);
         ++core->state.counters.nacks;
     }
-    hal->link->reply(hal->link->ctx, frame, len);
+    rw_core_link_send(core, hal, link, true, frame, len);
+}
+
+/* ---- session and provisioning ------------------------------------------------------------------ */
+
+static void reply_session_info(rw_core *core, const rw_hal *hal, rw_link_id link, const rw_frame *frame)
+{
+    rw_msg_hello hello;
+    rw_msg_hello_unpack(&hello, frame->payload);
+    rw_msg_session_info info = {
+        .host_nonce = hello.host_nonce,
+        .session_id = rw_core_session_id(core),
+        .key_set = core->state.config.key_set,
+        .schema_hash = (uint16_t)RW_PROTOCOL_SCHEMA_HASH,
+    };
+    uint8_t out[RW_MAX_FRAME_LEN];
+    size_t len = rw_msg_session_info_encode(&info, core->state.tx_seq++, out, sizeof out);
+    rw_core_link_send(core, hal, link, true, out, len);
+}
+
+static void queue_provision_status(rw_core *core)
+{
+    const rw_config *c = &core->state.config;
+    rw_msg_provision_status st = {
+        .key_set = c->key_set,
+        .password_set = c->password_set,
+        .boot_counter = c->boot_counter,
+        .commits = c->commits,
+        .config_version = (uint16_t)RW_CONFIG_VERSION,
+        .dirty = core->state.config_dirty ? 1u : 0u,
+    };
+    memcpy(st.wifi_ssid, c->wifi_ssid, sizeof st.wifi_ssid);
+    uint8_t out[RW_MAX_FRAME_LEN];
+    size_t len = rw_msg_provision_status_encode(&st, core->state.tx_seq++, out, sizeof out);
+    rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
+}
+
+/* PROVISION_* (USB serial only; the caller checked the link). Changes are staged in the RAM record and
+ * written by PROVISION_COMMIT; the key takes effect at the commit. */
+static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame)
+{
+    rw_config *c = &core->state.config;
+    if (frame->msg_id == RW_MSG_ID_PROVISION_GET) {
+        return ACCEPT;
+    }
+    if (core->state.state != RW_STATE_DISARMED) {
+        return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+    switch (frame->msg_id) {
+    case RW_MSG_ID_PROVISION_SET_WIFI_SSID: {
+        rw_msg_provision_set_wifi_ssid msg;
+        rw_msg_provision_set_wifi_ssid_unpack(&msg, frame->payload);
+        memcpy(c->wifi_ssid, msg.ssid, sizeof c->wifi_ssid);
+        break;
+    }
+    case RW_MSG_ID_PROVISION_SET_WIFI_PASSWORD: {
+        rw_msg_provision_set_wifi_password msg;
+        rw_msg_provision_set_wifi_password_unpack(&msg, frame->payload);
+        size_t n = strlen(msg.password);
+        if (n != 0u && n < 8u) {
+            return refuse(RW_NACK_REASON_OUT_OF_RANGE, 8); /* WPA2 needs 8..63 characters */
+        }
+        memcpy(c->wifi_password, msg.password, sizeof c->wifi_password);
+        c->password_set = n != 0u ? 1u : 0u;
+        break;
+    }
+    case RW_MSG_ID_PROVISION_SET_KEY: {
+        rw_msg_provision_set_key msg;
+        rw_msg_provision_set_key_unpack(&msg, frame->payload);
+        memcpy(core->state.staged_key, msg.key, RW_KEY_LEN);
+        core->state.key_staged = true;
+        break;
+    }
+    case RW_MSG_ID_PROVISION_COMMIT: {
+        if (hal->config == NULL) {
+            return refuse(RW_NACK_REASON_STORE_FAILED, 0);
+        }
+        rw_config next = *c;
+        memcpy(next.params, core->params.value, sizeof next.params);
+        if (core->state.key_staged) {
+            memcpy(next.key, core->state.staged_key, RW_KEY_LEN);
+            next.key_set = 1u;
+        }
+        next.commits += 1u;
+        rw_config_seal(&next);
+        if (!hal->config->save(hal->config->ctx, &next, sizeof next)) {
+            return refuse(RW_NACK_REASON_STORE_FAILED, 1);
+        }
+        if (core->state.key_staged) {
+            core->state.host_counter = 0u; /* a new key starts its own counter */
+            core->state.key_staged = false;
+            memset(core->state.staged_key, 0, RW_KEY_LEN);
+        }
+        *c = next;
+        core->state.config_dirty = false;
+        return ACCEPT;
+    }
+    default:
+        return refuse(RW_NACK_REASON_NOT_A_COMMAND, 0);
+    }
+    core->state.config_dirty = true;
+    return ACCEPT;
 }
 
 /* PARAM_GET and PARAM_SET are followed by the parameter's value (queued: one datagram per tick). */
@@ -327,54 +429,91 @@ static void queue_param_value(rw_core *core, const rw_frame *frame)
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
 }
 
-bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal)
+/* Over WiFi a frame counts only if it is signed with the key, for this session, with a fresh counter. */
+static bool authentic(rw_core *core, const rw_frame *frame)
 {
+    rw_core_counters *c = &core->state.counters;
+    if (core->state.config.key_set == 0u || (frame->flags & RW_FRAME_FLAG_SIGNED) == 0u ||
+        !rw_frame_tag_valid(frame, core->state.config.key)) {
+        ++c->rx_auth_failed;
+        return false;
+    }
+    if (frame->session_id != rw_core_session_id(core) || frame->counter <= core->state.host_counter) {
+        ++c->rx_replayed;
+        return false;
+    }
+    core->state.host_counter = frame->counter;
+    return true;
+}
+
+bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link)
+{
+    const rw_hal_link *l = link == RW_LINK_SERIAL ? hal->serial : hal->link;
     uint8_t buf[RW_MAX_FRAME_LEN + 1u];
-    size_t n = hal->link->recv(hal->link->ctx, buf, sizeof buf);
+    size_t n = l->recv(l->ctx, buf, sizeof buf);
     if (n == 0u) {
         return false;
     }
     rw_frame frame;
     /* A datagram longer than buf arrives truncated to sizeof buf, which is longer than any frame: the
      * decoder refuses it exactly as it refuses the whole datagram (trailing bytes: BAD_LENGTH; a declared
-     * payload over the maximum: OVERSIZE; a bad header first: BAD_MAGIC/BAD_VERSION/UNSUPPORTED_FLAGS). */
+     * payload over the maximum: OVERSIZE; a bad header first: BAD_MAGIC/BAD_VERSION/UNSUPPORTED_FLAGS).
+     * A malformed frame is answered with its reason (it carries nothing to authenticate). */
     int result = rw_frame_decode(buf, n > sizeof buf ? sizeof buf : n, &frame);
     if (result != RW_DECODE_OK) {
         ++core->state.counters.rx_bad;
-        send_verdict(core, hal, frame.msg_id, frame.seq, refuse((uint8_t)result, 0));
+        send_verdict(core, hal, link, frame.msg_id, frame.seq, refuse((uint8_t)result, 0));
         return true;
     }
     const rw_msg_info *info = rw_msg_info_find(frame.msg_id);
-    if (info->kind != RW_MSG_KIND_COMMAND && info->kind != RW_MSG_KIND_HEARTBEAT) {
+    if (info->kind == RW_MSG_KIND_HELLO) {
+        ++core->state.counters.rx_ok;
+        reply_session_info(core, hal, link, &frame);
+        return true;
+    }
+    if (link == RW_LINK_WIFI && !authentic(core, &frame)) {
+        return false; /* dropped and counted: no answer to an unauthenticated sender */
+    }
+    if (info->kind == RW_MSG_KIND_PROVISION && link != RW_LINK_SERIAL) {
         ++core->state.counters.rx_bad;
-        send_verdict(core, hal, frame.msg_id, frame.seq, refuse(RW_NACK_REASON_NOT_A_COMMAND, 0));
+        send_verdict(core, hal, link, frame.msg_id, frame.seq, refuse(RW_NACK_REASON_NOT_ON_THIS_LINK, 0));
+        return true;
+    }
+    if (info->kind != RW_MSG_KIND_COMMAND && info->kind != RW_MSG_KIND_HEARTBEAT &&
+        info->kind != RW_MSG_KIND_PROVISION) {
+        ++core->state.counters.rx_bad;
+        send_verdict(core, hal, link, frame.msg_id, frame.seq, refuse(RW_NACK_REASON_NOT_A_COMMAND, 0));
         return true;
     }
 
     ++core->state.counters.rx_ok;
-    hal->link->accept_peer(hal->link->ctx);
+    l->accept_peer(l->ctx);
+    core->state.peer_link = (uint8_t)link;
     core->state.last_host_frame_ms = core->state.uptime_ms;
     core->state.heartbeat_lost = false;
     if (info->kind == RW_MSG_KIND_HEARTBEAT) {
         return false;
     }
 
-    uint16_t checksum = (uint16_t)(buf[n - 2u] | (buf[n - 1u] << 8));
-    const rw_duplicate_entry *dup =
-        rw_duplicate_cache_find(&core->state.duplicates, frame.msg_id, frame.seq, checksum, core->state.uptime_ms);
+    /* the checksum covers header and payload, not the signature: a re-signed retransmission matches */
+    const rw_duplicate_entry *dup = rw_duplicate_cache_find(&core->state.duplicates, frame.msg_id, frame.seq,
+                                                            frame.checksum, core->state.uptime_ms);
     verdict v;
     if (dup != NULL) {
         ++core->state.counters.rx_duplicates;
         v = refuse(dup->nack_reason, dup->nack_detail);
     } else {
-        v = execute(core, hal, &frame);
-        rw_duplicate_cache_store(&core->state.duplicates, frame.msg_id, frame.seq, checksum, v.reason, v.detail,
-                                 core->state.uptime_ms);
+        v = info->kind == RW_MSG_KIND_PROVISION ? provision(core, hal, &frame) : execute(core, hal, &frame);
+        rw_duplicate_cache_store(&core->state.duplicates, frame.msg_id, frame.seq, frame.checksum, v.reason,
+                                 v.detail, core->state.uptime_ms);
         core->state.last_cmd_seq = frame.seq;
     }
-    send_verdict(core, hal, frame.msg_id, frame.seq, v);
+    send_verdict(core, hal, link, frame.msg_id, frame.seq, v);
     if (v.reason == 0u && (frame.msg_id == RW_MSG_ID_PARAM_GET || frame.msg_id == RW_MSG_ID_PARAM_SET)) {
         queue_param_value(core, &frame);
+    }
+    if (v.reason == 0u && frame.msg_id == RW_MSG_ID_PROVISION_GET) {
+        queue_provision_status(core);
     }
     return true;
 }

@@ -9,7 +9,10 @@ void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, 
 void rw_core_set_state(rw_core *core, uint8_t new_state, uint8_t cause);
 void rw_core_raise_fault(rw_core *core, uint16_t fault_bit);
 
-/* Receive at most one datagram, answer it; returns true when a datagram was sent this tick. */
-bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal);
+/* Receive at most one datagram on a link, answer it; returns true when a datagram was sent this tick. */
+bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link);
+/* Send a frame on a link (reply: to the sender of the last datagram; else to that link's peer); frames on
+ * WiFi are signed when a key is set. */
+void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len);
 
 #endif /* RW_CORE_INTERNAL_H */

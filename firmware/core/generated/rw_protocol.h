@@ -59,9 +59,10 @@ typedef enum {
     RW_NACK_REASON_UNSIGNED = 19, /* Never sent: an unsigned frame where a signed one is required is dropped and counted (rx_auth_failed). */
     RW_NACK_REASON_AUTH_FAILED = 20, /* Never sent: a frame whose tag is wrong for the key is dropped and counted (rx_auth_failed). */
     RW_NACK_REASON_REPLAYED = 21, /* Never sent: a frame from another session, or whose counter is not above the last accepted, is dropped and counted (rx_replayed). */
-    RW_NACK_REASON_NO_KEY = 22, /* The device has no key provisioned: it takes no command over WiFi until one is set over USB serial. */
+    RW_NACK_REASON_NO_KEY = 22, /* Never sent: the device has no key provisioned and drops every frame over WiFi but HELLO (SESSION_INFO says key_set 0) until one is set over USB serial. */
+    RW_NACK_REASON_STORE_FAILED = 23, /* PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed. */
 } rw_nack_reason;
-#define RW_NACK_REASON_COUNT 23u
+#define RW_NACK_REASON_COUNT 24u
 
 /* Event kinds (EVENT.event). */
 typedef enum {

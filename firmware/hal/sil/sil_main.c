@@ -1,10 +1,12 @@
 /* rw_sil: the firmware core with the sil HAL, as its own process.
  *
- *   rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N]
+ *   rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N] [--state-file PATH]
  *
  * Binds the command link (the host's UDP port, as the board's WiFi) and the plant port on 127.0.0.1
- * (0 = any free port), prints "rw_sil ready cmd_port=N plant_port=N" on stdout, then runs one core tick
- * per SIL_SENSORS datagram from the plant. Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
+ * (0 = any free port), opens a pseudo-terminal as the board's USB serial (provisioning), prints
+ * "rw_sil ready cmd_port=N plant_port=N serial=PATH" on stdout, then runs one core tick per SIL_SENSORS
+ * datagram from the plant. --state-file is the board's flash (configuration record: key, parameters,
+ * boot counter = session id); without it nothing persists and nothing can be committed. Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
  * for --plant-timeout-s (never hangs), 2 on bad arguments or sockets. */
 #include <errno.h>
 #include <signal.h>
@@ -13,8 +15,10 @@
 #include <string.h>
 
 #include "rw_core.h"
+#include "sil_config_store.h"
 #include "sil_link.h"
 #include "sil_lockstep.h"
+#include "sil_serial.h"
 
 static volatile sig_atomic_t stop_requested = 0;
 
@@ -63,16 +67,24 @@ static int parse_uint(const char *text, long max, long *out)
 
 static int usage(const char *msg)
 {
-    fprintf(stderr, "rw_sil: %s\nusage: rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N]\n", msg);
+    fprintf(stderr, "rw_sil: %s\nusage: rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N] [--state-file PATH]\n", msg);
     return 2;
 }
 
 int main(int argc, char **argv)
 {
     long cmd_port = 14550, plant_port = 14560, plant_timeout_s = 10, tick_us = 1000;
+    static sil_config_store store = { { 0 } };
     for (int i = 1; i < argc; ++i) {
         long *target = NULL;
         long max = 65535;
+        if (strcmp(argv[i], "--state-file") == 0) {
+            if (i + 1 >= argc || strlen(argv[i + 1]) >= sizeof store.path) {
+                return usage("--state-file needs a path");
+            }
+            strcpy(store.path, argv[++i]);
+            continue;
+        }
         if (strcmp(argv[i], "--cmd-port") == 0) {
             target = &cmd_port;
         } else if (strcmp(argv[i], "--plant-port") == 0) {
@@ -109,6 +121,13 @@ int main(int argc, char **argv)
         return 2;
     }
 
+    static sil_serial serial;
+    if (!sil_serial_open(&serial)) {
+        fprintf(stderr, "rw_sil: cannot open a pseudo-terminal for the serial link: %s\n", strerror(errno));
+        return 2;
+    }
+    rw_hal_link serial_hal = sil_serial_hal(&serial);
+    rw_hal_config_store store_hal = sil_config_store_hal(&store);
     rw_hal_link link_hal = sil_link_hal(&link);
     rw_hal_encoder encoder_hal = sil_lockstep_encoder(&lockstep);
     rw_hal_battery battery_hal = sil_lockstep_battery(&lockstep);
@@ -119,12 +138,12 @@ int main(int argc, char **argv)
     rw_hal_spindle spindle_hal = sil_lockstep_spindle(&lockstep);
     rw_hal hal = {
         .esc = &esc_hal, .encoder = &encoder_hal, .battery = &battery_hal, .link = &link_hal, .scheduler = &scheduler_hal,
-        .spindle = &spindle_hal,
+        .spindle = &spindle_hal, .serial = &serial_hal, .config = store.path[0] != '\0' ? &store_hal : NULL,
     };
     static rw_core core;
     rw_core_init(&core);
 
-    printf("rw_sil ready cmd_port=%u plant_port=%u\n", link.port, lockstep.port);
+    printf("rw_sil ready cmd_port=%u plant_port=%u serial=%s\n", link.port, lockstep.port, serial.path);
     fflush(stdout);
 
     int exit_code = 0;
@@ -151,5 +170,6 @@ int main(int argc, char **argv)
     }
     sil_link_close(&link);
     sil_lockstep_close(&lockstep);
+    sil_serial_close(&serial);
     return exit_code;
 }

@@ -99,7 +99,9 @@ class NackReason(IntEnum):
     REPLAYED = 21
     """Never sent: a frame from another session, or whose counter is not above the last accepted, is dropped and counted (rx_replayed)."""
     NO_KEY = 22
-    """The device has no key provisioned: it takes no command over WiFi until one is set over USB serial."""
+    """Never sent: the device has no key provisioned and drops every frame over WiFi but HELLO (SESSION_INFO says key_set 0) until one is set over USB serial."""
+    STORE_FAILED = 23
+    """PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed."""
 
 
 class EventKind(IntEnum):

@@ -1,0 +1,114 @@
+#include "sil_serial.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdlib.h>
+#include <string.h>
+#include <termios.h>
+#include <unistd.h>
+
+bool sil_serial_open(sil_serial *s)
+{
+    memset(s, 0, sizeof *s);
+    s->fd = posix_openpt(O_RDWR | O_NOCTTY);
+    if (s->fd < 0 || grantpt(s->fd) != 0 || unlockpt(s->fd) != 0) {
+        return false;
+    }
+    const char *name = ptsname(s->fd);
+    if (name == NULL || strlen(name) >= sizeof s->path) {
+        return false;
+    }
+    strcpy(s->path, name);
+    /* raw bytes both ways, as a USB CDC port: no echo, no line discipline */
+    int slave = open(s->path, O_RDWR | O_NOCTTY);
+    if (slave >= 0) {
+        struct termios t;
+        if (tcgetattr(slave, &t) == 0) {
+            cfmakeraw(&t);
+            tcsetattr(slave, TCSANOW, &t);
+        }
+        close(slave);
+    }
+    int flags = fcntl(s->fd, F_GETFL, 0);
+    fcntl(s->fd, F_SETFL, flags | O_NONBLOCK);
+    return true;
+}
+
+void sil_serial_close(sil_serial *s)
+{
+    if (s->fd >= 0) {
+        close(s->fd);
+        s->fd = -1;
+    }
+}
+
+/* Read bytes until one whole COBS frame is decoded into buf (returns its length) or none is waiting. */
+static size_t hal_recv(void *ctx, uint8_t *buf, size_t cap)
+{
+    sil_serial *s = ctx;
+    uint8_t byte;
+    while (read(s->fd, &byte, 1) == 1) {
+        if (byte != 0u) {
+            if (s->rx_len < sizeof s->rx) {
+                s->rx[s->rx_len++] = byte;
+            } else {
+                s->rx_overflow = true;
+            }
+            continue;
+        }
+        size_t n = s->rx_len;
+        bool overflow = s->rx_overflow;
+        s->rx_len = 0u;
+        s->rx_overflow = false;
+        if (n == 0u) {
+            continue; /* back-to-back delimiters */
+        }
+        size_t len = overflow ? 0u : rw_cobs_decode(s->rx, n, buf, cap);
+        if (len == 0u) {
+            ++s->bad_frames;
+            buf[0] = 0u; /* not a frame: the core refuses it (BAD_MAGIC) and counts it */
+            return 1u;
+        }
+        ++s->frames_in;
+        return len;
+    }
+    return 0u;
+}
+
+static void write_all(int fd, const uint8_t *p, size_t n)
+{
+    while (n > 0u) {
+        ssize_t w = write(fd, p, n);
+        if (w < 0) {
+            if (errno == EAGAIN || errno == EINTR) {
+                continue;
+            }
+            return; /* nobody on the other end */
+        }
+        p += w;
+        n -= (size_t)w;
+    }
+}
+
+static void hal_send(void *ctx, const uint8_t *frame, size_t len)
+{
+    sil_serial *s = ctx;
+    uint8_t out[RW_COBS_MAX_ENCODED(RW_MAX_FRAME_LEN) + 1u];
+    size_t n = rw_cobs_encode(frame, len, out, sizeof out - 1u);
+    if (n == 0u) {
+        return;
+    }
+    out[n++] = 0u;
+    write_all(s->fd, out, n);
+}
+
+static void hal_accept_peer(void *ctx)
+{
+    (void)ctx; /* one cable, one peer */
+}
+
+rw_hal_link sil_serial_hal(sil_serial *s)
+{
+    rw_hal_link hal = { .ctx = s, .recv = hal_recv, .reply = hal_send, .accept_peer = hal_accept_peer, .send = hal_send };
+    return hal;
+}
