@@ -1,8 +1,9 @@
 """Instructions and Cortex-M0+ cycles of one control tick of the firmware core, emulated with unicorn.
 
 Builds the ARM harness (firmware/cmake/arm_tick_harness.c, -mcpu=cortex-m0plus -Os) if needed, drives the
-core through its fake HAL to AIRBORNE (ARM, SET_ROPE_SPEED 5 m/s, wheel turning at the matching speed,
-heartbeats), then profiles single rw_core_tick calls:
+core through its fake HAL to AIRBORNE (ARM, HOME by the limit switch, SET_ROPE_SPEED 5 m/s, wheel turning at
+the matching speed, heartbeats, then SET_LOOP so the spindle position loop is moving the guide), then profiles
+single rw_core_tick calls:
 
   quiet        AIRBORNE, speed loop active, nothing received, no telemetry due
   telemetry    the same, telemetry packed and sent
@@ -12,6 +13,9 @@ heartbeats), then profiles single rw_core_tick calls:
                telemetry packed (the heaviest path found)
   heartbeat    HEARTBEAT received and accepted (no reply), telemetry packed and sent in the same tick: the
                one path on which a received datagram and an outgoing telemetry frame share a tick
+  cycle_max    the heaviest of SCHEDULE_TICKS consecutive ticks with nothing received (the speed loop, the
+               spindle step every 10th tick and the telemetry pack at their own phases): the worst case of the
+               periodic work; the table then names the ticks of the cycle by what ran in them
 
 Prints instructions, modelled cycles (see tests/firmware_arm/arm_harness_emulator.py for the Cortex-M0+ cycle
 model) and the CPU load of that tick at 1 kHz on 48 MHz, then what dominates the heaviest tick per function
@@ -37,6 +41,8 @@ CPU_HZ = 48_000_000
 TICK_HZ = 1000
 TARGET_MMPS = 5000
 WHEEL_RADIUS_M = 0.015
+LOOP_TARGET_UM = 150_000  # far from home: the spindle keeps moving while the ticks are profiled
+SCHEDULE_TICKS = 40  # a whole number of spindle (10 ms) and telemetry (20 ms at 50 Hz) periods
 
 
 def group_of(func: str) -> str:
@@ -50,7 +56,7 @@ def group_of(func: str) -> str:
     if func in ("__udivsi3", "__aeabi_uidiv", "__aeabi_uidivmod", "__divsi3", "__aeabi_idiv", "__aeabi_idivmod"):
         return "integer division"
     if func == "rw_crc16_ccitt":
-        return "CRC-16 (bitwise)"
+        return "CRC-16 (table)"
     if func in ("memcpy", "memset", "memmove"):
         return "memcpy/memset"
     if func.startswith(("rw_msg_", "rw_frame_")):
@@ -92,6 +98,11 @@ class Scenario:
         self.run_quiet(600)  # arming hold (arm_hold_s) with heartbeats
         sent, _ = self.tick(self.frame(proto.Arm()))
         assert sent and isinstance(sent[0], proto.Ack), f"ARM not acknowledged: {sent}"
+        sent, _ = self.tick(self.frame(proto.Home()))
+        assert sent and isinstance(sent[0], proto.Ack), f"HOME not acknowledged: {sent}"
+        self.emu.write_u32("harness_spindle_switch", 1)  # the guide reaches the home switch
+        self.run_quiet(30)
+        self.emu.write_u32("harness_spindle_switch", 0)
         rpm = round(TARGET_MMPS * 1e-3 / (2 * math.pi * WHEEL_RADIUS_M) * 60)
         self.emu.set_wheel_rpm(rpm)
         sent, _ = self.tick(self.frame(proto.SetRopeSpeed(rope_speed_mmps=TARGET_MMPS)))
@@ -101,7 +112,21 @@ class Scenario:
             if self.emu.state() == proto.State.AIRBORNE:
                 break
         assert self.emu.state() == proto.State.AIRBORNE, f"not airborne: state {self.emu.state()}"
+        sent, _ = self.tick(self.frame(proto.SetLoop(guide_position_um=LOOP_TARGET_UM)))
+        assert sent and isinstance(sent[0], proto.Ack), f"SET_LOOP not acknowledged: {sent}"
         self.run_quiet(200)  # drain the event queue, settle the loop
+
+    def schedule_cycle(self, ticks: int) -> list[tuple[str, "ah.CallProfile"]]:
+        """Profile `ticks` consecutive ticks with nothing received; each with a label of what ran in it."""
+        out = []
+        for _ in range(ticks):
+            sent, profile = self.tick(None, count=True)
+            parts = [part for part, func in (("speed", "rw_pi_controller_step"), ("spindle", "rw_spindle_step"))
+                     if profile.per_function.get(func)]
+            if any(isinstance(m, proto.Telemetry) for m in sent):
+                parts.append("telemetry")
+            out.append(("+".join(parts) or "none", profile))
+        return out
 
     def until_telemetry(self):  # noqa: ANN201
         """Tick (profiled) until a tick sends TELEMETRY; returns that tick's profile."""
@@ -138,6 +163,12 @@ def main() -> None:
     sc.run_quiet(period_ms - 1)
     sent, results["heartbeat"] = sc.tick(sc.frame(proto.Heartbeat(host_time_ms=sc.now_us // 1000)), count=True)
     assert sent and isinstance(sent[0], proto.Telemetry), f"heartbeat tick sent {sent}"
+    cycle = sc.schedule_cycle(SCHEDULE_TICKS)
+    assert emu.state() == proto.State.AIRBORNE
+    worst_label, results["cycle_max"] = max(cycle, key=lambda item: item[1].cycles)
+    by_label: dict[str, list[int]] = {}
+    for label, profile in cycle:
+        by_label.setdefault(label, []).append(profile.cycles)
 
     cycles_per_tick = CPU_HZ / TICK_HZ
     print(f"ELF: {elf}")
@@ -146,11 +177,18 @@ def main() -> None:
     print("             SAMD21 flash at 48 MHz has 1 wait state: real cycles up to ~1.5x the modelled figure.")
     print(f"{'tick':<11}{'instructions':>13}{'cycles':>9}{'us @48MHz':>11}{'load @1kHz':>12}{'load x1.5':>11}"
           f"{'stack B':>9}")
-    for name in ("quiet", "telemetry", "heartbeat", "command", "param_set"):
+    for name in ("quiet", "telemetry", "heartbeat", "command", "param_set", "cycle_max"):
         p = results[name]
         us = p.cycles / CPU_HZ * 1e6
         print(f"{name:<11}{p.instructions:>13}{p.cycles:>9}{us:>11.1f}{p.cycles / cycles_per_tick:>11.1%}"
               f"{1.5 * p.cycles / cycles_per_tick:>11.1%}{p.stack_bytes:>9}")
+
+    print(f"\n{SCHEDULE_TICKS} consecutive ticks, nothing received; cycle_max was a '{worst_label}' tick.")
+    print(f"{'what ran in the tick':<28}{'ticks':>6}{'max cycles':>12}{'load @1kHz':>12}")
+    for label, cycles in sorted(by_label.items(), key=lambda kv: -max(kv[1])):
+        print(f"{label:<28}{len(cycles):>6}{max(cycles):>12}{max(cycles) / cycles_per_tick:>11.1%}")
+    mean_cycles = sum(p.cycles for _, p in cycle) / len(cycle)
+    print(f"{'mean over the cycle':<28}{len(cycle):>6}{mean_cycles:>12.0f}{mean_cycles / cycles_per_tick:>11.1%}")
 
     worst_name = max(results, key=lambda k: results[k].cycles)
     worst = results[worst_name]

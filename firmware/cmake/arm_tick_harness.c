@@ -8,7 +8,10 @@
  *   - encoder: a wheel turning at harness_wheel_rpm, 64 edges per revolution, edges timed exactly;
  *   - battery: harness_battery_mv;
  *   - link: one datagram in harness_rx[0..harness_rx_len) is delivered by the next recv(); reply() and
- *     send() copy the frame into harness_tx[] and count it (harness_tx_kind tells which of the two).
+ *     send() copy the frame into harness_tx[] and count it (harness_tx_kind tells which of the two);
+ *   - spindle: an AX-12A in wheel mode that always answers; it turns at the written moving speed (1023 =
+ *     59 rpm, about 12 position units per 10 ms read), reads 1023 in its 60 degree dead zone, load
+ *     harness_spindle_load_raw, limit switch harness_spindle_switch (so HOME can finish by switch).
  * On reset: copy .data, zero .bss, then main() ticks the core every simulated millisecond forever. */
 #include <stddef.h>
 #include <stdint.h>
@@ -30,6 +33,8 @@ uint32_t harness_tx_len;                   /* out: its length */
 uint8_t harness_tx[RW_MAX_FRAME_LEN];      /* out: its bytes */
 uint32_t harness_tx_count;                 /* out: datagrams out since init */
 uint32_t harness_pulse_us;                 /* out: last ESC pulse written, microseconds */
+uint32_t harness_spindle_switch;           /* in: home limit switch closed (1) or open (0) */
+uint16_t harness_spindle_load_raw;         /* in: present load register */
 rw_core harness_core;
 
 /* Fake encoder: edges every 60e6 / (rpm * 64) microseconds of the tick clock (the current rpm). */
@@ -110,6 +115,36 @@ static void fake_link_send(void *ctx, const uint8_t *frame, size_t len)
     fake_link_out(HARNESS_TX_SEND, frame, len);
 }
 
+/* Fake AX-12A: angle in 1/256 position units over the full 360 degrees (1228.8 units), advanced per read. */
+#define FAKE_SERVO_TURN_Q8 (1229u * 256u)
+static struct {
+    uint32_t angle_q8;
+    uint16_t moving_speed_raw;
+} fake_servo;
+
+static bool fake_spindle_read(void *ctx, rw_spindle_reading *out)
+{
+    (void)ctx;
+    uint32_t step_q8 = 3u * (fake_servo.moving_speed_raw & 0x03FFu); /* 1023 -> 12 units per read */
+    if ((fake_servo.moving_speed_raw & 0x0400u) == 0u) {
+        fake_servo.angle_q8 = (fake_servo.angle_q8 + step_q8) % FAKE_SERVO_TURN_Q8;
+    } else {
+        fake_servo.angle_q8 = (fake_servo.angle_q8 + FAKE_SERVO_TURN_Q8 - step_q8) % FAKE_SERVO_TURN_Q8;
+    }
+    uint32_t position = fake_servo.angle_q8 >> 8;
+    out->position_raw = (uint16_t)(position > 1023u ? 1023u : position);
+    out->speed_raw = fake_servo.moving_speed_raw;
+    out->load_raw = harness_spindle_load_raw;
+    out->limit_switch = harness_spindle_switch != 0u;
+    return true;
+}
+
+static void fake_spindle_write(void *ctx, uint16_t raw)
+{
+    (void)ctx;
+    fake_servo.moving_speed_raw = raw;
+}
+
 static uint32_t fake_tick_overruns(void *ctx)
 {
     (void)ctx;
@@ -121,12 +156,14 @@ static const rw_hal_encoder harness_encoder = { NULL, fake_encoder_read };
 static const rw_hal_battery harness_battery = { NULL, fake_battery_read_mv };
 static const rw_hal_link harness_link = { NULL, fake_link_recv, fake_link_reply, fake_link_accept_peer, fake_link_send };
 static const rw_hal_scheduler harness_scheduler = { NULL, fake_tick_overruns };
+static const rw_hal_spindle harness_spindle = { NULL, fake_spindle_read, fake_spindle_write };
 const rw_hal harness_hal = {
     .esc = &harness_esc,
     .encoder = &harness_encoder,
     .battery = &harness_battery,
     .link = &harness_link,
     .scheduler = &harness_scheduler,
+    .spindle = &harness_spindle,
 };
 
 /* Entry points for the emulator (called with the AAPCS: arguments in r0.., return in r0). */
@@ -138,6 +175,10 @@ uint8_t harness_state(void);
 void harness_init(void)
 {
     memset(&fake_wheel, 0, sizeof fake_wheel);
+    memset(&fake_servo, 0, sizeof fake_servo);
+    fake_servo.angle_q8 = 512u * 256u;
+    harness_spindle_switch = 0u;
+    harness_spindle_load_raw = 0u;
     harness_wheel_rpm = 0u;
     harness_battery_mv = 14800u;
     harness_rx_len = 0u;

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import io
-import json
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -32,7 +31,3 @@ def wrangler() -> Callable[..., tuple[ExitStatus, str, str]]:
         status = main(list(argv), Environment(out, err, {}))
         return status, out.getvalue(), err.getvalue()
     return run
-
-
-def json_lines(text: str) -> list[dict]:
-    return [json.loads(line) for line in text.splitlines() if line.strip()]

@@ -49,3 +49,20 @@ def test_committed_table_is_what_the_simulator_produces():
     fresh = steady_contour_xz_m(ShooterParams(), phi_deg=10.0, rope_speed_mps=5.0, loop_length_m=table.loop_length_m,
                                 n_points=table.n_points)
     assert np.abs(fresh - table.contours_m[s, p]).max() < 1e-5
+
+
+def test_shape_export_cli_writes_a_loadable_table(tmp_path):
+    from robowrangler_sim.string_shooter.shape_export import main
+
+    out = tmp_path / "table.json"
+    assert main(["--out", str(out), "--speeds", "5", "--loop-length", "0.6", "--points", "12", "--settle", "0.5"]) == 0
+    table = ShapeTable.load(out)
+    assert table.contours_m.shape == (1, 15, 12, 2)
+    assert table.loop_length_m == 0.6
+
+
+def test_shape_export_cli_refuses_bad_input(tmp_path, capsys):
+    from robowrangler_sim.string_shooter.shape_export import main
+
+    assert main(["--out", str(tmp_path / "t.json"), "--speeds", "5", "5"]) == 2
+    assert "rope_speed_mps" in capsys.readouterr().err

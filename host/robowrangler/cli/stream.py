@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 
+from robowrangler import units
 from robowrangler.cli.context import CliContext
 from robowrangler.client import Client
 from robowrangler.telemetry import DeviceEvent, TelemetrySample
@@ -16,7 +17,8 @@ def telemetry_line(s: TelemetrySample) -> str:
     faults = ",".join(f.name for f in type(s.fault_bits) if f in s.fault_bits) or "-"
     return (f"{s.time_s:9.3f} s  {s.state.name:<9} speed {s.rope_speed_mps:6.2f} m/s "
             f"(setpoint {s.rope_speed_setpoint_mps:6.2f}, target {s.rope_speed_target_mps:6.2f})  "
-            f"{s.motor_rpm:5d} rpm  esc {s.esc_pulse_us:4d} us  {s.battery_v:5.2f} V  faults {faults}")
+            f"{s.motor_rpm:5d} rpm  esc {s.esc_pulse_us:4d} us  {s.battery_v:5.2f} V  "
+            f"guide {units.m_to_mm(s.guide_position_m):6.1f} mm  load {s.spindle_load_pct:5.1f} %  faults {faults}")
 
 
 def telemetry_table(s: TelemetrySample) -> str:

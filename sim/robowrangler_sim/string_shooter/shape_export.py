@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..shape_table import ShapeTable, resample_by_arc_length
+from ..shape_table import ShapeTable, ShapeTableError, resample_by_arc_length
 from .model import StringShooter
 from .motion import ModuleMotion
 from .params import ShooterParams, StringShooterParamError
@@ -57,6 +57,10 @@ def make_shape_table(params: ShooterParams | None = None, *, phi_deg=DEFAULT_PHI
     speeds = [float(v) for v in rope_speeds_mps]
     if n_points < 4:
         raise StringShooterParamError(f"n_points: expected >= 4, got {n_points}")
+    if len(speeds) < 1 or np.any(np.diff(speeds) <= 0) or min(speeds) <= 0:
+        raise StringShooterParamError(f"rope_speed_mps: expected ascending distinct positive speeds, got {speeds}")
+    if len(phis) < 2 or np.any(np.diff(phis) <= 0):
+        raise StringShooterParamError(f"phi_deg: expected at least 2 ascending angles, got {phis}")
     contours = np.zeros((len(speeds), len(phis), n_points, 2))
     t0 = time.perf_counter()
     total = len(speeds) * len(phis)
@@ -89,9 +93,13 @@ def main(argv=None) -> int:
     ap.add_argument("--points", type=int, default=40, help="contour points per shape")
     ap.add_argument("--settle", type=float, default=6.0, help="simulated settling time per shape, s")
     args = ap.parse_args(argv)
-    table = make_shape_table(rope_speeds_mps=sorted(args.speeds), loop_length_m=args.loop_length,
-                             n_points=args.points, settle_s=args.settle, progress=True)
-    table.save(args.out)
+    try:
+        table = make_shape_table(rope_speeds_mps=sorted(args.speeds), loop_length_m=args.loop_length,
+                                 n_points=args.points, settle_s=args.settle, progress=True)
+        table.save(args.out)
+    except (StringShooterParamError, ShapeTableError, OSError) as exc:
+        print(f"shape_export: {exc}", file=sys.stderr)
+        return 2
     print(f"wrote {args.out}: {len(table.rope_speed_mps)} speeds x {len(table.phi_deg)} phi x {table.n_points} points",
           file=sys.stderr)
     return 0

@@ -1,0 +1,117 @@
+"""`wrangler record / inspect / replay` against the live SIL: a whole recording, link loss, no device,
+and kill -9 of a recorder process mid-run.
+
+The recorder is the only host here: the device sends telemetry to the host that sent the last valid frame,
+so a recorder next to another commanding host sees only part of the stream (see schema.md)."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.recorder import read_recording
+from robowrangler_sim.sil import SilSession
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def json_lines(text: str) -> list[dict]:
+    return [json.loads(line) for line in text.splitlines() if line.strip()]
+
+
+def test_record_inspect_replay_on_the_live_device(live_sil: SilSession, tmp_path: Path, wrangler) -> None:
+    out = tmp_path / "rec.mcap"
+    status, text, err = wrangler("--url", live_sil.cmd_url, "--json", "record", str(out), "--duration", "2",
+                                 "--seed", "0")
+    assert status == ExitStatus.OK, err
+    (summary,) = json_lines(text)
+    assert 80 <= summary["telemetry"] <= 110  # 50 Hz for 2 s
+    assert "recording" in err  # progress and notes on stderr, not stdout
+
+    rec = read_recording(out)
+    assert rec.meta["source"] == "sil" and rec.meta["seed"] == "0"
+    assert float(rec.metadata["/device/params"]["tov_mps"]) == pytest.approx(2.6)
+    assert {(c["message"], c["verdict"]) for c in rec.commands} == {("PARAM_GET", "ACK")}  # its parameter reads
+    assert len(rec.commands) == len(rec.metadata["/device/params"]) and summary["commands"] == len(rec.commands)
+    assert set(rec.telemetry["state"]) == {"DISARMED"}
+    # a PARAM_GET per parameter in a row: the device's outbox may drop a telemetry frame for their replies (a gap of 1 each)
+    assert all(g["missing"] == 1 for g in rec.gaps) and len(rec.gaps) <= 5
+
+    status, text, err = wrangler("inspect", str(out), "--json")
+    assert status == ExitStatus.OK, err
+    (info,) = json_lines(text)
+    assert info["truncated"] is False and info["channels"]["/device/telemetry"] == len(rec.telemetry["seq"])
+    assert info["duration_s"] == pytest.approx(2.0, abs=0.3)
+    status, text, _ = wrangler("inspect", str(out))
+    assert status == ExitStatus.OK and "/device/telemetry" in text and "gaps:" in text
+    png = tmp_path / "plot.png"
+    status, _, err = wrangler("replay", str(out), "--plot", str(png))
+    assert status == ExitStatus.OK, err
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+
+
+def test_record_survives_link_loss_and_records_the_open_gap(native_build_dir: Path, tmp_path: Path,
+                                                            wrangler) -> None:
+    out = tmp_path / "lost.mcap"
+    result = {}
+    with SilSession(speedup=1.0) as sil:
+        sil.run_in_background()
+        sil.wait_until(0.6)
+        recorder = threading.Thread(target=lambda: result.update(
+            zip(("status", "out", "err"), wrangler("--url", sil.cmd_url, "--timeout", "0.5", "record", str(out),
+                                                   "--duration", "2.5", "--no-params"))))
+        recorder.start()
+        time.sleep(1.0)
+    recorder.join(timeout=10.0)  # the device died 1 s in; the recorder keeps going to the end
+    assert result["status"] == ExitStatus.OK, result["err"]
+    assert "link lost" in result["err"]
+    rec = read_recording(out)
+    assert rec.duration_s > 2.0 and len(rec.telemetry["seq"]) > 10
+    (gap,) = rec.gaps
+    assert gap["to_seq"] is None and gap["resume_time_s"] is None and gap["silent_s"] > 1.0
+
+
+def test_record_without_a_device_writes_the_file_and_exits_link_timeout(tmp_path: Path, wrangler) -> None:
+    out = tmp_path / "none.mcap"
+    t0 = time.monotonic()
+    status, _, err = wrangler("--url", "udp://127.0.0.1:9", "--timeout", "0.3", "record", str(out),
+                              "--duration", "1")
+    assert status == ExitStatus.LINK_TIMEOUT and time.monotonic() - t0 < 3.0
+    assert err.splitlines()[-1].startswith("wrangler: no TELEMETRY from udp://127.0.0.1:9")
+    rec = read_recording(out)
+    assert not rec.truncated and len(rec.telemetry["seq"]) == 0 and rec.meta["source"] == "sil"
+
+
+def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path) -> None:
+    out = tmp_path / "killed.mcap"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", "from robowrangler.cli.main import entry_point; entry_point()",
+         "--url", live_sil.cmd_url, "record", str(out), "--no-params"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    progress = []  # "wrangler: killed.mcap:    2.0 s, 100 telemetry, ..." every 2 s
+    try:
+        for line in proc.stderr:
+            if "telemetry," in line:
+                progress.append(int(line.split(" telemetry,")[0].rsplit(" ", 1)[1]))
+                if len(progress) == 2:
+                    break
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+    assert proc.returncode == -signal.SIGKILL
+    written = progress[-1]  # telemetry the recorder had written when it printed the line
+    rec = read_recording(out)
+    got = len(rec.telemetry["seq"])
+    assert rec.truncated and ("cut off" in rec.truncation_reason or "no footer" in rec.truncation_reason)
+    # at most one unfinished chunk (<= 0.5 s = 25 frames at 50 Hz) is lost; a few more may have come after the line
+    assert written - 30 <= got <= written + 15, (written, got)
+    assert rec.telemetry["seq"].tolist() == sorted(rec.telemetry["seq"].tolist())
