@@ -20,6 +20,7 @@ times, then LinkTimeout. A new command always gets a new seq.
 from __future__ import annotations
 
 import collections
+import os
 import queue
 import secrets
 import struct
@@ -29,12 +30,17 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 
 from robowrangler import units
-from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, NotConnected, StateTimeout,
+from robowrangler.errors import (AuthenticationError, NotProvisioned, CommandRefused, InvalidArgument, LinkTimeout, NotConnected, StateTimeout,
                                  UnknownParameter)
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
 from robowrangler.telemetry import DeviceEvent, TelemetrySample
-from robowrangler.transport import DEFAULT_URL, Transport, open_transport, parse_url
+from robowrangler.link_security import LinkSecurity, default_key_path, read_key_file
+from robowrangler.transport import DEFAULT_URL, Transport, UdpUrl, open_transport, parse_url
+
+def msg_id_is_session_info(msg_id: int) -> bool:
+    return msg_id == MsgId.SESSION_INFO
+
 
 RECV_POLL_S = 0.05  # receiver thread wakes this often to notice close()
 TELEMETRY_QUEUE_LEN = 4096  # per telemetry() iterator; the oldest sample is dropped when full (~80 s at 50 Hz)
@@ -75,6 +81,9 @@ class ClientStats:
     events_received: int = 0
     events_lost: int = 0
     unexpected_messages: int = 0
+    auth_failed: int = 0
+    replayed: int = 0
+    session_changes: int = 0
 
 
 class _Waiter:
@@ -119,11 +128,15 @@ class Client:
         first_seq: sequence number of the first frame (0..65535); None draws a random one so that a
             new process never repeats the bytes of a previous one inside the device's duplicate window.
         transport: an already open Transport to use instead of opening `url` (tests, custom links).
+        key: the 16-byte link key the device was provisioned with; key_file: read it from there. Over UDP
+            one of them is needed (else $ROBOWRANGLER_KEY_FILE or ~/.config/robowrangler/link.key is read);
+            over USB serial (trusted) frames go unsigned unless a key is given.
     """
 
     def __init__(self, url: str = DEFAULT_URL, *, ack_timeout_s: float = 0.2, retries: int = 5,
                  heartbeat_hz: float = 10.0, connect_timeout_s: float = 3.0, first_seq: int | None = None,
-                 transport: Transport | None = None) -> None:
+                 transport: Transport | None = None, key: bytes | None = None,
+                 key_file: str | os.PathLike | None = None) -> None:
         if transport is None:
             parse_url(url)  # raises InvalidArgument before any socket is opened
         self.url = url if transport is None else getattr(transport, "url", url)
@@ -139,6 +152,12 @@ class Client:
             raise InvalidArgument("first_seq", "an integer in [0, 65535] or None", first_seq)
         self._next_seq_value = first_seq
         self._transport = transport
+        if key is None and key_file is not None:
+            key = read_key_file(key_file)
+        elif key is None and transport is None and isinstance(parse_url(url), UdpUrl):
+            key = read_key_file(default_key_path())
+        self._security = LinkSecurity(key)
+        self._session_infos: queue.Queue = queue.Queue()
         self._lock = threading.Lock()  # guards waiters, subscribers, stats, events
         self._send_lock = threading.Lock()  # seq allocation + send keep frames in seq order
         self._waiters: dict[tuple[int, int], _Waiter] = {}
@@ -167,17 +186,58 @@ class Client:
             self._transport = open_transport(self.url)
         self._stop.clear()
         self._first_telemetry.clear()
-        self._threads = [threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True),
-                         threading.Thread(target=self._heartbeat_loop, name="robowrangler-hb", daemon=True)]
-        for t in self._threads:
-            t.start()
+        self._threads = [threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True)]
+        self._threads[0].start()
         self._connected = True
+        if self._security.signing:
+            try:
+                self._handshake()
+            except BaseException:
+                self.close()
+                raise
+        heartbeat = threading.Thread(target=self._heartbeat_loop, name="robowrangler-hb", daemon=True)
+        self._threads.append(heartbeat)
+        heartbeat.start()
         if not self._first_telemetry.wait(self.connect_timeout_s):
             self.close()
             raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
                               "(or the SIL firmware) running and listening at that address?",
                               url=self.url, waited_s=self.connect_timeout_s)
         return self
+
+    def _handshake(self) -> None:
+        """HELLO -> SESSION_INFO: the session to sign for. Retried every ack_timeout_s until connect_timeout_s."""
+        nonce = secrets.randbits(32)
+        deadline = time.monotonic() + self.connect_timeout_s
+        wrong_key = False
+        while time.monotonic() < deadline:
+            self._send_raw(gen.encode_frame(gen.Hello(nonce), self._next_seq()))
+            try:
+                frame, info = self._session_infos.get(timeout=min(self.ack_timeout_s, max(0.0, deadline - time.monotonic())))
+            except queue.Empty:
+                continue
+            if info.host_nonce != nonce:
+                continue
+            if not frame.signed and info.key_set == 0:
+                raise NotProvisioned(f"{self.url} has no link key: provision it over USB serial "
+                                     "(wrangler provision --port PORT --key-file FILE)")
+            if not self._security.tag_valid(frame):
+                wrong_key = True
+                continue
+            self._security.accept(frame)
+            return
+        if wrong_key:
+            raise AuthenticationError(f"{self.url} answered, but its signature does not match this key: "
+                                      "is it the key file the device was provisioned with?")
+        raise LinkTimeout(f"no SESSION_INFO from {self.url} within {self.connect_timeout_s:g} s: is the device "
+                          "(or the SIL firmware) running and listening at that address?",
+                          url=self.url, waited_s=self.connect_timeout_s)
+
+    def _next_seq(self) -> int:
+        with self._send_lock:
+            seq = self._next_seq_value
+            self._next_seq_value = (seq + 1) & 0xFFFF
+        return seq
 
     def close(self) -> None:
         """Stop the threads and release the link; open telemetry() iterators end. Idempotent.
@@ -211,7 +271,9 @@ class Client:
     def stats(self) -> ClientStats:
         """A snapshot of the link counters."""
         with self._lock:
-            snap = replace(self._stats, decode_errors_by_reason=dict(self._stats.decode_errors_by_reason))
+            sec = self._security.stats
+            snap = replace(self._stats, decode_errors_by_reason=dict(self._stats.decode_errors_by_reason),
+                           auth_failed=sec.auth_failed, replayed=sec.replayed, session_changes=sec.session_changes)
         if self._transport is not None:
             snap.framing_errors = self._transport.framing_errors
         return snap
@@ -419,7 +481,7 @@ class Client:
         with self._send_lock:
             seq = self._next_seq_value
             self._next_seq_value = (seq + 1) & 0xFFFF
-            frame = gen.encode_frame(message, seq)
+            frame = self._security.encode(message, seq)
             waiter = None
             if waiter_key_msg_id is not None:
                 waiter = _Waiter()
@@ -473,7 +535,11 @@ class Client:
                         f"{message.NAME} (seq {seq}): no ACK/NACK from {self.url} after {attempts} attempts "
                         f"in {waited_s:.2f} s; the link or the device is down", url=self.url, waited_s=waited_s)
                 self._require_connected()
-                self._send_raw(frame)
+                # same seq and payload (the device answers it from its duplicate cache), but signed afresh:
+                # an identical copy would be dropped as a replay
+                with self._send_lock:
+                    frame = self._security.encode(message, seq)
+                    self._send_raw(frame)
                 attempts += 1
                 with self._lock:
                     self._stats.retransmissions += 1
@@ -557,6 +623,11 @@ class Client:
         except Exception:  # noqa: BLE001 - any unpack failure is bad data, counted not raised
             self._count_decode_error("UNPACK")
             return
+        if msg_id_is_session_info(frame.msg_id):
+            self._session_infos.put((frame, msg))
+            return
+        if not self._security.accept(frame):
+            return  # unsigned, wrongly signed or replayed: counted in stats (auth_failed / replayed)
         with self._lock:
             self._stats.frames_received += 1
         msg_id = frame.msg_id

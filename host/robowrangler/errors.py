@@ -194,3 +194,11 @@ def _msg_name(msg_id: int) -> str:
         return MsgId(msg_id).name
     except ValueError:
         return f"message {msg_id}"
+
+
+class AuthenticationError(RoboWranglerError):
+    """The device answers but its frames are not signed with our key (wrong key file, or another device)."""
+
+
+class NotProvisioned(RoboWranglerError):
+    """The device has no link key yet: it takes nothing over WiFi until provisioned over USB serial."""

@@ -54,7 +54,7 @@ def run_demo(out_png: str | Path, *, speedup: float = 1.0, seed: int = 0, hold_s
     with SilSession(speedup=speedup, seed=seed) as sil:
         sil.run_in_background()
         progress(f"SIL device listening on {sil.cmd_url}")
-        with Client(sil.cmd_url, connect_timeout_s=5.0) as rw:
+        with Client(sil.cmd_url, connect_timeout_s=5.0, key=sil.key) as rw:
             collector = threading.Thread(target=_collect, args=(rw, samples, stop), daemon=True)
             collector.start()
             progress("arm (waits out the ESC arming hold)")

@@ -17,6 +17,7 @@ from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.cli.main import main
 from robowrangler.client import Client
 from robowrangler.errors import CommandRefused
+from robowrangler.link_security import write_key_file
 from robowrangler.protocol.generated import NackReason, State
 from robowrangler_sim.sil import SilSession
 
@@ -31,7 +32,8 @@ def live_sil(native_build_dir: Path) -> Iterator[SilSession]:
 
 def wrangler(sil: SilSession, *argv: str) -> tuple[ExitStatus, list[dict], str]:
     out, err = io.StringIO(), io.StringIO()
-    status = main(["--url", sil.cmd_url, "--json", *argv], Environment(out, err, {}))
+    key_file = write_key_file(Path(sil.state_file).with_name("link.key"), sil.key, force=True)
+    status = main(["--url", sil.cmd_url, "--key-file", str(key_file), "--json", *argv], Environment(out, err, {}))
     lines = [json.loads(line) for line in out.getvalue().splitlines() if line.strip()]
     return status, lines, err.getvalue()
 
@@ -58,15 +60,17 @@ def test_cli_refusals_exit_with_the_nack_status_and_reason(live_sil: SilSession)
     assert status == ExitStatus.OK and out[-1]["value"] == pytest.approx(2.6)
 
 
-def test_cli_times_out_cleanly_when_no_device_answers(native_build_dir: Path) -> None:
+def test_cli_times_out_cleanly_when_no_device_answers(native_build_dir: Path, tmp_path: Path) -> None:
     out, err = io.StringIO(), io.StringIO()
-    status = main(["--url", "udp://127.0.0.1:9", "--timeout", "0.5", "status"], Environment(out, err, {}))
+    key_file = write_key_file(tmp_path / "link.key", bytes(range(16)))
+    status = main(["--url", "udp://127.0.0.1:9", "--key-file", str(key_file), "--timeout", "0.5", "status"],
+                  Environment(out, err, {}))
     assert status == ExitStatus.LINK_TIMEOUT
     assert "udp://127.0.0.1:9" in err.getvalue() and err.getvalue().count("\n") == 1
 
 
 def test_client_guard_refusal_names_the_guard_and_keeps_flying(live_sil: SilSession) -> None:
-    with Client(live_sil.cmd_url) as rw:
+    with Client(live_sil.cmd_url, key=live_sil.key) as rw:
         rw.arm(timeout_s=2.0)
         rw.spin(5.0)
         rw.wait_for_state(State.AIRBORNE, timeout_s=3.0)

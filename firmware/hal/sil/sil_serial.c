@@ -80,10 +80,10 @@ static void write_all(int fd, const uint8_t *p, size_t n)
     while (n > 0u) {
         ssize_t w = write(fd, p, n);
         if (w < 0) {
-            if (errno == EAGAIN || errno == EINTR) {
+            if (errno == EINTR) {
                 continue;
             }
-            return; /* nobody on the other end */
+            return; /* buffer full (nobody reading) or nobody on the other end: dropped, as USB CDC drops */
         }
         p += w;
         n -= (size_t)w;

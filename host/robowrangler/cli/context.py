@@ -5,12 +5,15 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import click
 
 from robowrangler.cli.environment import Environment
 from robowrangler.client import Client
+from robowrangler.link_security import default_key_path
+from robowrangler.transport import SerialUrl, parse_url
 
 URL_ENV_VAR = "ROBOWRANGLER_URL"
 DEFAULT_TIMEOUT_S = 3.0
@@ -28,17 +31,25 @@ class CliContext:
 
     url: link URL (--url, else $ROBOWRANGLER_URL, else the default); timeout_s: --timeout [s], used
     as the connect timeout, the longest telemetry gap and the ARM NOT_READY retry window;
-    json_mode: --json.
+    json_mode: --json; key_file: --key-file (else $ROBOWRANGLER_KEY_FILE, else ~/.config/robowrangler/link.key).
     """
 
     env: Environment
     url: str
     timeout_s: float = DEFAULT_TIMEOUT_S
     json_mode: bool = False
+    key_file: str | None = None
+
+    def resolved_key_file(self) -> Path:
+        return Path(self.key_file).expanduser() if self.key_file else default_key_path(self.env.environ)
 
     def client(self) -> Client:
-        """A Client for this run's URL (not yet connected: use it in a `with`)."""
-        return Client(self.url, connect_timeout_s=self.timeout_s)
+        """A Client for this run's URL (not yet connected: use it in a `with`). Over USB serial the key is
+        optional (a trusted link); over UDP it is read from the key file."""
+        path = self.resolved_key_file()
+        if isinstance(parse_url(self.url), SerialUrl) and not path.exists():
+            return Client(self.url, connect_timeout_s=self.timeout_s)
+        return Client(self.url, connect_timeout_s=self.timeout_s, key_file=path)
 
     # -- output: machine output on stdout only with --json, prose on stderr
     def result(self, data: dict[str, Any], human: str) -> None:

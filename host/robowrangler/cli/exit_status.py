@@ -18,5 +18,7 @@ class ExitStatus(IntEnum):
     """The device refused the command (NACK); nothing was executed. The reason is on stderr."""
     LINK_TIMEOUT = 4
     """The device did not answer: no telemetry on connect, no ACK after every retry, telemetry stopped."""
+    AUTH = 5
+    """Link security: no usable key file, a key that does not match the device's, or an unprovisioned device."""
     CTRL_C = 130
     """Interrupted by Ctrl-C (SIGINT)."""

@@ -12,6 +12,7 @@ import click
 
 from robowrangler.cli.context import CliContext, pass_context
 from robowrangler.errors import RoboWranglerError
+from robowrangler.link_security import generate_key, read_key_file, write_key_file
 
 
 class SimulatorUnavailable(RoboWranglerError):
@@ -35,27 +36,36 @@ def _sil_modules():
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Plant noise seed.")
 @click.option("--duration", "duration_s", type=click.FloatRange(min=0.0, min_open=True), default=None,
               metavar="SECONDS", help="Stop after this much simulated time (default: until Ctrl-C).")
+@click.option("--state-file", default=None, metavar="PATH",
+              help="The SIL device's flash (key, parameters, boot counter); default: a temporary one.")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
-                duration_s: float | None) -> None:
+                duration_s: float | None, state_file: str | None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
-    Point any wrangler command or the Python client at it: it speaks the board's protocol.
+    Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
+    over its (pseudo-terminal) USB serial with your key file, as a board would be; the serial path is printed.
     """
     sil_pkg, _ = _sil_modules()
+    key_path = ctx.resolved_key_file()
+    if not key_path.exists():
+        write_key_file(key_path, generate_key())
+        ctx.note(f"no key file at {key_path}: created one (mode 0600) and provisioned the SIL device with it")
     try:
         session = sil_pkg.SilSession(speedup=None if unpaced else speedup, seed=seed, cmd_port=cmd_port,
-                                     trace_every=0)
+                                     trace_every=0, key=read_key_file(key_path), state_file=state_file)
         session.start()
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
     try:
         session.run_in_background()
         if ctx.json_mode:
-            ctx.json_line({"type": "ready", "url": session.cmd_url, "speedup": None if unpaced else speedup})
+            ctx.json_line({"type": "ready", "url": session.cmd_url, "serial": session.serial_path,
+                           "key_file": str(key_path), "speedup": None if unpaced else speedup})
         else:
-            ctx.note(f"SIL device on {session.cmd_url} (speed-up {'max' if unpaced else speedup:g}x); Ctrl-C to stop"
-                     if not unpaced else f"SIL device on {session.cmd_url} (unpaced); Ctrl-C to stop")
+            pace = "unpaced" if unpaced else f"speed-up {speedup:g}x"
+            ctx.note(f"SIL device on {session.cmd_url} ({pace}), USB serial {session.serial_path}, "
+                     f"key {key_path}; Ctrl-C to stop")
         while duration_s is None or session.time_s < duration_s:
             session.check()
             time.sleep(0.05)

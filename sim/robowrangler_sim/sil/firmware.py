@@ -1,4 +1,8 @@
-"""The SIL firmware process (``rw_sil``): find it, start it on free ports, stop it."""
+"""The SIL firmware process (``rw_sil``): find it, start it on free ports, stop it.
+
+It prints its ports and the path of the pseudo-terminal that stands in for the board's USB serial; the
+state file stands in for the board's flash (configuration record: key, parameters, boot counter).
+"""
 
 from __future__ import annotations
 
@@ -10,7 +14,7 @@ from pathlib import Path
 
 from robowrangler_sim.sil.errors import SilFirmwareError
 
-_READY = re.compile(r"rw_sil ready cmd_port=(\d+) plant_port=(\d+)")
+_READY = re.compile(r"rw_sil ready cmd_port=(\d+) plant_port=(\d+) serial=(\S+)")
 REPO_ROOT = Path(__file__).resolve().parents[3]
 
 
@@ -33,17 +37,20 @@ class FirmwareProcess:
     """``rw_sil`` as a child process. Ports 0 pick free ones; the bound ports are read from its ready line."""
 
     def __init__(self, *, cmd_port: int = 0, plant_port: int = 0, plant_timeout_s: int = 10, tick_us: int = 1000,
-                 binary: Path | None = None, start_timeout_s: float = 5.0) -> None:
+                 state_file: Path | None = None, binary: Path | None = None, start_timeout_s: float = 5.0) -> None:
         for name, port in (("cmd_port", cmd_port), ("plant_port", plant_port)):
             if not isinstance(port, int) or not 0 <= port <= 65535:
                 raise ValueError(f"{name}: expected a UDP port 0..65535, got {port!r}")
         self.binary = Path(binary) if binary is not None else find_sil_binary()
         self._args = [str(self.binary), "--cmd-port", str(cmd_port), "--plant-port", str(plant_port),
                       "--plant-timeout-s", str(int(plant_timeout_s)), "--tick-us", str(int(tick_us))]
+        if state_file is not None:
+            self._args += ["--state-file", str(state_file)]
         self._start_timeout_s = start_timeout_s
         self._proc: subprocess.Popen[str] | None = None
         self.cmd_port = 0
         self.plant_port = 0
+        self.serial_path = ""
 
     def start(self) -> FirmwareProcess:
         self._proc = subprocess.Popen(self._args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -55,6 +62,7 @@ class FirmwareProcess:
             err = self._proc.stderr.read() if self._proc.stderr else ""
             raise SilFirmwareError(f"{self.binary} did not start: {(line + err).strip() or 'no output'}")
         self.cmd_port, self.plant_port = int(match.group(1)), int(match.group(2))
+        self.serial_path = match.group(3)
         return self
 
     def poll(self) -> int | None:

@@ -3,6 +3,11 @@
 The host sends its frames to the SIL firmware's command port and announces how many it has sent in
 each SIL_SENSORS (host_frames_sent), so the firmware processes each frame at a known tick whatever
 the machine's speed. Everything the firmware sends back is decoded and kept, in order.
+
+It signs as a real host does: HELLO for the session, then every frame signed with the session's key
+(sil.key unless another is given) and a growing counter; device frames whose signature or freshness fails
+are dropped and counted in received.auth_failed / received.replayed. The counter is a plain count from 1
+(not the wall clock), so runs stay reproducible.
 """
 
 from __future__ import annotations
@@ -23,15 +28,24 @@ class Received:
     acks: list[gen.Ack] = field(default_factory=list)
     nacks: list[gen.Nack] = field(default_factory=list)
     param_values: list[gen.ParamValue] = field(default_factory=list)
+    session_infos: list[gen.SessionInfo] = field(default_factory=list)
     raw: list[bytes] = field(default_factory=list)
     decode_errors: int = 0
+    auth_failed: int = 0
+    replayed: int = 0
 
 
 class ScriptedHost:
     """Drives a SilSession tick by tick. Heartbeats at heartbeat_period_s unless paused."""
 
-    def __init__(self, sil: SilSession, *, heartbeat_period_s: float = 0.1) -> None:
+    def __init__(self, sil: SilSession, *, heartbeat_period_s: float = 0.1, key: bytes | None = None,
+                 handshake: bool = True) -> None:
         self.sil = sil
+        self.key = sil.key if key is None else key
+        self.session_id = 0
+        self.counter = 0
+        self._device_session = -1
+        self._device_counter = -1
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind(("127.0.0.1", 0))
         self._sock.setblocking(False)
@@ -42,6 +56,22 @@ class ScriptedHost:
         self.heartbeats_enabled = True
         self._next_heartbeat_us = 0
         self.received = Received()
+        if handshake:
+            self.hello()
+
+    def hello(self, *, timeout_s: float = 0.05) -> gen.SessionInfo:
+        """HELLO -> SESSION_INFO: learn the device's session (AssertionError if no answer)."""
+        nonce = 0x5EED0000 + len(self.received.session_infos)
+        self.send(gen.Hello(nonce))
+        heartbeats, self.heartbeats_enabled = self.heartbeats_enabled, False  # nothing signed before the session
+        try:
+            self.run_until(lambda h: any(i.host_nonce == nonce for i in h.received.session_infos), timeout_s=timeout_s)
+        finally:
+            self.heartbeats_enabled = heartbeats
+        info = next((i for i in self.received.session_infos if i.host_nonce == nonce), None)
+        assert info is not None, "no SESSION_INFO answered the HELLO"
+        self.session_id = info.session_id
+        return info
 
     # ---------------------------------------------------------------------------------------------
     def send_raw(self, data: bytes) -> None:
@@ -49,12 +79,19 @@ class ScriptedHost:
         self._sock.sendto(data, self._dest)
         self.frames_sent += 1
 
-    def send(self, message: gen.Message, *, seq: int | None = None) -> int:
-        """Frame and send a message; returns the seq used."""
+    def frame(self, message: gen.Message, seq: int, *, signed: bool = True) -> bytes:
+        """The bytes of message with seq: signed for the session with the next counter (HELLO unsigned)."""
+        if not signed or message.KIND == gen.MsgKind.HELLO:
+            return gen.encode_frame(message, seq)
+        self.counter += 1
+        return gen.encode_frame(message, seq, key=self.key, session_id=self.session_id, counter=self.counter)
+
+    def send(self, message: gen.Message, *, seq: int | None = None, signed: bool = True) -> int:
+        """Frame (signed) and send a message; returns the seq used."""
         if seq is None:
             seq = self.seq
             self.seq = (self.seq + 1) & 0xFFFF
-        self.send_raw(gen.encode_frame(message, seq))
+        self.send_raw(self.frame(message, seq, signed=signed))
         return seq
 
     def tick(self) -> None:
@@ -88,9 +125,22 @@ class ScriptedHost:
                 return
             r.raw.append(data)
             try:
-                _, msg = gen.decode_message(data)
+                frame, msg = gen.decode_message(data)
             except gen.FrameError:
                 r.decode_errors += 1
+                continue
+            if not frame.signed or not gen.tag_valid(frame, self.key):
+                r.auth_failed += 1
+                # the one unsigned frame worth reading: an unprovisioned device's SESSION_INFO saying so
+                if not (not frame.signed and isinstance(msg, gen.SessionInfo) and msg.key_set == 0):
+                    continue
+            elif (frame.session_id, frame.counter) <= (self._device_session, self._device_counter):
+                r.replayed += 1
+                continue
+            else:
+                self._device_session, self._device_counter = frame.session_id, frame.counter
+            if isinstance(msg, gen.SessionInfo):
+                r.session_infos.append(msg)
                 continue
             if isinstance(msg, gen.Telemetry):
                 r.telemetry.append(msg)

@@ -11,11 +11,16 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import tempfile
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
+from robowrangler.link_security import generate_key
+from robowrangler.provisioning import Provisioner, ProvisionStatus
+from robowrangler.transport_serial import SerialTransport
 from robowrangler_sim.plants import DriveParams, DrivePlant
 from robowrangler_sim.plants.spindle import SpindleParams, SpindlePlant
 from robowrangler_sim.sil.errors import SilError, SilFirmwareError
@@ -70,6 +75,10 @@ class SilSession:
         speedup: pacing factor for run_for/background running; None = unpaced.
         cmd_port: UDP port of the firmware's command link on 127.0.0.1 (0 = a free port).
         trace_every: keep a PlantSample every this many ticks (0 = none).
+        key: the link key provisioned into the SIL device over its USB serial at start (None: a fresh random
+            one; read it from ``key``). provision=False starts an unprovisioned device (it refuses WiFi).
+        state_file: the SIL device's flash (configuration record, boot counter = session id); None: a file in
+            a temporary folder removed at stop().
 
     Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
     ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
@@ -82,7 +91,8 @@ class SilSession:
     def __init__(self, *, drive_params: DriveParams | None = None, spindle_params: SpindleParams | None = None,
                  seed: int = 0, tick_us: int = 1000,
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
-                 plant_timeout_s: int = 10) -> None:
+                 plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
+                 state_file: str | Path | None = None) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
@@ -98,7 +108,12 @@ class SilSession:
         self.last_esc_pulse_us = 0
         self.sensor_filters: list[SensorFilter] = []
         self.actuator_filters: list[ActuatorFilter] = []
-        self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s, tick_us=tick_us)
+        self.key = generate_key() if key is None else bytes(key)
+        self._provision_on_start = provision
+        self._tmpdir = None if state_file is not None else tempfile.TemporaryDirectory(prefix="rw_sil_")
+        self.state_file = Path(state_file) if state_file is not None else Path(self._tmpdir.name) / "flash.bin"
+        self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s, tick_us=tick_us,
+                                         state_file=self.state_file)
         self._link: LockstepLink | None = None
         self._actions: list[tuple[int, int, Callable[[], None]]] = []
         self._action_counter = itertools.count()
@@ -122,10 +137,37 @@ class SilSession:
     def time_s(self) -> float:
         return self.plant.time_us * 1e-6
 
+    @property
+    def serial_path(self) -> str:
+        """The SIL device's USB serial (a pseudo-terminal): pyserial opens it like /dev/ttyACM0."""
+        return self._firmware.serial_path
+
     def start(self) -> SilSession:
         self._firmware.start()
         self._link = LockstepLink(self._firmware.plant_port)
+        if self._provision_on_start:
+            self.provision(key=self.key)
         return self
+
+    def provision(self, **fields) -> ProvisionStatus:
+        """Provision over the USB serial (the key, WiFi, parameters: Provisioner.provision's keywords) while
+        the clock stands still, so provisioning leaves no trace in the simulated timeline."""
+        transport = SerialTransport(self.serial_path, url=f"serial://{self.serial_path}")
+        try:
+            return Provisioner(transport, url=f"serial://{self.serial_path}", pump=self._tick_frozen).provision(**fields)
+        finally:
+            transport.close()
+
+    def _tick_frozen(self) -> None:
+        """A control tick at the current plant time, without advancing the plant (dt = 0 for the firmware)."""
+        plant, spindle = self.plant, self.spindle
+        self._link.exchange(time_us=plant.time_us, encoder_counts=plant.encoder_counts,
+                            encoder_last_edge_us=plant.encoder_last_edge_us,
+                            battery_mv=round(plant.battery_adc_v * 1000.0), host_frames_sent=0,
+                            spindle_position_raw=spindle.position_raw, spindle_speed_raw=spindle.speed_raw,
+                            spindle_load_raw=spindle.load_raw, spindle_answered=spindle.answering,
+                            limit_switch=spindle.limit_switch)
+        time.sleep(0.0005)  # the pseudo-terminal hands bytes over asynchronously
 
     def stop(self) -> None:
         self._stop.set()
@@ -136,6 +178,9 @@ class SilSession:
             self._link.close()
             self._link = None
         self._firmware.stop()
+        if self._tmpdir is not None:
+            self._tmpdir.cleanup()
+            self._tmpdir = None
 
     def __enter__(self) -> SilSession:
         return self.start()

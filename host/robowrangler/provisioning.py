@@ -1,0 +1,99 @@
+"""Provisioning over USB serial: the link key, the WiFi credentials and the parameters, written to flash.
+
+USB serial is the one trusted link (physical access): PROVISION_* messages are refused over WiFi, and the
+key never travels anywhere else. Each step is a command answered by ACK or NACK; PROVISION_COMMIT writes
+one versioned record with a CRC; PROVISION_GET reads back what is stored (never the key or the password).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+from robowrangler.errors import CommandRefused, LinkTimeout
+from robowrangler.protocol import generated as gen
+from robowrangler.transport import Transport
+
+
+@dataclass(frozen=True)
+class ProvisionStatus:
+    """What the device has stored (PROVISION_STATUS)."""
+
+    key_set: bool
+    password_set: bool
+    wifi_ssid: str
+    boot_counter: int
+    commits: int
+    config_version: int
+    dirty: bool
+
+
+class Provisioner:
+    """Sends PROVISION_* and PARAM_SET over a trusted transport and waits for each answer.
+
+    pump: called while waiting (a SIL stepped in lockstep advances its clock here); None sleeps briefly.
+    """
+
+    def __init__(self, transport: Transport, *, url: str = "serial", timeout_s: float = 3.0,
+                 pump: Callable[[], None] | None = None) -> None:
+        self._transport = transport
+        self._url = url
+        self._timeout_s = timeout_s
+        self._pump = pump
+        self._seq = int(time.time() * 1000) & 0xFFFF
+        self._pending: list[gen.Message] = []
+
+    def _wait(self, accept: Callable[[gen.Message], bool]) -> gen.Message:
+        deadline = time.monotonic() + self._timeout_s
+        while time.monotonic() < deadline:
+            for i, msg in enumerate(self._pending):
+                if accept(msg):
+                    return self._pending.pop(i)
+            if self._pump is not None:
+                self._pump()
+                poll_s = 0.0
+            else:
+                poll_s = 0.02
+            data = self._transport.recv(poll_s)
+            if data is None:
+                continue
+            try:
+                _, msg = gen.decode_message(data)
+            except gen.FrameError:
+                continue
+            self._pending.append(msg)
+        raise LinkTimeout(f"no answer from the device on {self._url} within {self._timeout_s:g} s: is it the right "
+                          "port, and is the firmware running?", url=self._url, waited_s=self._timeout_s)
+
+    def command(self, message: gen.Message) -> gen.Ack:
+        seq = self._seq
+        self._seq = (self._seq + 1) & 0xFFFF
+        self._transport.send(gen.encode_frame(message, seq))
+        reply = self._wait(lambda m: isinstance(m, (gen.Ack, gen.Nack)) and m.cmd_seq == seq
+                           and m.cmd_msg_id == message.MSG_ID)
+        if isinstance(reply, gen.Nack):
+            raise CommandRefused(command_msg_id=message.MSG_ID, reason=reply.reason, state=reply.state,
+                                 detail=reply.detail)
+        return reply
+
+    def status(self) -> ProvisionStatus:
+        self.command(gen.ProvisionGet())
+        st = self._wait(lambda m: isinstance(m, gen.ProvisionStatus))
+        return ProvisionStatus(bool(st.key_set), bool(st.password_set), st.wifi_ssid, st.boot_counter, st.commits,
+                               st.config_version, bool(st.dirty))
+
+    def provision(self, *, key: bytes | None = None, wifi_ssid: str | None = None, wifi_password: str | None = None,
+                  params: Mapping[str, float] | None = None) -> ProvisionStatus:
+        """Stage what is given, commit it to flash, and return the stored status."""
+        if key is not None:
+            self.command(gen.ProvisionSetKey(bytes(key)))
+        if wifi_ssid is not None:
+            self.command(gen.ProvisionSetWifiSsid(wifi_ssid))
+        if wifi_password is not None:
+            self.command(gen.ProvisionSetWifiPassword(wifi_password))
+        for name, value in (params or {}).items():
+            spec = gen.PARAMS_BY_NAME[name]
+            self.command(gen.ParamSet(spec.id, float(value)))
+        self.command(gen.ProvisionCommit())
+        return self.status()
