@@ -100,6 +100,7 @@ class SoakFigures:
     ticks_checked: int = 0
     airborne_ticks: int = 0
     min_airborne_margin_mps: float = math.inf  # plant speed minus the guard, lowest while AIRBORNE
+    min_airborne_margin_at_s: float = 0.0
     heartbeat_losses: int = 0
     blackouts: int = 0
     device_frames: int = 0
@@ -344,6 +345,9 @@ class Soak:
         return ref + ((seq - ref + 0x8000) & 0xFFFF) - 0x8000
 
     def _on_delivered_to_device(self, data: bytes) -> None:
+        if not data:
+            self._awaiting_verdict.append((None, True))  # an empty datagram reads as none (as on the board)
+            return
         try:
             frame, msg = gen.decode_message(data)
         except gen.FrameError:
@@ -404,6 +408,15 @@ class Soak:
             self._violation(f"t={time_us / 1e6:.3f}s verdict {msg} for no delivered frame")
             return
         key, _ = self._awaiting_verdict.popleft()
+        if key is not None and (msg.cmd_msg_id, msg.cmd_seq) != key[:2]:
+            # resynchronise on the frame this verdict belongs to, so one miss is one violation, not a cascade
+            ahead = [k for k, hb in list(self._awaiting_verdict)[:16] if k is not None and not hb]
+            if (msg.cmd_msg_id, msg.cmd_seq) in [k[:2] for k in ahead]:
+                self._violation(f"t={time_us / 1e6:.3f}s command {key[:2]} got no verdict")
+                while True:
+                    key, hb = self._awaiting_verdict.popleft()
+                    if key is not None and key[:2] == (msg.cmd_msg_id, msg.cmd_seq):
+                        break
         verdict = (isinstance(msg, gen.Ack), 0 if isinstance(msg, gen.Ack) else msg.reason,
                    0 if isinstance(msg, gen.Ack) else msg.detail)
         if key is None:
@@ -491,8 +504,11 @@ class Soak:
             f = self.figures
             f.airborne_ticks += 1
             margin = plant.rope_speed_mps - guard_mps
-            f.min_airborne_margin_mps = min(f.min_airborne_margin_mps, margin)
-            if margin < -SPEED_TOLERANCE_MPS:
+            if margin < f.min_airborne_margin_mps:
+                f.min_airborne_margin_mps, f.min_airborne_margin_at_s = margin, plant.time_us * 1e-6
+            if plant.rope_speed_mps < P["tov_mps"].default:
+                self._violation(f"t={plant.time_us / 1e6:.3f}s AIRBORNE at {plant.rope_speed_mps:.3f} m/s, under ToV")
+            elif margin < -SPEED_TOLERANCE_MPS:
                 self._violation(f"t={plant.time_us / 1e6:.3f}s AIRBORNE at {plant.rope_speed_mps:.3f} m/s, "
                                 f"under the guard {guard_mps:.3f} m/s")
 
