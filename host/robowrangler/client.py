@@ -29,8 +29,8 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 
 from robowrangler import units
-from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, NotConnected, StateTimeout,
-                                 UnknownParameter)
+from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArgument, LinkTimeout, NotConnected,
+                                 StateTimeout, UnknownParameter)
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
 from robowrangler.telemetry import DeviceEvent, TelemetrySample
@@ -75,6 +75,8 @@ class ClientStats:
     events_received: int = 0
     events_lost: int = 0
     unexpected_messages: int = 0
+    auth_failures: int = 0
+    session_changes: int = 0
 
 
 class _Waiter:
@@ -119,11 +121,15 @@ class Client:
         first_seq: sequence number of the first frame (0..65535); None draws a random one so that a
             new process never repeats the bytes of a previous one inside the device's duplicate window.
         transport: an already open Transport to use instead of opening `url` (tests, custom links).
+        key: the 16-byte link key. Given, connect() asks the device for its session (HELLO ->
+            SESSION_INFO, whose tag must verify) and every frame is signed (session id, a counter that
+            only grows, SipHash-2-4 tag); signed frames from the device with a wrong tag are dropped and
+            counted (stats.auth_failures). None: unsigned frames (USB serial, a device without a key).
     """
 
     def __init__(self, url: str = DEFAULT_URL, *, ack_timeout_s: float = 0.2, retries: int = 5,
                  heartbeat_hz: float = 10.0, connect_timeout_s: float = 3.0, first_seq: int | None = None,
-                 transport: Transport | None = None) -> None:
+                 transport: Transport | None = None, key: bytes | None = None) -> None:
         if transport is None:
             parse_url(url)  # raises InvalidArgument before any socket is opened
         self.url = url if transport is None else getattr(transport, "url", url)
@@ -138,6 +144,15 @@ class Client:
         if isinstance(first_seq, bool) or not isinstance(first_seq, int) or not 0 <= first_seq <= 0xFFFF:
             raise InvalidArgument("first_seq", "an integer in [0, 65535] or None", first_seq)
         self._next_seq_value = first_seq
+        if key is not None and (not isinstance(key, (bytes, bytearray)) or len(key) != gen.KEY_LEN):
+            raise InvalidArgument("key", f"{gen.KEY_LEN} bytes (a 128-bit link key)",
+                                  f"{type(key).__name__} of length {len(key) if hasattr(key, '__len__') else '?'}")
+        self._key = None if key is None else bytes(key)
+        self._session_id: int | None = None
+        self._counter = 0
+        self._hello_nonce: int | None = None
+        self._session_info: gen.Message | None = None
+        self._session_event = threading.Event()
         self._transport = transport
         self._lock = threading.Lock()  # guards waiters, subscribers, stats, events
         self._send_lock = threading.Lock()  # seq allocation + send keep frames in seq order
@@ -167,17 +182,60 @@ class Client:
             self._transport = open_transport(self.url)
         self._stop.clear()
         self._first_telemetry.clear()
-        self._threads = [threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True),
-                         threading.Thread(target=self._heartbeat_loop, name="robowrangler-hb", daemon=True)]
-        for t in self._threads:
-            t.start()
+        self._session_event.clear()
+        self._session_info = None
         self._connected = True
-        if not self._first_telemetry.wait(self.connect_timeout_s):
+        receiver = threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True)
+        heartbeat = threading.Thread(target=self._heartbeat_loop, name="robowrangler-hb", daemon=True)
+        self._threads = [receiver, heartbeat]
+        receiver.start()
+        try:
+            self._hello()  # unsigned and harmless: tells a keyless host why a keyed device stays silent
+            if self._key is not None:
+                self._establish_session()
+            heartbeat.start()
+            if not self._first_telemetry.wait(self.connect_timeout_s):
+                info = self._session_info
+                if self._key is None and info is not None and info.key_set:
+                    raise AuthenticationError(
+                        f"{self.url} requires signed frames (its SESSION_INFO says a key is provisioned) and no "
+                        "link key was given: pass key=... (wrangler --key-file)", url=self.url)
+                raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
+                                  "(or the SIL firmware) running and listening at that address?",
+                                  url=self.url, waited_s=self.connect_timeout_s)
+        except BaseException:
             self.close()
-            raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
-                              "(or the SIL firmware) running and listening at that address?",
-                              url=self.url, waited_s=self.connect_timeout_s)
+            raise
         return self
+
+    def _hello(self) -> None:
+        self._hello_nonce = secrets.randbelow(2**32)
+        self._send_new(gen.Hello(self._hello_nonce), sign=False)
+
+    def _establish_session(self) -> None:
+        """Wait for the SESSION_INFO answering our HELLO (resending HELLO each ack_timeout_s)."""
+        deadline = time.monotonic() + self.connect_timeout_s
+        while not self._session_event.wait(min(self.ack_timeout_s, max(0.0, deadline - time.monotonic()))):
+            if time.monotonic() >= deadline:
+                raise LinkTimeout(f"no SESSION_INFO from {self.url} within {self.connect_timeout_s:g} s: is the "
+                                  "device running, and does its firmware speak protocol version "
+                                  f"{gen.PROTOCOL_VERSION}?", url=self.url, waited_s=self.connect_timeout_s)
+            self._send_new(gen.Hello(self._hello_nonce), sign=False)
+        info = self._session_info
+        if info.schema_hash != gen.SCHEMA_HASH:
+            raise AuthenticationError(f"{self.url} speaks protocol schema 0x{info.schema_hash:04X}, this host "
+                                      f"0x{gen.SCHEMA_HASH:04X}: update the firmware or the host", url=self.url)
+        if not info.key_set:
+            raise AuthenticationError(f"{self.url} has no link key provisioned, so it takes no command over WiFi: "
+                                      "provision one over USB serial", url=self.url)
+        if self._session_id is None:
+            raise AuthenticationError(f"the SESSION_INFO from {self.url} is not signed with the given key: the "
+                                      "host's and the device's link keys differ", url=self.url)
+
+    @property
+    def session_id(self) -> int | None:
+        """The device session this client signs for (None: unsigned link)."""
+        return self._session_id
 
     def close(self) -> None:
         """Stop the threads and release the link; open telemetry() iterators end. Idempotent.
@@ -186,7 +244,7 @@ class Client:
         """
         self._stop.set()
         for t in self._threads:
-            if t is not threading.current_thread():
+            if t is not threading.current_thread() and t.ident is not None:  # started
                 t.join(timeout=2.0)
         self._threads = []
         if self._transport is not None:
@@ -413,13 +471,25 @@ class Client:
         if not self._connected or self._transport is None:
             raise NotConnected(f"not connected to {self.url}: call connect() or use `with Client(...)`")
 
+    def _encode(self, message: gen.Message, seq: int, *, sign: bool = True) -> bytes:
+        """Frame a message; signed (session id, next counter) when the client has a key and a session.
+
+        The counter is the larger of the last one + 1 and the wall clock in microseconds, so it keeps
+        growing across host processes within one device session (the device drops a counter that is not
+        above the last it accepted). Call with _send_lock held.
+        """
+        if not sign or self._key is None or self._session_id is None:
+            return gen.encode_frame(message, seq)
+        self._counter = max(self._counter + 1, time.time_ns() // 1000)
+        return gen.encode_frame(message, seq, key=self._key, session_id=self._session_id, counter=self._counter)
+
     def _send_new(self, message: gen.Message, waiter_key_msg_id: int | None = None,
-                  param_waiter: _Waiter | None = None) -> tuple[int, bytes, _Waiter | None]:
+                  param_waiter: _Waiter | None = None, *, sign: bool = True) -> tuple[int, bytes, _Waiter | None]:
         """Allocate a seq, encode and send; registers an ACK/NACK waiter first if asked."""
         with self._send_lock:
             seq = self._next_seq_value
             self._next_seq_value = (seq + 1) & 0xFFFF
-            frame = gen.encode_frame(message, seq)
+            frame = self._encode(message, seq, sign=sign)
             waiter = None
             if waiter_key_msg_id is not None:
                 waiter = _Waiter()
@@ -473,6 +543,9 @@ class Client:
                         f"{message.NAME} (seq {seq}): no ACK/NACK from {self.url} after {attempts} attempts "
                         f"in {waited_s:.2f} s; the link or the device is down", url=self.url, waited_s=waited_s)
                 self._require_connected()
+                if self._key is not None:  # same seq and payload (same checksum), a fresh counter
+                    with self._send_lock:
+                        frame = self._encode(message, seq)
                 self._send_raw(frame)
                 attempts += 1
                 with self._lock:
@@ -557,9 +630,14 @@ class Client:
         except Exception:  # noqa: BLE001 - any unpack failure is bad data, counted not raised
             self._count_decode_error("UNPACK")
             return
+        if frame.signed and not self._accept_signed(frame, msg):
+            return
         with self._lock:
             self._stats.frames_received += 1
         msg_id = frame.msg_id
+        if msg_id == MsgId.SESSION_INFO:
+            self._on_session_info(frame, msg)
+            return
         if msg_id in (MsgId.ACK, MsgId.NACK):
             self._on_reply(msg)
         elif msg_id == MsgId.PARAM_VALUE:
@@ -581,6 +659,36 @@ class Client:
         else:
             with self._lock:
                 self._stats.unexpected_messages += 1
+
+    def _accept_signed(self, frame: gen.Frame, msg: gen.Message) -> bool:
+        """A signed frame from the device counts only if its tag verifies with our key; a verified frame
+        from a newer session (the device rebooted) moves the client to that session."""
+        if self._key is None:
+            return True  # nothing to check it with; an unsigned link trusts the transport
+        if not gen.tag_valid(frame, self._key):
+            with self._lock:
+                self._stats.auth_failures += 1
+            if frame.msg_id == MsgId.SESSION_INFO and msg.host_nonce == self._hello_nonce:
+                self._session_info = msg  # the answer to our HELLO, signed with another key
+                self._session_event.set()
+            return False
+        if self._session_id is not None and frame.session_id != self._session_id and frame.msg_id != MsgId.SESSION_INFO:
+            with self._send_lock:
+                self._session_id = frame.session_id
+            with self._lock:
+                self._stats.session_changes += 1
+        return True
+
+    def _on_session_info(self, frame: gen.Frame, msg: gen.Message) -> None:
+        if msg.host_nonce != self._hello_nonce:
+            with self._lock:
+                self._stats.unexpected_messages += 1  # someone else's HELLO, or a replayed answer
+            return
+        self._session_info = msg
+        if self._key is not None and frame.signed:  # verified by _accept_signed
+            with self._send_lock:
+                self._session_id = msg.session_id
+        self._session_event.set()
 
     def _count_decode_error(self, reason: str) -> None:
         with self._lock:

@@ -65,6 +65,15 @@ class LinkError(RoboWranglerError, OSError):
         return self.args[0]
 
 
+class AuthenticationError(RoboWranglerError):
+    """The link key and the device do not agree: no key given where the device requires signed frames,
+    a wrong key (the device's SESSION_INFO does not verify), or a device without a provisioned key."""
+
+    def __init__(self, message: str, *, url: str) -> None:
+        super().__init__(message)
+        self.url = url
+
+
 class StateTimeout(RoboWranglerError, TimeoutError):
     """Telemetry kept arriving but the device did not reach the awaited state (or condition) in time.
     `expected` is a tuple of States or a description of the condition."""

@@ -238,3 +238,27 @@ def test_a_retract_that_secures_nothing_exits_1(device: ScriptedDevice) -> None:
     run = wrangler("--url", device.url, "--json", "retract")
     assert run.status == ExitStatus.ERROR and run.json["error"] == "NothingGrasped"
     assert "end of the stroke (180 mm) without securing a load" in run.stderr
+
+
+def test_signed_link_from_a_key_file(tmp_path) -> None:
+    key = bytes(range(16))
+    key_file = tmp_path / "link.key"
+    key_file.write_text(key.hex() + "\n")
+    with ScriptedDevice(key=key) as device:
+        run = wrangler("--url", device.url, "--key-file", str(key_file), "--json", "arm")
+        assert run.status == ExitStatus.OK and run.json["state"] == "ARMED"
+        via_env = wrangler("--url", device.url, "--json", "disarm", environ={"ROBOWRANGLER_KEY_FILE": str(key_file)})
+        assert via_env.status == ExitStatus.OK
+        keyless = wrangler("--url", device.url, "--timeout", "0.3", "--json", "status")
+        assert keyless.status == ExitStatus.ERROR and keyless.json["error"] == "AuthenticationError"
+    assert key.hex() not in run.stdout + run.stderr + keyless.stdout + keyless.stderr
+
+
+@pytest.mark.parametrize("content, expected", [("abc", "32 hex digits"), ("zz" * 16, "32 hex digits")])
+def test_a_bad_key_file_is_a_usage_error_that_does_not_echo_it(tmp_path, content: str, expected: str) -> None:
+    key_file = tmp_path / "bad.key"
+    key_file.write_text(content)
+    run = wrangler("--url", "udp://127.0.0.1:9", "--key-file", str(key_file), "status")
+    assert run.status == ExitStatus.USAGE and expected in run.stderr and content not in run.stderr
+    missing = wrangler("--url", "udp://127.0.0.1:9", "--key-file", str(tmp_path / "none"), "status")
+    assert missing.status == ExitStatus.USAGE and "readable file" in missing.stderr

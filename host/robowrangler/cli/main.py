@@ -18,7 +18,8 @@ from typing import Any
 import click
 
 from robowrangler.cli import monitor, motion, param, record, sil, spindle
-from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext, OutputClosed
+from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_ENV_VAR, CliContext, OutputClosed,
+                                      read_key_file)
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
@@ -45,13 +46,18 @@ _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStat
 @click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.0, min_open=True), default=DEFAULT_TIMEOUT_S,
               show_default=True, metavar="SECONDS",
               help="Connect timeout, longest telemetry gap, and ARM retry window.")
+@click.option("--key-file", "key_file", default=None, metavar="PATH",
+              help=f"File with the 128-bit link key (32 hex digits) for signed frames [env {KEY_FILE_ENV_VAR}; "
+                   "default: unsigned frames].")
 @click.pass_context
-def cli(click_ctx: click.Context, url: str | None, json_mode: bool, timeout_s: float) -> None:
+def cli(click_ctx: click.Context, url: str | None, json_mode: bool, timeout_s: float, key_file: str | None) -> None:
     """Command a RoboWrangler rope lasso (board or SIL) over UDP or USB serial."""
     env: Environment = click_ctx.obj
     url = url or env.environ.get(URL_ENV_VAR) or DEFAULT_URL
     parse_url(url)  # a malformed URL is a usage error before anything is opened
-    click_ctx.obj = CliContext(env=env, url=url, timeout_s=timeout_s, json_mode=json_mode)
+    key_file = key_file or env.environ.get(KEY_FILE_ENV_VAR)
+    key = read_key_file(key_file) if key_file else None
+    click_ctx.obj = CliContext(env=env, url=url, timeout_s=timeout_s, json_mode=json_mode, key=key)
 
 
 for _command in COMMANDS:
