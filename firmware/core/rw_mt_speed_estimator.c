@@ -5,25 +5,20 @@
 
 #include "rw_defaults.h"
 
-#include <stdint.h>
-#include <string.h>
+#include "rw_float_bits.h"
 
-/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
- * calls on the Cortex-M0+, this is a few integer instructions. */
-static bool finite_f(float x)
-{
-    uint32_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    return (bits & 0x7F800000u) != 0x7F800000u;
-}
+#include <stdint.h>
 
 #define RW_TWO_PI_F 6.28318530718f
 #define RW_US_PER_S_F 1.0e6f
 #define RW_HALF_RANGE_U32 0x80000000u
+#define RW_BOUND_SURE_UNDER_F 0.999e6f
 
 void rw_mt_speed_estimator_init(rw_mt_speed_estimator *e, const rw_mt_speed_estimator_config *cfg)
 {
     e->cfg = *cfg;
+    e->state.two_pi_r_m = 0.0f;
+    e->state.two_pi_r_radius_m = 0.0f;
     const rw_lowpass_config filter_cfg = {.tau_s = cfg->filter_tau_s};
     rw_lowpass_init(&e->state.filter, &filter_cfg);
     rw_mt_speed_estimator_reset(e);
@@ -49,8 +44,8 @@ void rw_mt_speed_estimator_reset(rw_mt_speed_estimator *e)
 
 bool rw_mt_speed_estimator_config_is_valid(const rw_mt_speed_estimator_config *cfg)
 {
-    return cfg->counts_per_rev > 0u && cfg->timeout_us > 0u && finite_f(cfg->wheel_radius_m) &&
-           cfg->wheel_radius_m > 0.0f && finite_f(cfg->filter_tau_s) && cfg->filter_tau_s >= 0.0f;
+    return cfg->counts_per_rev > 0u && cfg->timeout_us > 0u && rw_f32_positive_finite(cfg->wheel_radius_m) &&
+           rw_f32_finite(cfg->filter_tau_s) && rw_f32_ge(cfg->filter_tau_s, 0.0f);
 }
 
 float rw_mt_speed_estimator_rev_per_s(const rw_mt_speed_estimator *e)
@@ -66,10 +61,12 @@ float rw_mt_speed_estimator_rpm(const rw_mt_speed_estimator *e)
 float rw_mt_speed_estimator_rope_mps(const rw_mt_speed_estimator *e)
 {
     const float r_m = e->cfg.wheel_radius_m;
-    if (!(r_m > 0.0f) || !finite_f(r_m)) {
+    if (!rw_f32_positive_finite(r_m)) {
         return 0.0f;
     }
-    return RW_TWO_PI_F * r_m * rw_lowpass_output(&e->state.filter);
+    /* (2 pi r) y: the product kept by the step when it belongs to this radius (same bits either way) */
+    const float two_pi_r_m = rw_f32_same(r_m, e->state.two_pi_r_radius_m) ? e->state.two_pi_r_m : RW_TWO_PI_F * r_m;
+    return two_pi_r_m * rw_lowpass_output(&e->state.filter);
 }
 
 float rw_mt_speed_estimator_raw_rev_per_s(const rw_mt_speed_estimator *e)
@@ -120,6 +117,10 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
     }
 
     e->state.filter.cfg.tau_s = e->cfg.filter_tau_s; /* cfg is public: follow a changed tau */
+    if (!rw_f32_same(e->cfg.wheel_radius_m, e->state.two_pi_r_radius_m)) {
+        e->state.two_pi_r_m = RW_TWO_PI_F * e->cfg.wheel_radius_m;
+        e->state.two_pi_r_radius_m = e->cfg.wheel_radius_m;
+    }
     const float counts_per_rev = (float)e->cfg.counts_per_rev;
     const uint32_t dn = count - e->state.last_count;
     float n_rev_per_s = e->state.raw_rev_per_s;
@@ -158,15 +159,21 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
                 return 0.0f;
             }
             if (silence_us > 0u) {
-                const float bound_rev_per_s = RW_US_PER_S_F / (counts_per_rev * (float)silence_us);
-                if (n_rev_per_s > bound_rev_per_s) {
-                    n_rev_per_s = bound_rev_per_s;
+                /* n <= bound whenever n (counts_per_rev s) stays clearly under 1e6 (0.1 % margin, far
+                 * above the rounding of either side): then the division is skipped, the result is the
+                 * same. Otherwise the bound is computed as the law says. */
+                const float span = counts_per_rev * (float)silence_us;
+                if (!rw_f32_lt(n_rev_per_s * span, RW_BOUND_SURE_UNDER_F)) {
+                    const float bound_rev_per_s = RW_US_PER_S_F / span;
+                    if (rw_f32_gt(n_rev_per_s, bound_rev_per_s)) {
+                        n_rev_per_s = bound_rev_per_s;
+                    }
                 }
             }
         }
     }
 
-    if (!finite_f(n_rev_per_s) || n_rev_per_s < 0.0f) {
+    if (!rw_f32_finite(n_rev_per_s) || rw_f32_lt(n_rev_per_s, 0.0f)) {
         n_rev_per_s = e->state.raw_rev_per_s;
     }
     e->state.raw_rev_per_s = n_rev_per_s;

@@ -24,7 +24,15 @@ typedef struct rw_throttle_map_config {
 } rw_throttle_map_config;
 
 typedef struct rw_throttle_map {
-    rw_throttle_map_config cfg; /**< public, may be changed between calls; no private state */
+    rw_throttle_map_config cfg; /**< public, may be changed between calls */
+    struct {
+        float two_pi_r_kv;  /**< 2 pi wheel_radius_m kv_rpm_per_v for the two below (computed once) */
+        float memo_kv_rpm_per_v; /**< the kv two_pi_r_kv belongs to (0: none yet) */
+        float memo_wheel_radius_m; /**< the radius it belongs to */
+        float last_rope_mps;  /**< the last feed-forward's inputs and result (the setpoint and battery */
+        float last_battery_v; /**< often repeat from one tick to the next: then no division) */
+        float last_throttle;
+    } state;                /**< private: precomputed values only, the map has no history */
 } rw_throttle_map;
 
 /** Copies cfg. */
@@ -36,8 +44,9 @@ void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg);
  * rope_mps (m/s) on a battery of battery_v volts:
  *     throttle = 60 rope_mps / (2 pi wheel_radius_m kv_rpm_per_v battery_v), clamped to [0, 1].
  * Returns 0 for non-finite or non-positive rope_mps or battery_v, or an invalid kv/radius.
+ * Keeps 2 pi r kv and the last result in m->state (the answer is the same as computing it afresh).
  */
-float rw_throttle_map_feed_forward(const rw_throttle_map *m, float rope_mps, float battery_v);
+float rw_throttle_map_feed_forward(rw_throttle_map *m, float rope_mps, float battery_v);
 /** Inverse of the feed-forward: unloaded rope speed (m/s, >= 0) at a throttle fraction (clamped
  *  to [0, 1]) and battery voltage; 0 for non-finite input or invalid config. */
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v);
