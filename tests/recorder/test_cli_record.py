@@ -119,7 +119,8 @@ def test_ctrl_c_ends_the_recording_with_a_complete_file_and_exit_0(live_sil: Sil
     assert not rec.truncated and len(rec.telemetry["seq"]) >= progress[-1]
 
 
-def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path) -> None:
+def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path,
+                                                              wrangler) -> None:
     out = tmp_path / "killed.mcap"
     proc, progress, _ = _recorder_process(live_sil.cmd_url, out, signal.SIGKILL, lines=2)
     assert proc.returncode == -signal.SIGKILL
@@ -130,3 +131,5 @@ def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSessi
     # at most one unfinished chunk (<= 0.5 s = 25 frames at 50 Hz) is lost; a few more may have come after the line
     assert written - 30 <= got <= written + 15, (written, got)
     assert rec.telemetry["seq"].tolist() == sorted(rec.telemetry["seq"].tolist())
+    status, text, err = wrangler("inspect", str(out))
+    assert status == ExitStatus.OK and "TRUNCATED" in text and "truncated" in err
