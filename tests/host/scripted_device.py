@@ -84,7 +84,7 @@ class ScriptedDevice:
         self._last_counter = 0
         self._counter = 0
         # spindle: the guide moves at guide_speed_mps; a retract secures a load when it reaches object_at_m
-        self.guide_speed_mps = 0.5
+        self.guide_speed_mps = 1.5
         self.object_at_m: float | None = None
         self.spindle_unavailable = False
         self.homed = False
