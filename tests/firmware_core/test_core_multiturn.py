@@ -112,7 +112,9 @@ def test_wrong_speed_in_the_dead_zone_is_resynchronised_on_exit(rw_core, rpm, di
     exits = np.flatnonzero(dead[:-1] & ~dead[1:]) + 1
     assert len(exits) >= 3
     steps_per_deg = 1.0 / (rpm * 6.0 * DT_S)
-    settle = int(math.ceil(2 * 6.0 * steps_per_deg)) + 2  # through the margin band and one usable reading
+    margin = multiturn_defaults(rw_core).dead_zone_margin_deg
+    # through the margin band behind the lagging prediction (6 degrees at -10 %), then one usable reading
+    settle = int(math.ceil((margin + 6.0) * steps_per_deg)) + 2
     for e in exits:
         after = err[e + settle:e + settle + int(100 * steps_per_deg)]
         assert after.max() < TRACK_TOL_DEG, f"not re-synchronised {settle} steps after the exit at step {e}"
@@ -176,7 +178,7 @@ def test_start_in_the_dead_zone_dead_reckons_until_the_first_usable_reading(rw_c
     truth, est, dead, _ = track(mt, servo, seconds=10 * 60.0 / 20.0)
     assert mt.initialized
     first = np.flatnonzero(~dead)[0]
-    ref = first + int(2 * 6.0 / (120.0 * DT_S)) + 2
+    ref = first + int(2 * multiturn_defaults(rw_core).dead_zone_margin_deg / (120.0 * DT_S)) + 2
     offset = est[ref] - truth[ref]
     assert abs(offset - 360.0 * round(offset / 360.0)) < TRACK_TOL_DEG, "referenced to the register"
     assert np.abs(est[ref:] - truth[ref:] - offset).max() < TRACK_TOL_DEG, "then tracks ten turns"
@@ -193,7 +195,7 @@ def test_start_in_the_dead_zone_with_garbage_readings_never_initialises_on_garba
     mt = Multiturn(rw_core)
     truth, est, dead, _ = track(mt, servo, seconds=5 * 60.0 / 20.0)
     first = np.flatnonzero(~dead)[0]
-    ref = first + int(2 * 6.0 / (120.0 * DT_S)) + 2
+    ref = first + int(2 * multiturn_defaults(rw_core).dead_zone_margin_deg / (120.0 * DT_S)) + 2
     offset = est[ref] - truth[ref]
     assert abs(offset - 360.0 * round(offset / 360.0)) < TRACK_TOL_DEG
     assert np.abs(est[ref:] - truth[ref:] - offset).max() < TRACK_TOL_DEG
