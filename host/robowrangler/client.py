@@ -33,7 +33,7 @@ from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArg
                                  StateTimeout, UnknownParameter)
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
-from robowrangler.telemetry import DeviceEvent, TelemetrySample
+from robowrangler.telemetry import DeviceEvent, ProvisionStatus, TelemetrySample
 from robowrangler.transport import DEFAULT_URL, Transport, open_transport, parse_url
 
 RECV_POLL_S = 0.05  # receiver thread wakes this often to notice close()
@@ -158,6 +158,7 @@ class Client:
         self._send_lock = threading.Lock()  # seq allocation + send keep frames in seq order
         self._waiters: dict[tuple[int, int], _Waiter] = {}
         self._param_waiters: dict[int, list[_Waiter]] = collections.defaultdict(list)
+        self._status_waiters: list[_Waiter] = []
         self._subscribers: list[queue.Queue] = []
         self._events: collections.deque[DeviceEvent] = collections.deque(maxlen=EVENT_HISTORY_LEN)
         self._last_event_seq: int | None = None
@@ -346,6 +347,61 @@ class Client:
         """DISARMED or ARMED with the rope stopped: drive the guide to the home end (stall or limit
         switch), position 0 there. Returns when accepted; telemetry spindle_flags gets HOMED when done."""
         return State(self._command(gen.Home()).state)
+
+    # ----------------------------------------------------------------- provisioning (USB serial only)
+
+    def provision_status(self) -> ProvisionStatus:
+        """What the device has stored (PROVISION_GET -> ACK + PROVISION_STATUS). Serial links only."""
+        self._require_serial_link()
+        for _ in range(self.retries + 1):
+            waiter = _Waiter()
+            with self._lock:
+                self._status_waiters.append(waiter)
+            try:
+                self._command(gen.ProvisionGet(), param_waiter=waiter)
+                if waiter.event.wait(self.ack_timeout_s):
+                    return ProvisionStatus.from_wire(waiter.reply)
+            finally:
+                with self._lock:
+                    if waiter in self._status_waiters:
+                        self._status_waiters.remove(waiter)
+        raise LinkTimeout(f"PROVISION_GET: ACKed by {self.url} but no PROVISION_STATUS arrived after "
+                          f"{self.retries + 1} requests", url=self.url, waited_s=(self.retries + 1) * self.ack_timeout_s)
+
+    def provision(self, *, key: bytes | None = None, wifi_ssid: str | None = None,
+                  wifi_password: str | None = None, commit: bool = True) -> ProvisionStatus:
+        """Store a link key and/or WiFi credentials on the device, then (commit=True) write them to flash.
+
+        Only over a serial:// link: a key or a password never travels over WiFi, so any other link is
+        refused here, before anything is sent (InvalidArgument naming the URL). key: 16 bytes;
+        wifi_ssid: at most 32 UTF-8 bytes; wifi_password: at most 63 bytes (the device checks WPA2's
+        8-63 or empty). Error messages never contain the key or the password. Returns the status after.
+        """
+        self._require_serial_link()
+        if key is not None and (not isinstance(key, (bytes, bytearray)) or len(key) != gen.KEY_LEN):
+            raise InvalidArgument("key", f"{gen.KEY_LEN} bytes", f"{type(key).__name__} of length "
+                                  f"{len(key) if hasattr(key, '__len__') else '?'}")
+        if wifi_ssid is not None and (not isinstance(wifi_ssid, str) or len(wifi_ssid.encode()) > 32 or "\0" in wifi_ssid):
+            raise InvalidArgument("wifi_ssid", "text of at most 32 UTF-8 bytes without NUL", wifi_ssid)
+        if wifi_password is not None and (not isinstance(wifi_password, str) or len(wifi_password.encode()) > 63
+                                          or "\0" in wifi_password):
+            length = len(wifi_password.encode()) if isinstance(wifi_password, str) else "?"
+            raise InvalidArgument("wifi_password", "text of at most 63 bytes without NUL",
+                                  f"a {type(wifi_password).__name__} of {length} bytes (not shown)")
+        if key is not None:
+            self._command(gen.ProvisionSetKey(bytes(key)))
+        if wifi_ssid is not None:
+            self._command(gen.ProvisionSetWifiSsid(wifi_ssid))
+        if wifi_password is not None:
+            self._command(gen.ProvisionSetWifiPassword(wifi_password))
+        if commit:
+            self._command(gen.ProvisionCommit())
+        return self.provision_status()
+
+    def _require_serial_link(self) -> None:
+        if not self.url.startswith("serial://"):
+            raise InvalidArgument("url", "a serial:// link: provisioning (keys, WiFi passwords) never travels "
+                                  "over WiFi", self.url)
 
     def get_param(self, name: str) -> float:
         """A parameter's value on the device, in its SI unit (see robowrangler.protocol PARAMS)."""
@@ -652,6 +708,12 @@ class Client:
                         taken = True
                 if not taken:
                     self._stats.stale_param_values += 1
+        elif msg_id == MsgId.PROVISION_STATUS:
+            with self._lock:
+                for w in self._status_waiters:
+                    if w.armed and w.reply is None:
+                        w.reply = msg
+                        w.event.set()
         elif msg_id == MsgId.TELEMETRY:
             self._on_telemetry(TelemetrySample.from_wire(msg, received_s=received_s))
         elif msg_id == MsgId.EVENT:

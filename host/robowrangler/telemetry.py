@@ -182,6 +182,30 @@ class DeviceEvent:
         return d
 
 
+@dataclass(frozen=True)
+class ProvisionStatus:
+    """PROVISION_STATUS: what the device has stored (the key and the WiFi password are never sent back).
+
+    boot_counter is the session id of the current boot; commits counts flash writes (wear); dirty says
+    something was set since the last commit."""
+
+    key_set: bool
+    password_set: bool
+    wifi_ssid: str
+    boot_counter: int
+    commits: int
+    config_version: int
+    dirty: bool
+
+    @classmethod
+    def from_wire(cls, msg: Any) -> ProvisionStatus:
+        return cls(bool(msg.key_set), bool(msg.password_set), msg.wifi_ssid, msg.boot_counter, msg.commits,
+                   msg.config_version, bool(msg.dirty))
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
 def _flags(bits: Fault | None) -> str:
     return "|".join(f.name for f in Fault if bits is not None and f in bits) or "none"
 
