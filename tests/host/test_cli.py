@@ -262,3 +262,32 @@ def test_a_bad_key_file_is_a_usage_error_that_does_not_echo_it(tmp_path, content
     assert run.status == ExitStatus.USAGE and expected in run.stderr and content not in run.stderr
     missing = wrangler("--url", "udp://127.0.0.1:9", "--key-file", str(tmp_path / "none"), "status")
     assert missing.status == ExitStatus.USAGE and "readable file" in missing.stderr
+
+
+def test_provision_over_serial_generates_a_key_and_never_prints_it(tmp_path) -> None:
+    from pty_device import PtyDevice
+
+    key_path = tmp_path / "link.key"
+    password_path = tmp_path / "wifi.pw"
+    password_path.write_text("correct horse\n")
+    with PtyDevice() as dev:
+        url = f"serial://{dev.port}"
+        run = wrangler("--url", url, "--json", "provision", "set", "--generate-key", str(key_path),
+                       "--wifi-ssid", "lab", "--wifi-password-file", str(password_path))
+        status = wrangler("--url", url, "provision", "status")
+        again = wrangler("--url", url, "provision", "set", "--generate-key", str(key_path))
+    assert run.status == ExitStatus.OK, run.stderr
+    assert run.json["key_set"] is True and run.json["wifi_ssid"] == "lab" and run.json["commits"] == 1
+    key_hex = key_path.read_text().strip()
+    assert dev.stored_key == bytes.fromhex(key_hex) and dev.password == "correct horse"
+    assert oct(key_path.stat().st_mode & 0o777) == "0o600"
+    for out in (run, status, again):
+        assert key_hex not in out.stdout + out.stderr and "correct horse" not in out.stdout + out.stderr
+    assert "link key       set" in status.stdout
+    assert again.status == ExitStatus.USAGE and "a key is never overwritten" in again.stderr
+
+
+def test_provision_refuses_a_wifi_link_before_connecting(device: ScriptedDevice) -> None:
+    run = wrangler("--url", device.url, "--json", "provision", "set", "--wifi-ssid", "lab")
+    assert run.status == ExitStatus.USAGE and "provisioning never travels over WiFi" in run.json["message"]
+    assert device.received == []

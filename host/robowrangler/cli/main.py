@@ -17,7 +17,7 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param, record, sil, spindle
+from robowrangler.cli import monitor, motion, param, provision, record, sil, spindle
 from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_ENV_VAR, CliContext, OutputClosed,
                                       read_key_file)
 from robowrangler.cli.environment import Environment
@@ -30,7 +30,7 @@ COMMANDS: list[click.Command] = [
     motion.arm, motion.disarm, motion.spin, motion.spindown, motion.estop,
     spindle.home, spindle.loop, spindle.relax, spindle.retract, spindle.grasp, spindle.release,
     monitor.status, monitor.watch,
-    param.param,
+    param.param, provision.provision,
     sil.sil_command, sil.demo_command,
     record.record, record.inspect, record.replay,
 ]
