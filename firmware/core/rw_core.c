@@ -21,17 +21,10 @@ static uint16_t sat_u16(float x)
     if (!rw_f32_positive(x)) {
         return 0u;
     }
-    const uint32_t bits = rw_f32_bits(x);
-    if (bits >= RW_CORE_F32_BITS_65535) {
+    if (rw_f32_bits(x) >= RW_CORE_F32_BITS_65535) {
         return 65535u;
     }
-    const int32_t exp2 = (int32_t)(bits >> 23) - 127; /* x = m 2^(exp2 - 23), here exp2 <= 15 */
-    if (exp2 < -1) {
-        return 0u; /* x < 0.5 */
-    }
-    const uint32_t mantissa = (bits & 0x007FFFFFu) | 0x00800000u;
-    const uint32_t shift = (uint32_t)(23 - exp2); /* 8..24 */
-    return (uint16_t)((mantissa + (1u << (shift - 1u))) >> shift);
+    return (uint16_t)rw_f32_round_half_up_u24(x);
 }
 
 /* (float)dt_us 1e-6, capped at RW_CORE_MAX_CONTROL_DT_S: the same value, kept for the dt_us it was
@@ -421,9 +414,16 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     uint32_t dt_us = now_us - core->state.last_now_us;
     core->state.last_now_us = now_us;
     uint32_t total_us = core->state.uptime_rem_us + dt_us;
-    uint32_t dt_ms = total_us / 1000u;
+    uint32_t dt_ms;
+    if (total_us < 2000u && total_us >= dt_us) { /* the usual tick: no division (same result) */
+        dt_ms = total_us >= 1000u ? 1u : 0u;
+        total_us -= dt_ms * 1000u;
+    } else {
+        dt_ms = total_us / 1000u;
+        total_us %= 1000u;
+    }
     core->state.uptime_ms += dt_ms;
-    core->state.uptime_rem_us = total_us % 1000u;
+    core->state.uptime_rem_us = total_us;
     float dt_s = capped_dt_s(dt_us, &core->state.tick_dt_us_memo, &core->state.tick_dt_s_memo);
     /* the schedule (rw_core.h): speed ticks and other ticks alternate */
     const bool speed_tick = core->state.speed_tick_next;
@@ -439,8 +439,10 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     if (speed_tick) {
         speed_dt_s = capped_dt_s(core->state.speed_dt_us, &core->state.speed_dt_us_memo, &core->state.speed_dt_s_memo);
         core->state.speed_dt_us = 0u;
-        rw_mt_speed_estimator_step(&core->state.speed, enc.counts, enc.last_edge_us, now_us, speed_dt_s);
-        core->state.measured_mps = rw_mt_speed_estimator_rope_mps(&core->state.speed);
+        /* the step returns rw_mt_speed_estimator_rope_mps (0 with an invalid config, which the parameter
+         * ranges exclude) */
+        core->state.measured_mps =
+            rw_mt_speed_estimator_step(&core->state.speed, enc.counts, enc.last_edge_us, now_us, speed_dt_s);
     }
     uint16_t battery_mv = hal->battery->read_mv(hal->battery->ctx);
     if (battery_mv != core->state.battery_mv) { /* volts only when the reading changes */

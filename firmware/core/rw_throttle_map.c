@@ -125,7 +125,8 @@ uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, float throttle)
         return hi_us;
     }
     const float span_us = (float)(hi_us - lo_us);
-    const uint32_t offset_us = (uint32_t)(throttle * span_us + 0.5f); /* 0 <= . <= span: no overflow */
+    /* round half up, on the bit pattern (0 <= throttle span < 1000: in range) */
+    const uint32_t offset_us = rw_f32_round_half_up_u24(throttle * span_us);
     uint32_t pulse_us = (uint32_t)lo_us + offset_us;
     if (pulse_us > hi_us) {
         pulse_us = hi_us;
