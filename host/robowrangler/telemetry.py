@@ -51,6 +51,8 @@ class TelemetrySample:
     spindle_load_pct: float
     spindle_flags: SpindleFlag
     spindle_rejected: int
+    rx_auth_failed: int
+    rx_replayed: int
     received_s: float
 
     @classmethod
@@ -77,6 +79,8 @@ class TelemetrySample:
             spindle_load_pct=units.permille_to_pct(msg.spindle_load_permille),
             spindle_flags=SpindleFlag(msg.spindle_flags),
             spindle_rejected=msg.spindle_rejected,
+            rx_auth_failed=msg.rx_auth_failed,
+            rx_replayed=msg.rx_replayed,
             received_s=received_s,
         )
 
