@@ -12,9 +12,15 @@ Threads: a receiver thread decodes every frame and hands ACK/NACK to the waiting
 raised. A heartbeat thread sends HEARTBEAT at heartbeat_hz while connected (the device spins the
 rope down after heartbeat_timeout_s of silence).
 
-Retries: a command is retransmitted with the SAME seq and bytes after each ack_timeout_s without an
+Retries: a command is retransmitted with the SAME seq and payload after each ack_timeout_s without an
 answer (the device answers a retransmission again but never executes it twice), at most `retries`
-times, then LinkTimeout. A new command always gets a new seq.
+times, then LinkTimeout; a NACK saying the frame arrived damaged is answered by an immediate
+retransmission. A new command always gets a new seq.
+
+Signed links (protocol v2, key=...): connect() asks for the session (HELLO -> SESSION_INFO), then every
+frame carries the session id, a counter that only grows (also across processes: it follows the wall
+clock in microseconds) and a SipHash-2-4 tag; a retransmission keeps seq and checksum but gets a fresh
+counter. Provisioning (key, WiFi) goes over serial:// links only.
 """
 
 from __future__ import annotations
