@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import io
 import json
-import math
 
 import pytest
 
@@ -13,7 +12,7 @@ from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.cli.main import main
 from robowrangler.client import Client
-from robowrangler.protocol.generated import PARAMS, MsgId, State
+from robowrangler.protocol.generated import PARAMS, MsgId
 from scripted_device import ScriptedDevice
 
 
@@ -187,7 +186,6 @@ def test_param_list_get_set(device: ScriptedDevice) -> None:
     assert refused.status == ExitStatus.NACK and refused.json["reason"] == "OUT_OF_RANGE"
     human = wrangler("--url", device.url, "param", "list")
     assert "wheel_radius_m" in human.stdout and "locked" in human.stdout
-    assert not math.isnan(held["value"])
 
 
 class ClosedAfterOneLine(io.StringIO):
