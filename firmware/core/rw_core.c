@@ -343,7 +343,7 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
         core->state.pulse_us = esc_min;
         return;
     }
-    float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.battery_v);
+    float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.ff_battery_v);
     float u = rw_pi_controller_step(&core->state.pi, setpoint, core->state.measured_mps, ff, dt_s);
     uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u);
     core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
@@ -456,7 +456,13 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     /* 3. supervision, 4. control; the spindle and the telemetry pack only on other ticks, one job a tick */
     supervise(core, dt_s, dt_ms, primed ? counts_delta : 1u);
     const bool telemetry_due = (int32_t)(core->state.uptime_ms - core->state.telemetry_due_ms) >= 0;
-    if (!speed_tick && !telemetry_due && (int32_t)(core->state.uptime_ms - core->state.spindle_due_ms) >= 0) {
+    const bool spindle_due = (int32_t)(core->state.uptime_ms - core->state.spindle_due_ms) >= 0;
+    if (!speed_tick && !telemetry_due && !spindle_due && !rw_f32_same(core->state.battery_v, core->state.ff_battery_v)) {
+        /* an idle tick: the feed-forward's battery division happens here, not on a speed tick */
+        core->state.ff_battery_v = core->state.battery_v;
+        rw_throttle_map_prepare_battery(&core->state.throttle, core->state.ff_battery_v);
+    }
+    if (!speed_tick && !telemetry_due && spindle_due) {
         /* the real time since the last spindle step: after a tick gap the dead reckoning must cover it */
         uint32_t elapsed_ms = core->state.uptime_ms - core->state.spindle_last_ms;
         if (elapsed_ms == 0u || elapsed_ms > 60000u) {

@@ -21,7 +21,10 @@
  *   speed tick (odd calls):    M/T estimator + ramp + PI + feed-forward, dt = the time since the last
  *                              speed tick (2 ms at a 1 ms tick: 500 Hz, above the ESC's 400 Hz frame rate)
  *   other tick (even calls):   the telemetry pack when due; otherwise the spindle loop when due
- *                              (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick of its kind
+ *                              (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick of its kind;
+ *                              with neither, the feed-forward's battery factor (60 / (2 pi r kv V), one
+ *                              division) is refreshed if the battery reading changed, so the speed tick
+ *                              never divides for it (the feed-forward sees the battery a few ms late)
  * A telemetry frame held back by the schedule (at most 2 ms) does not shift the next one: the period
  * counts from when it was due. A spindle step held back measures its real elapsed time as always. The
  * first call is an "other" tick, so the first telemetry frame leaves at uptime 0.
@@ -100,6 +103,7 @@ typedef struct rw_core {
         float speed_dt_s_memo;
         float telemetry_rate_hz_memo; /* the rate telemetry_period_ms was computed for (0: none yet) */
         uint32_t telemetry_period_ms; /* round(1000 / telemetry_rate_hz) */
+        float ff_battery_v;       /* the battery voltage the feed-forward uses (refreshed on idle ticks) */
         uint16_t tx_seq;
         uint16_t last_cmd_seq;
 

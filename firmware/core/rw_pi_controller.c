@@ -122,6 +122,7 @@ float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measureme
     float integral = c->state.integral + c->state.ki_dt * error;
     const float ff_p = feed_forward + p; /* (ff + p) + I: the order C evaluates ff + p + I in */
     const float unsaturated = ff_p + integral;
+    const float candidate = integral;
     if (rw_f32_gt(unsaturated, cfg->out_max) && rw_f32_positive(error)) {
         /* conditional integration: only up to the limit, never backwards */
         integral = maxf(c->state.integral, cfg->out_max - feed_forward - p);
@@ -130,7 +131,8 @@ float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measureme
     }
     const float ff_in_limits = clampf(feed_forward, cfg->out_min, cfg->out_max);
     integral = clampf(integral, cfg->out_min - ff_in_limits, cfg->out_max - ff_in_limits);
-    const float u = ff_p + integral;
+    /* the integral untouched by the anti-windup (the usual case): u is the sum already made */
+    const float u = rw_f32_same(integral, candidate) ? unsaturated : ff_p + integral;
     if (!rw_f32_finite(integral) || !rw_f32_finite(u)) { /* overflow of huge (but finite) inputs */
         return c->state.output;
     }

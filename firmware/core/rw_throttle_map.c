@@ -53,33 +53,34 @@ static float rope_m_per_min_at_full_throttle(float two_pi_r_kv_value, float batt
     return rw_f32_finite(full_m_per_min) ? full_m_per_min : 0.0f;
 }
 
-float rw_throttle_map_feed_forward(rw_throttle_map *m, float rope_mps, float battery_v)
+void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v)
 {
     const float kv = m->cfg.kv_rpm_per_v;
     const float r_m = m->cfg.wheel_radius_m;
-    if (!rw_f32_same(kv, m->state.memo_kv_rpm_per_v) || !rw_f32_same(r_m, m->state.memo_wheel_radius_m)) {
+    const bool constants_changed =
+        !rw_f32_same(kv, m->state.memo_kv_rpm_per_v) || !rw_f32_same(r_m, m->state.memo_wheel_radius_m);
+    if (constants_changed) {
         m->state.two_pi_r_kv = two_pi_r_kv(kv, r_m);
         m->state.memo_kv_rpm_per_v = kv;
         m->state.memo_wheel_radius_m = r_m;
-        m->state.last_throttle = -1.0f; /* no remembered result for the new constants */
     }
-    if (!rw_f32_positive_finite(rope_mps)) {
+    if (constants_changed || !rw_f32_same(battery_v, m->state.memo_battery_v)) {
+        const float full_m_per_min = rope_m_per_min_at_full_throttle(m->state.two_pi_r_kv, battery_v);
+        /* one soft-float division, once per battery voltage */
+        m->state.throttle_per_mps = rw_f32_positive(full_m_per_min) ? RW_S_PER_MIN_F / full_m_per_min : 0.0f;
+        m->state.memo_battery_v = battery_v;
+    }
+}
+
+float rw_throttle_map_feed_forward(rw_throttle_map *m, float rope_mps, float battery_v)
+{
+    rw_throttle_map_prepare_battery(m, battery_v);
+    const float per_mps = m->state.throttle_per_mps;
+    if (!rw_f32_positive_finite(rope_mps) || !rw_f32_positive(per_mps)) {
         return 0.0f;
     }
-    if (rw_f32_same(rope_mps, m->state.last_rope_mps) && rw_f32_same(battery_v, m->state.last_battery_v) &&
-        !rw_f32_lt(m->state.last_throttle, 0.0f)) {
-        return m->state.last_throttle;
-    }
-    const float full_m_per_min = rope_m_per_min_at_full_throttle(m->state.two_pi_r_kv, battery_v);
-    if (!rw_f32_positive(full_m_per_min)) {
-        return 0.0f;
-    }
-    float throttle = (RW_S_PER_MIN_F * rope_mps) / full_m_per_min; /* one soft-float division */
-    throttle = rw_f32_gt(throttle, 1.0f) ? 1.0f : throttle;
-    m->state.last_rope_mps = rope_mps;
-    m->state.last_battery_v = battery_v;
-    m->state.last_throttle = throttle;
-    return throttle;
+    const float throttle = rope_mps * per_mps;
+    return rw_f32_gt(throttle, 1.0f) ? 1.0f : throttle;
 }
 
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v)

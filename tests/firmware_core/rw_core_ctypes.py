@@ -78,7 +78,7 @@ class ThrottleConfig(ctypes.Structure):
 
 class _ThrottleState(ctypes.Structure):
     _fields_ = [("two_pi_r_kv", c_float), ("memo_kv_rpm_per_v", c_float), ("memo_wheel_radius_m", c_float),
-                ("last_rope_mps", c_float), ("last_battery_v", c_float), ("last_throttle", c_float)]
+                ("memo_battery_v", c_float), ("throttle_per_mps", c_float)]
 
 
 class Throttle(ctypes.Structure):
