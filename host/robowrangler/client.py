@@ -220,10 +220,28 @@ class Client:
         self._send_new(gen.Hello(self._hello_nonce), sign=False)
 
     def _establish_session(self) -> None:
-        """Wait for the SESSION_INFO answering our HELLO (resending HELLO each ack_timeout_s)."""
-        deadline = time.monotonic() + self.connect_timeout_s
-        while not self._session_event.wait(min(self.ack_timeout_s, max(0.0, deadline - time.monotonic()))):
-            if time.monotonic() >= deadline:
+        """Wait for the SESSION_INFO answering our HELLO (resending HELLO each ack_timeout_s).
+
+        An answer that does not verify with our key (wrong key, a device without one, or a forgery: HELLO
+        and its nonce travel in clear) is believed only if no verified answer follows within two more
+        HELLO rounds.
+        """
+        start = time.monotonic()
+        deadline = start + self.connect_timeout_s
+        unverified_until: float | None = None
+        while self._session_id is None:
+            self._session_event.wait(min(self.ack_timeout_s, max(0.0, deadline - time.monotonic())))
+            if self._session_id is not None:
+                break
+            now = time.monotonic()
+            if self._session_info is not None:
+                unverified_until = unverified_until or now + 2 * self.ack_timeout_s
+                if now >= unverified_until:
+                    break
+                self._session_event.clear()
+            if now >= deadline:
+                if self._session_info is not None:
+                    break
                 raise LinkTimeout(f"no SESSION_INFO from {self.url} within {self.connect_timeout_s:g} s: is the "
                                   "device running, and does its firmware speak protocol version "
                                   f"{gen.PROTOCOL_VERSION}?", url=self.url, waited_s=self.connect_timeout_s)
@@ -232,7 +250,7 @@ class Client:
         if info.schema_hash != gen.SCHEMA_HASH:
             raise AuthenticationError(f"{self.url} speaks protocol schema 0x{info.schema_hash:04X}, this host "
                                       f"0x{gen.SCHEMA_HASH:04X}: update the firmware or the host", url=self.url)
-        if not info.key_set:
+        if self._session_id is None and not info.key_set:
             raise AuthenticationError(f"{self.url} has no link key provisioned, so it takes no command over WiFi: "
                                       "provision one over USB serial", url=self.url)
         if self._session_id is None:
@@ -736,8 +754,8 @@ class Client:
         if not gen.tag_valid(frame, self._key):
             with self._lock:
                 self._stats.auth_failures += 1
-            if frame.msg_id == MsgId.SESSION_INFO and msg.host_nonce == self._hello_nonce:
-                self._session_info = msg  # the answer to our HELLO, signed with another key
+            if frame.msg_id == MsgId.SESSION_INFO and msg.host_nonce == self._hello_nonce and self._session_id is None:
+                self._session_info = msg  # an answer to our HELLO signed with another key (or forged)
                 self._session_event.set()
             return False
         if self._session_id is not None and frame.session_id != self._session_id and frame.msg_id != MsgId.SESSION_INFO:
@@ -752,8 +770,10 @@ class Client:
             with self._lock:
                 self._stats.unexpected_messages += 1  # someone else's HELLO, or a replayed answer
             return
-        self._session_info = msg
-        if self._key is not None and frame.signed:  # verified by _accept_signed
+        verified = self._key is not None and frame.signed  # the tag was checked by _accept_signed
+        if verified or self._session_id is None:  # an unverified answer never replaces a verified one
+            self._session_info = msg
+        if verified:
             with self._send_lock:
                 self._session_id = msg.session_id
         self._session_event.set()

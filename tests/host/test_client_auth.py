@@ -95,3 +95,19 @@ def test_key_must_be_16_bytes() -> None:
 
     with pytest.raises(InvalidArgument, match="key: expected 16 bytes"):
         Client("udp://127.0.0.1:14550", key=b"short")
+
+
+def test_a_forged_session_answer_does_not_beat_the_real_one() -> None:
+    with ScriptedDevice(key=KEY, session_id=9) as device:
+        original = device._on_datagram
+
+        def forge_first(data: bytes, addr) -> None:  # an attacker answers the HELLO first, unsigned, "no key"
+            frame, msg = gen.decode_message(data)
+            if frame.msg_id == MsgId.HELLO:
+                device._sock.sendto(gen.encode_frame(gen.SessionInfo(msg.host_nonce, 1, 0, gen.SCHEMA_HASH), 0), addr)
+                time.sleep(0.03)  # the real answer comes clearly later
+            original(data, addr)
+
+        device._on_datagram = forge_first
+        with Client(device.url, key=KEY, **FAST) as rw:
+            assert rw.session_id == 9 and rw.arm() == State.ARMED
