@@ -8,11 +8,47 @@
 #include "rw_float_bits.h"
 
 #include <stdint.h>
+#include <string.h>
 
 #define RW_TWO_PI_F 6.28318530718f
 #define RW_US_PER_S_F 1.0e6f
 #define RW_HALF_RANGE_U32 0x80000000u
 #define RW_BOUND_SURE_UNDER_F 0.999e6f
+/* Integer M/T division range: dn 1e6 < 2^30 and counts_per_rev dT < 2^24 (float-exact operands). */
+#define RW_MT_INT_MAX_DN 1073u
+#define RW_MT_INT_MAX_DEN 0x00FFFFFFu
+
+/* The M/T quotient dn 1e6 / (counts_per_rev dT) in rev/s by integer long division: the M0+ divides
+ * 32-bit integers in ~40 instructions and floats in ~350. The quotient is developed to at least 26
+ * bits, the remainder folded into its last bit (sticky), converted once (one rounding) and scaled by a
+ * power of two on the exponent (exact): the correctly rounded quotient, the same bits as the float
+ * division of these exactly representable operands. false when an operand is too large for that (the
+ * caller then divides in float). */
+static bool mt_rev_per_s_int(uint32_t dn, uint32_t counts_per_rev, uint32_t dt_us, float *out)
+{
+    if (dn > RW_MT_INT_MAX_DN || dt_us > RW_MT_INT_MAX_DEN / counts_per_rev) {
+        return false;
+    }
+    const uint32_t num = dn * 1000000u; /* < 2^30, exact as a float too (dn 15625 < 2^24) */
+    const uint32_t den = counts_per_rev * dt_us; /* < 2^24 */
+    uint32_t q = num / den;
+    uint32_t r = num - q * den;
+    uint32_t frac_bits = 0u;
+    while (q < 0x02000000u) { /* q < 2^25 and r < 2^24: both shift by 7 within 32 bits; <= 5 steps */
+        const uint32_t shifted = r << 7;
+        const uint32_t digit = shifted / den;
+        q = (q << 7) | digit;
+        r = shifted - digit * den;
+        frac_bits += 7u;
+    }
+    q |= r != 0u ? 1u : 0u; /* q >= 2^25: bit 0 lies below the rounding bit of a 24-bit significand */
+    float value = (float)q;
+    uint32_t bits;
+    memcpy(&bits, &value, sizeof bits);
+    bits -= frac_bits << 23; /* / 2^frac_bits: the result stays a normal number */
+    memcpy(out, &bits, sizeof bits);
+    return true;
+}
 
 void rw_mt_speed_estimator_init(rw_mt_speed_estimator *e, const rw_mt_speed_estimator_config *cfg)
 {
@@ -143,7 +179,9 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
             return 0.0f;
         }
         if (dt_edges_us > 0u) {
-            n_rev_per_s = ((float)dn * RW_US_PER_S_F) / (counts_per_rev * (float)dt_edges_us);
+            if (!mt_rev_per_s_int(dn, e->cfg.counts_per_rev, dt_edges_us, &n_rev_per_s)) {
+                n_rev_per_s = ((float)dn * RW_US_PER_S_F) / (counts_per_rev * (float)dt_edges_us);
+            }
             e->state.last_count = count;
             e->state.last_edge_us = edge_us;
             e->state.stale = false;
