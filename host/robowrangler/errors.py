@@ -147,6 +147,14 @@ class CommandRefused(RoboWranglerError):
         if r == NackReason.SPINDLE_UNAVAILABLE:
             return (f"the spindle servo does not answer or is in fault (fault bits 0x{self.detail & 0xFFFF:X}); "
                     "check the AX-12A's power and bus, then disarm to clear the fault")
+        if r == NackReason.NOT_ON_THIS_LINK:
+            return "provisioning is taken on the USB serial link only: connect with serial://"
+        if r == NackReason.NO_KEY:
+            return ("the device has no link key, so it takes no command over WiFi: provision one over USB serial "
+                    "(wrangler provision set --generate-key PATH)")
+        if r in (NackReason.UNSIGNED, NackReason.AUTH_FAILED, NackReason.REPLAYED):
+            return ("the frame's signature was refused (missing, wrong key, or an old session/counter): connect "
+                    "with the device's link key")
         if r == NackReason.NOT_A_COMMAND:
             return "the device does not accept this message from a host"
         if r == NackReason.UNKNOWN_MESSAGE:
