@@ -59,7 +59,8 @@ def main() -> int:
           "(all dropped or corrupted by the proxy)")
     print(f"verdicts / telemetry     {f.verdicts_checked} verdicts and {f.telemetry_checked} telemetry samples checked")
     print(f"airborne                 {f.airborne_ticks} ticks, lowest plant speed over the guard "
-          f"{f.min_airborne_margin_mps:+.3f} m/s")
+          f"{f.min_airborne_margin_mps:+.3f} m/s (at t = {f.min_airborne_margin_at_s:.3f} s), "
+          f"{f.airborne_ticks_under_guard} ticks under the guard (speed-loop undershoot, a known core gap)")
     print(f"invariant violations     {f.violations}")
     for text in f.first_violations:
         print(f"  {text}")

@@ -4,17 +4,42 @@
 #include <string.h>
 
 #include "rw_core_internal.h"
+#include "rw_float_bits.h"
 
 /* A tick longer than this (a debugger pause, a stalled loop) is integrated as this long, so the PI and
  * ramp never take one giant step; the uptime still advances by the real time. */
 #define RW_CORE_MAX_CONTROL_DT_S 0.05f
 
+/* 65535.0f as a bit pattern: positive floats order like their bit patterns. */
+#define RW_CORE_F32_BITS_65535 0x477FFF00u
+
+/* x rounded half up to 0..65535 (NaN and x <= 0 -> 0, x >= 65535 -> 65535), on the bit pattern: no
+ * soft-float call. The half-up rounding is exact (floor(x + 0.5) of the real value, where the float
+ * sum x + 0.5f could round up just below a half). */
 static uint16_t sat_u16(float x)
 {
-    if (!(x > 0.0f)) {
+    if (!rw_f32_positive(x)) {
         return 0u;
     }
-    return x >= 65535.0f ? 65535u : (uint16_t)(x + 0.5f);
+    if (rw_f32_bits(x) >= RW_CORE_F32_BITS_65535) {
+        return 65535u;
+    }
+    return (uint16_t)rw_f32_round_half_up_u24(x);
+}
+
+/* (float)dt_us 1e-6, capped at RW_CORE_MAX_CONTROL_DT_S: the same value, kept for the dt_us it was
+ * computed for (the tick period repeats, a conversion and a multiply are ~100 instructions each). */
+static float capped_dt_s(uint32_t dt_us, uint32_t *memo_us, float *memo_s)
+{
+    if (dt_us != *memo_us) {
+        float dt_s = (float)dt_us * 1.0e-6f;
+        if (dt_s > RW_CORE_MAX_CONTROL_DT_S) {
+            dt_s = RW_CORE_MAX_CONTROL_DT_S;
+        }
+        *memo_us = dt_us;
+        *memo_s = dt_s;
+    }
+    return *memo_s;
 }
 
 /* Push the current parameter values into the controllers' public configs. */
@@ -294,10 +319,12 @@ static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
     hal->spindle->write_moving_speed_raw(hal->spindle->ctx, sp->state.moving_speed_raw);
 }
 
-static void control(rw_core *core, float dt_s)
+/* The rope speed loop. Every tick: a state that does not drive the rope holds the ESC at its minimum at
+ * once. Speed ticks only: ramp, feed-forward and PI with dt_s since the previous speed tick. */
+static void control(rw_core *core, float dt_s, bool speed_tick)
 {
     uint8_t st = core->state.state;
-    uint16_t esc_min = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
+    uint16_t esc_min = core->state.throttle.cfg.pulse_min_us; /* (uint16_t)esc_min_us (rw_core_apply_params) */
     if (!rope_driven(st)) {
         rw_pi_controller_reset(&core->state.pi);
         rw_ramp_reset_to(&core->state.ramp, 0.0f);
@@ -305,15 +332,18 @@ static void control(rw_core *core, float dt_s)
         core->state.pulse_us = esc_min;
         return;
     }
+    if (!speed_tick) {
+        return;
+    }
     float target = rope_landing(st) ? 0.0f : core->state.target_mps;
     float setpoint = rw_ramp_step(&core->state.ramp, target, dt_s);
     core->state.setpoint_mps = setpoint;
-    if (rope_landing(st) && setpoint <= 0.0f) {
+    if (rope_landing(st) && rw_f32_le(setpoint, 0.0f)) {
         rw_pi_controller_reset(&core->state.pi);
         core->state.pulse_us = esc_min;
         return;
     }
-    float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.battery_v);
+    float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.ff_battery_v);
     float u = rw_pi_controller_step(&core->state.pi, setpoint, core->state.measured_mps, ff, dt_s);
     uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u);
     core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
@@ -381,6 +411,7 @@ static void load_config(rw_core *core, const rw_hal *hal)
 
 static void queue_telemetry(rw_core *core, const rw_hal *hal)
 {
+    core->state.rpm = rw_mt_speed_estimator_rpm(&core->state.speed); /* only telemetry reads it */
     const rw_core_counters *c = &core->state.counters;
     uint32_t age_ms = core->state.uptime_ms - core->state.last_host_frame_ms;
     rw_msg_telemetry msg = {
@@ -413,6 +444,17 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_TELEMETRY, frame, len);
 }
 
+/* round(1000 / telemetry_rate_hz) ms, computed once per rate (a float division is ~350 instructions). */
+static uint32_t telemetry_period_ms(rw_core *core)
+{
+    float rate_hz = rw_params_get(&core->params, RW_PARAM_TELEMETRY_RATE_HZ);
+    if (!rw_f32_same(rate_hz, core->state.telemetry_rate_hz_memo)) {
+        core->state.telemetry_period_ms = (uint32_t)(1000.0f / rate_hz + 0.5f);
+        core->state.telemetry_rate_hz_memo = rate_hz;
+    }
+    return core->state.telemetry_period_ms;
+}
+
 void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
 {
     if (!core->state.started) {
@@ -424,31 +466,56 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     uint32_t dt_us = now_us - core->state.last_now_us;
     core->state.last_now_us = now_us;
     uint32_t total_us = core->state.uptime_rem_us + dt_us;
-    uint32_t dt_ms = total_us / 1000u;
-    core->state.uptime_ms += dt_ms;
-    core->state.uptime_rem_us = total_us % 1000u;
-    float dt_s = (float)dt_us * 1.0e-6f;
-    if (dt_s > RW_CORE_MAX_CONTROL_DT_S) {
-        dt_s = RW_CORE_MAX_CONTROL_DT_S;
+    uint32_t dt_ms;
+    if (total_us < 2000u && total_us >= dt_us) { /* the usual tick: no division (same result) */
+        dt_ms = total_us >= 1000u ? 1u : 0u;
+        total_us -= dt_ms * 1000u;
+    } else {
+        dt_ms = total_us / 1000u;
+        total_us %= 1000u;
     }
+    core->state.uptime_ms += dt_ms;
+    core->state.uptime_rem_us = total_us;
+    float dt_s = capped_dt_s(dt_us, &core->state.tick_dt_us_memo, &core->state.tick_dt_s_memo);
+    /* the schedule (rw_core.h): speed ticks and other ticks alternate */
+    const bool speed_tick = core->state.speed_tick_next;
+    core->state.speed_tick_next = !speed_tick;
+    uint32_t speed_dt_us = core->state.speed_dt_us + dt_us;
+    core->state.speed_dt_us = speed_dt_us < dt_us ? UINT32_MAX : speed_dt_us; /* saturates */
 
-    /* 1. sensors */
+    /* 1. sensors: the encoder every tick (supervision watches its count), the estimator on speed ticks */
     rw_encoder_sample enc = hal->encoder->read(hal->encoder->ctx);
     uint32_t counts_delta = enc.counts - core->state.speed.state.last_count;
     bool primed = core->state.speed.state.primed;
-    rw_mt_speed_estimator_step(&core->state.speed, enc.counts, enc.last_edge_us, now_us, dt_s);
-    core->state.measured_mps = rw_mt_speed_estimator_rope_mps(&core->state.speed);
-    core->state.rpm = rw_mt_speed_estimator_rpm(&core->state.speed);
-    core->state.battery_mv = hal->battery->read_mv(hal->battery->ctx);
-    core->state.battery_v = (float)core->state.battery_mv * 1.0e-3f;
+    float speed_dt_s = 0.0f;
+    if (speed_tick) {
+        speed_dt_s = capped_dt_s(core->state.speed_dt_us, &core->state.speed_dt_us_memo, &core->state.speed_dt_s_memo);
+        core->state.speed_dt_us = 0u;
+        /* the step returns rw_mt_speed_estimator_rope_mps (0 with an invalid config, which the parameter
+         * ranges exclude) */
+        core->state.measured_mps =
+            rw_mt_speed_estimator_step(&core->state.speed, enc.counts, enc.last_edge_us, now_us, speed_dt_s);
+    }
+    uint16_t battery_mv = hal->battery->read_mv(hal->battery->ctx);
+    if (battery_mv != core->state.battery_mv) { /* volts only when the reading changes */
+        core->state.battery_mv = battery_mv;
+        core->state.battery_v = (float)battery_mv * 1.0e-3f;
+    }
 
     /* 2. at most one received datagram per link (USB serial first: it is where provisioning happens) */
     bool sent = hal->serial != NULL && rw_core_handle_datagram(core, hal, RW_LINK_SERIAL);
     sent = rw_core_handle_datagram(core, hal, RW_LINK_WIFI) || sent;
 
-    /* 3. supervision, 4. control */
+    /* 3. supervision, 4. control; the spindle and the telemetry pack only on other ticks, one job a tick */
     supervise(core, dt_s, dt_ms, primed ? counts_delta : 1u);
-    if ((int32_t)(core->state.uptime_ms - core->state.spindle_due_ms) >= 0) {
+    const bool telemetry_due = (int32_t)(core->state.uptime_ms - core->state.telemetry_due_ms) >= 0;
+    const bool spindle_due = (int32_t)(core->state.uptime_ms - core->state.spindle_due_ms) >= 0;
+    if (!speed_tick && !telemetry_due && !spindle_due && !rw_f32_same(core->state.battery_v, core->state.ff_battery_v)) {
+        /* an idle tick: the feed-forward's battery division happens here, not on a speed tick */
+        core->state.ff_battery_v = core->state.battery_v;
+        rw_throttle_map_prepare_battery(&core->state.throttle, core->state.ff_battery_v);
+    }
+    if (!speed_tick && !telemetry_due && spindle_due) {
         /* the real time since the last spindle step: after a tick gap the dead reckoning must cover it */
         uint32_t elapsed_ms = core->state.uptime_ms - core->state.spindle_last_ms;
         if (elapsed_ms == 0u || elapsed_ms > 60000u) {
@@ -458,14 +525,16 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         core->state.spindle_last_ms = core->state.uptime_ms;
         core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
     }
-    control(core, dt_s);
+    control(core, speed_dt_s, speed_tick);
     hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
 
     /* 5. telemetry, then at most one datagram out per tick */
-    float rate_hz = rw_params_get(&core->params, RW_PARAM_TELEMETRY_RATE_HZ);
-    if ((int32_t)(core->state.uptime_ms - core->state.telemetry_due_ms) >= 0) {
+    if (!speed_tick && telemetry_due) {
         queue_telemetry(core, hal);
-        core->state.telemetry_due_ms = core->state.uptime_ms + (uint32_t)(1000.0f / rate_hz + 0.5f);
+        /* held back by the schedule (<= 2 ms): the next frame is due one period after this one was */
+        uint32_t late_ms = core->state.uptime_ms - core->state.telemetry_due_ms;
+        late_ms = late_ms <= RW_CORE_SCHEDULE_MAX_HOLD_MS ? late_ms : 0u;
+        core->state.telemetry_due_ms = core->state.uptime_ms + telemetry_period_ms(core) - late_ms;
     }
     if (!sent) {
         const rw_outbox_slot *slot = rw_outbox_peek(&core->state.outbox);

@@ -10,13 +10,29 @@
  * accepted one; anything else is dropped and counted (rx_auth_failed, rx_replayed). Without a key nothing
  * is accepted over WiFi. USB serial is trusted: unsigned frames and the PROVISION_* messages.
  *
- * Tick (period = the time between calls, 1 ms on the board and in SIL; the spindle every 10 ms):
- *   1. encoder -> M/T estimator -> rope speed (m/s);  battery (V)
+ * Tick (period = the time between calls, 1 ms on the board and in SIL):
+ *   1. encoder (every tick, for the silence check) -> M/T estimator -> rope speed (m/s), on speed ticks;
+ *      battery (V)
  *   2. one received datagram -> decode -> duplicate check -> command -> ACK/NACK (straight to its sender)
- *   3. supervision: arming hold, heartbeat loss -> SPINDOWN, encoder silence -> FAULT, loop collapse,
- *      battery cutoff -> SPINDOWN, spindle outcomes (homed, secured, stall, no answer) -> grasp states
- *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us)
+ *   3. supervision (every tick): arming hold, heartbeat loss -> SPINDOWN, encoder silence -> FAULT, loop
+ *      collapse, battery cutoff -> SPINDOWN, spindle outcomes (homed, secured, stall, no answer) -> grasp states
+ *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us), on speed ticks;
+ *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
  *   5. telemetry at telemetry_rate_hz; one queued frame to the peer
+ *
+ * Schedule: the calls alternate between two kinds of tick, so that the expensive periodic jobs never
+ * share a tick (the worst-case tick is one job plus the per-tick work, not their sum; on the M0+ every
+ * float operation is a libgcc call):
+ *   speed tick (odd calls):    M/T estimator + ramp + PI + feed-forward, dt = the time since the last
+ *                              speed tick (2 ms at a 1 ms tick: 500 Hz, above the ESC's 400 Hz frame rate)
+ *   other tick (even calls):   the telemetry pack when due; otherwise the spindle loop when due
+ *                              (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick of its kind;
+ *                              with neither, the feed-forward's battery factor (60 / (2 pi r kv V), one
+ *                              division) is refreshed if the battery reading changed, so the speed tick
+ *                              never divides for it (the feed-forward sees the battery a few ms late)
+ * A telemetry frame held back by the schedule (at most 2 ms) does not shift the next one: the period
+ * counts from when it was due. A spindle step held back measures its real elapsed time as always. The
+ * first call is an "other" tick, so the first telemetry frame leaves at uptime 0.
  */
 #ifndef RW_CORE_H
 #define RW_CORE_H
@@ -44,6 +60,8 @@
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
 /* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
 #define RW_CORE_SPINDLE_PERIOD_MS 10u
+/* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
+#define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
 
 typedef struct rw_core_counters {
     uint16_t rx_ok;
@@ -99,6 +117,15 @@ typedef struct rw_core {
         uint32_t spindle_last_ms;
         uint32_t battery_low_ms;
         bool grasp_pending;       /* GRASP: RELAX goes on to RETRACT once the rope has stopped */
+        bool speed_tick_next;     /* schedule: the next call is a speed tick (see the schedule above) */
+        uint32_t speed_dt_us;     /* time since the last speed tick, microseconds */
+        uint32_t tick_dt_us_memo; /* dt_us the value below was computed for (the tick period repeats) */
+        float tick_dt_s_memo;     /* min(dt_us 1e-6, max control step), seconds */
+        uint32_t speed_dt_us_memo;
+        float speed_dt_s_memo;
+        float telemetry_rate_hz_memo; /* the rate telemetry_period_ms was computed for (0: none yet) */
+        uint32_t telemetry_period_ms; /* round(1000 / telemetry_rate_hz) */
+        float ff_battery_v;       /* the battery voltage the feed-forward uses (refreshed on idle ticks) */
         uint16_t tx_seq;
         uint16_t last_cmd_seq;
 

@@ -3,21 +3,14 @@
  */
 #include "rw_lowpass.h"
 
-#include <stdint.h>
-#include <string.h>
-
-/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
- * calls on the Cortex-M0+, this is a few integer instructions. */
-static bool finite_f(float x)
-{
-    uint32_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    return (bits & 0x7F800000u) != 0x7F800000u;
-}
+#include "rw_float_bits.h"
 
 void rw_lowpass_init(rw_lowpass *f, const rw_lowpass_config *cfg)
 {
     f->cfg = *cfg;
+    f->state.alpha = 1.0f;
+    f->state.alpha_tau_s = 0.0f;
+    f->state.alpha_dt_s = 0.0f;
     rw_lowpass_reset(f);
 }
 
@@ -28,7 +21,7 @@ void rw_lowpass_reset(rw_lowpass *f)
 
 void rw_lowpass_reset_to(rw_lowpass *f, float y)
 {
-    f->state.y = finite_f(y) ? y : 0.0f;
+    f->state.y = rw_f32_finite(y) ? y : 0.0f;
 }
 
 float rw_lowpass_output(const rw_lowpass *f)
@@ -38,7 +31,7 @@ float rw_lowpass_output(const rw_lowpass *f)
 
 bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
 {
-    return finite_f(cfg->tau_s) && cfg->tau_s >= 0.0f;
+    return rw_f32_finite(cfg->tau_s) && rw_f32_ge(cfg->tau_s, 0.0f);
 }
 
 /*
@@ -49,20 +42,27 @@ bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
  * tau_s <= 0 (or not finite): y[k] = x[k] (pass-through).
  * dt_s <= 0, dt_s not finite or x not finite: y[k] = y[k-1] (the sample is ignored), so no NaN or
  * infinity ever leaves the filter.
+ * alpha is computed once per (tau_s, dt_s) pair and kept (a division is ~350 instructions on the M0+;
+ * the tick has a fixed dt): the same value, bit for bit, as computing it every step.
  */
 float rw_lowpass_step(rw_lowpass *f, float x, float dt_s)
 {
-    if (!finite_f(x) || !finite_f(dt_s) || dt_s <= 0.0f) {
+    if (!rw_f32_finite(x) || !rw_f32_positive_finite(dt_s)) {
         return f->state.y;
     }
     const float tau_s = f->cfg.tau_s;
-    if (!(tau_s > 0.0f) || !finite_f(tau_s)) {
+    if (!rw_f32_positive_finite(tau_s)) {
         f->state.y = x;
         return f->state.y;
     }
-    const float alpha = dt_s / (tau_s + dt_s);
+    if (!rw_f32_same(tau_s, f->state.alpha_tau_s) || !rw_f32_same(dt_s, f->state.alpha_dt_s)) {
+        f->state.alpha = dt_s / (tau_s + dt_s);
+        f->state.alpha_tau_s = tau_s;
+        f->state.alpha_dt_s = dt_s;
+    }
+    const float alpha = f->state.alpha;
     const float y = f->state.y + alpha * (x - f->state.y);
-    if (finite_f(y)) { /* x - y may overflow for inputs near FLT_MAX */
+    if (rw_f32_finite(y)) { /* x - y may overflow for inputs near FLT_MAX */
         f->state.y = y;
     }
     return f->state.y;

@@ -20,8 +20,11 @@ typedef struct rw_lowpass_config {
 typedef struct rw_lowpass {
     rw_lowpass_config cfg; /**< public, may be changed between steps */
     struct {
-        float y; /**< last output, input units */
-    } state;     /**< private history */
+        float y;        /**< last output, input units */
+        float alpha;    /**< dt / (tau + dt) for alpha_tau_s and alpha_dt_s (computed once, not per step) */
+        float alpha_tau_s; /**< the tau_s alpha belongs to (0: none yet) */
+        float alpha_dt_s;  /**< the dt_s alpha belongs to (0: none yet) */
+    } state;            /**< private history */
 } rw_lowpass;
 
 /** Copies cfg and resets the output to 0. */

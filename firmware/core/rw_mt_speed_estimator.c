@@ -5,25 +5,56 @@
 
 #include "rw_defaults.h"
 
+#include "rw_float_bits.h"
+
 #include <stdint.h>
 #include <string.h>
-
-/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
- * calls on the Cortex-M0+, this is a few integer instructions. */
-static bool finite_f(float x)
-{
-    uint32_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    return (bits & 0x7F800000u) != 0x7F800000u;
-}
 
 #define RW_TWO_PI_F 6.28318530718f
 #define RW_US_PER_S_F 1.0e6f
 #define RW_HALF_RANGE_U32 0x80000000u
+#define RW_BOUND_SURE_UNDER_F 0.999e6f
+/* Integer M/T division range: dn 1e6 < 2^30 and counts_per_rev dT < 2^24 (float-exact operands). */
+#define RW_MT_INT_MAX_DN 1073u
+#define RW_MT_INT_MAX_DEN 0x00FFFFFFu
+
+/* The M/T quotient dn 1e6 / (counts_per_rev dT) in rev/s by integer long division: the M0+ divides
+ * 32-bit integers in ~40 instructions and floats in ~350. The quotient is developed to at least 26
+ * bits, the remainder folded into its last bit (sticky), converted once (one rounding) and scaled by a
+ * power of two on the exponent (exact): the correctly rounded quotient, the same bits as the float
+ * division of these exactly representable operands. false when an operand is too large for that (the
+ * caller then divides in float). */
+static bool mt_rev_per_s_int(uint32_t dn, uint32_t counts_per_rev, uint32_t dt_us, float *out)
+{
+    if (dn > RW_MT_INT_MAX_DN || dt_us > RW_MT_INT_MAX_DEN / counts_per_rev) {
+        return false;
+    }
+    const uint32_t num = dn * 1000000u; /* < 2^30, exact as a float too (dn 15625 < 2^24) */
+    const uint32_t den = counts_per_rev * dt_us; /* < 2^24 */
+    uint32_t q = num / den;
+    uint32_t r = num - q * den;
+    uint32_t frac_bits = 0u;
+    while (q < 0x02000000u) { /* q < 2^25 and r < 2^24: both shift by 7 within 32 bits; <= 5 steps */
+        const uint32_t shifted = r << 7;
+        const uint32_t digit = shifted / den;
+        q = (q << 7) | digit;
+        r = shifted - digit * den;
+        frac_bits += 7u;
+    }
+    q |= r != 0u ? 1u : 0u; /* q >= 2^25: bit 0 lies below the rounding bit of a 24-bit significand */
+    float value = (float)q;
+    uint32_t bits;
+    memcpy(&bits, &value, sizeof bits);
+    bits -= frac_bits << 23; /* / 2^frac_bits: the result stays a normal number */
+    memcpy(out, &bits, sizeof bits);
+    return true;
+}
 
 void rw_mt_speed_estimator_init(rw_mt_speed_estimator *e, const rw_mt_speed_estimator_config *cfg)
 {
     e->cfg = *cfg;
+    e->state.two_pi_r_m = 0.0f;
+    e->state.two_pi_r_radius_m = 0.0f;
     const rw_lowpass_config filter_cfg = {.tau_s = cfg->filter_tau_s};
     rw_lowpass_init(&e->state.filter, &filter_cfg);
     rw_mt_speed_estimator_reset(e);
@@ -49,8 +80,8 @@ void rw_mt_speed_estimator_reset(rw_mt_speed_estimator *e)
 
 bool rw_mt_speed_estimator_config_is_valid(const rw_mt_speed_estimator_config *cfg)
 {
-    return cfg->counts_per_rev > 0u && cfg->timeout_us > 0u && finite_f(cfg->wheel_radius_m) &&
-           cfg->wheel_radius_m > 0.0f && finite_f(cfg->filter_tau_s) && cfg->filter_tau_s >= 0.0f;
+    return cfg->counts_per_rev > 0u && cfg->timeout_us > 0u && rw_f32_positive_finite(cfg->wheel_radius_m) &&
+           rw_f32_finite(cfg->filter_tau_s) && rw_f32_ge(cfg->filter_tau_s, 0.0f);
 }
 
 float rw_mt_speed_estimator_rev_per_s(const rw_mt_speed_estimator *e)
@@ -66,10 +97,12 @@ float rw_mt_speed_estimator_rpm(const rw_mt_speed_estimator *e)
 float rw_mt_speed_estimator_rope_mps(const rw_mt_speed_estimator *e)
 {
     const float r_m = e->cfg.wheel_radius_m;
-    if (!(r_m > 0.0f) || !finite_f(r_m)) {
+    if (!rw_f32_positive_finite(r_m)) {
         return 0.0f;
     }
-    return RW_TWO_PI_F * r_m * rw_lowpass_output(&e->state.filter);
+    /* (2 pi r) y: the product kept by the step when it belongs to this radius (same bits either way) */
+    const float two_pi_r_m = rw_f32_same(r_m, e->state.two_pi_r_radius_m) ? e->state.two_pi_r_m : RW_TWO_PI_F * r_m;
+    return two_pi_r_m * rw_lowpass_output(&e->state.filter);
 }
 
 float rw_mt_speed_estimator_raw_rev_per_s(const rw_mt_speed_estimator *e)
@@ -120,6 +153,10 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
     }
 
     e->state.filter.cfg.tau_s = e->cfg.filter_tau_s; /* cfg is public: follow a changed tau */
+    if (!rw_f32_same(e->cfg.wheel_radius_m, e->state.two_pi_r_radius_m)) {
+        e->state.two_pi_r_m = RW_TWO_PI_F * e->cfg.wheel_radius_m;
+        e->state.two_pi_r_radius_m = e->cfg.wheel_radius_m;
+    }
     const float counts_per_rev = (float)e->cfg.counts_per_rev;
     const uint32_t dn = count - e->state.last_count;
     float n_rev_per_s = e->state.raw_rev_per_s;
@@ -142,7 +179,9 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
             return 0.0f;
         }
         if (dt_edges_us > 0u) {
-            n_rev_per_s = ((float)dn * RW_US_PER_S_F) / (counts_per_rev * (float)dt_edges_us);
+            if (!mt_rev_per_s_int(dn, e->cfg.counts_per_rev, dt_edges_us, &n_rev_per_s)) {
+                n_rev_per_s = ((float)dn * RW_US_PER_S_F) / (counts_per_rev * (float)dt_edges_us);
+            }
             e->state.last_count = count;
             e->state.last_edge_us = edge_us;
             e->state.stale = false;
@@ -158,15 +197,21 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
                 return 0.0f;
             }
             if (silence_us > 0u) {
-                const float bound_rev_per_s = RW_US_PER_S_F / (counts_per_rev * (float)silence_us);
-                if (n_rev_per_s > bound_rev_per_s) {
-                    n_rev_per_s = bound_rev_per_s;
+                /* n <= bound whenever n (counts_per_rev s) stays clearly under 1e6 (0.1 % margin, far
+                 * above the rounding of either side): then the division is skipped, the result is the
+                 * same. Otherwise the bound is computed as the law says. */
+                const float span = counts_per_rev * (float)silence_us;
+                if (!rw_f32_lt(n_rev_per_s * span, RW_BOUND_SURE_UNDER_F)) {
+                    const float bound_rev_per_s = RW_US_PER_S_F / span;
+                    if (rw_f32_gt(n_rev_per_s, bound_rev_per_s)) {
+                        n_rev_per_s = bound_rev_per_s;
+                    }
                 }
             }
         }
     }
 
-    if (!finite_f(n_rev_per_s) || n_rev_per_s < 0.0f) {
+    if (!rw_f32_finite(n_rev_per_s) || rw_f32_lt(n_rev_per_s, 0.0f)) {
         n_rev_per_s = e->state.raw_rev_per_s;
     }
     e->state.raw_rev_per_s = n_rev_per_s;

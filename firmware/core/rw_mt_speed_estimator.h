@@ -40,6 +40,8 @@ typedef struct rw_mt_speed_estimator {
         rw_lowpass filter;     /**< low-pass on raw_rev_per_s, tau = filter_tau_s */
         bool primed;           /**< a reference edge has been latched since reset */
         bool stale;            /**< no measured edge interval since reset, or silent > timeout_us */
+        float two_pi_r_m;      /**< 2 pi wheel_radius_m for two_pi_r_radius_m (computed once, not per step) */
+        float two_pi_r_radius_m; /**< the wheel_radius_m two_pi_r_m belongs to (0: none yet) */
     } state;                   /**< private history */
 } rw_mt_speed_estimator;
 

@@ -33,6 +33,8 @@ bool rw_outbox_push(rw_outbox *o, rw_outbox_class cls, const uint8_t *frame, siz
     }
     if (free_slot->used) {
         ++o->state.dropped;
+    } else {
+        ++o->state.used;
     }
     memcpy(free_slot->bytes, frame, len);
     free_slot->len = (uint8_t)len;
@@ -45,6 +47,9 @@ bool rw_outbox_push(rw_outbox *o, rw_outbox_class cls, const uint8_t *frame, siz
 const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o)
 {
     const rw_outbox_slot *best = NULL;
+    if (o->state.used == 0u) {
+        return NULL;
+    }
     for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
         const rw_outbox_slot *s = &o->state.slots[i];
         if (s->used && (best == NULL || s->cls < best->cls || (s->cls == best->cls && s->order < best->order))) {
@@ -57,8 +62,9 @@ const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o)
 void rw_outbox_pop(rw_outbox *o, const rw_outbox_slot *slot)
 {
     for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
-        if (&o->state.slots[i] == slot) {
+        if (&o->state.slots[i] == slot && o->state.slots[i].used) {
             o->state.slots[i].used = false;
+            --o->state.used;
         }
     }
 }

@@ -33,6 +33,7 @@ typedef struct rw_outbox {
         rw_outbox_slot slots[RW_OUTBOX_SLOTS];
         uint32_t next_order;
         uint16_t dropped;
+        uint8_t used; /* slots in use: an empty outbox is answered without a scan (every tick) */
     } state;
 } rw_outbox;
 

@@ -5,22 +5,14 @@
 
 #include "rw_defaults.h"
 
-#include <math.h>
-#include <stdint.h>
-#include <string.h>
-
-/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
- * calls on the Cortex-M0+, this is a few integer instructions. */
-static bool finite_f(float x)
-{
-    uint32_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    return (bits & 0x7F800000u) != 0x7F800000u;
-}
+#include "rw_float_bits.h"
 
 void rw_pi_controller_init(rw_pi_controller *c, const rw_pi_controller_config *cfg)
 {
     c->cfg = *cfg;
+    c->state.ki_dt = 0.0f;
+    c->state.ki_dt_ki_per_s = 0.0f;
+    c->state.ki_dt_dt_s = 0.0f;
     rw_pi_controller_reset(c);
 }
 
@@ -38,10 +30,10 @@ void rw_pi_controller_reset(rw_pi_controller *c)
     c->state.output = 0.0f;
     c->state.saturation = 0;
     /* Keep the held output inside the limits when 0 is not (e.g. out_min = 0.1). */
-    if (c->state.output < c->cfg.out_min) {
+    if (rw_f32_lt(c->state.output, c->cfg.out_min)) {
         c->state.output = c->cfg.out_min;
     }
-    if (c->state.output > c->cfg.out_max) {
+    if (rw_f32_gt(c->state.output, c->cfg.out_max)) {
         c->state.output = c->cfg.out_max;
     }
 }
@@ -53,13 +45,37 @@ float rw_pi_controller_output(const rw_pi_controller *c)
 
 bool rw_pi_controller_config_is_valid(const rw_pi_controller_config *cfg)
 {
-    return finite_f(cfg->kp) && cfg->kp >= 0.0f && finite_f(cfg->ki_per_s) && cfg->ki_per_s >= 0.0f &&
-           finite_f(cfg->out_min) && finite_f(cfg->out_max) && cfg->out_min <= cfg->out_max;
+    return rw_f32_finite(cfg->kp) && rw_f32_ge(cfg->kp, 0.0f) && rw_f32_finite(cfg->ki_per_s) &&
+           rw_f32_ge(cfg->ki_per_s, 0.0f) && rw_f32_finite(cfg->out_min) && rw_f32_finite(cfg->out_max) &&
+           rw_f32_le(cfg->out_min, cfg->out_max);
 }
 
 static float clampf(float x, float lo, float hi)
 {
-    return x < lo ? lo : (x > hi ? hi : x);
+    return rw_f32_lt(x, lo) ? lo : (rw_f32_gt(x, hi) ? hi : x);
+}
+
+/* fmaxf/fminf as C99 defines them (a NaN argument gives the other one), compared on the bit patterns. */
+static float maxf(float a, float b)
+{
+    if (rw_f32_isnan(a)) {
+        return b;
+    }
+    if (rw_f32_isnan(b)) {
+        return a;
+    }
+    return rw_f32_lt(a, b) ? b : a;
+}
+
+static float minf(float a, float b)
+{
+    if (rw_f32_isnan(a)) {
+        return b;
+    }
+    if (rw_f32_isnan(b)) {
+        return a;
+    }
+    return rw_f32_gt(a, b) ? b : a;
 }
 
 /*
@@ -83,6 +99,8 @@ static float clampf(float x, float lo, float hi)
  * Bad input: dt_s <= 0 or not finite, or any input not finite -> u[k] = u[k-1] and nothing is
  * integrated. No NaN or infinity ever leaves the step. With out_min > out_max (invalid config,
  * see rw_pi_controller_config_is_valid) the output is held.
+ * ki_per_s * dt_s is computed once per (ki_per_s, dt_s) and kept (the product the law uses first, so
+ * the same value bit for bit); comparisons run on the bit patterns with the C semantics.
  */
 float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measurement,
                             float feed_forward, float dt_s)
@@ -90,31 +108,39 @@ float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measureme
     const rw_pi_controller_config *cfg = &c->cfg;
     /* Only the limits are checked here (one comparison, false for NaN): a non-finite gain makes u
      * non-finite, which the check below catches. */
-    if (!finite_f(setpoint) || !finite_f(measurement) || !finite_f(feed_forward) || !finite_f(dt_s) ||
-        dt_s <= 0.0f || !(cfg->out_min <= cfg->out_max)) {
+    if (!rw_f32_finite(setpoint) || !rw_f32_finite(measurement) || !rw_f32_finite(feed_forward) ||
+        !rw_f32_positive_finite(dt_s) || !rw_f32_le(cfg->out_min, cfg->out_max)) {
         return c->state.output;
+    }
+    if (!rw_f32_same(cfg->ki_per_s, c->state.ki_dt_ki_per_s) || !rw_f32_same(dt_s, c->state.ki_dt_dt_s)) {
+        c->state.ki_dt = cfg->ki_per_s * dt_s;
+        c->state.ki_dt_ki_per_s = cfg->ki_per_s;
+        c->state.ki_dt_dt_s = dt_s;
     }
     const float error = setpoint - measurement;
     const float p = cfg->kp * error;
-    float integral = c->state.integral + cfg->ki_per_s * dt_s * error;
-    const float unsaturated = feed_forward + p + integral;
-    if (unsaturated > cfg->out_max && error > 0.0f) {
+    float integral = c->state.integral + c->state.ki_dt * error;
+    const float ff_p = feed_forward + p; /* (ff + p) + I: the order C evaluates ff + p + I in */
+    const float unsaturated = ff_p + integral;
+    const float candidate = integral;
+    if (rw_f32_gt(unsaturated, cfg->out_max) && rw_f32_positive(error)) {
         /* conditional integration: only up to the limit, never backwards */
-        integral = fmaxf(c->state.integral, cfg->out_max - feed_forward - p);
-    } else if (unsaturated < cfg->out_min && error < 0.0f) {
-        integral = fminf(c->state.integral, cfg->out_min - feed_forward - p);
+        integral = maxf(c->state.integral, cfg->out_max - feed_forward - p);
+    } else if (rw_f32_lt(unsaturated, cfg->out_min) && rw_f32_lt(error, 0.0f)) {
+        integral = minf(c->state.integral, cfg->out_min - feed_forward - p);
     }
     const float ff_in_limits = clampf(feed_forward, cfg->out_min, cfg->out_max);
     integral = clampf(integral, cfg->out_min - ff_in_limits, cfg->out_max - ff_in_limits);
-    const float u = feed_forward + p + integral;
-    if (!finite_f(integral) || !finite_f(u)) { /* overflow of huge (but finite) inputs */
+    /* the integral untouched by the anti-windup (the usual case): u is the sum already made */
+    const float u = rw_f32_same(integral, candidate) ? unsaturated : ff_p + integral;
+    if (!rw_f32_finite(integral) || !rw_f32_finite(u)) { /* overflow of huge (but finite) inputs */
         return c->state.output;
     }
     c->state.integral = integral;
-    if (u >= cfg->out_max) {
+    if (rw_f32_ge(u, cfg->out_max)) {
         c->state.output = cfg->out_max;
         c->state.saturation = 1;
-    } else if (u <= cfg->out_min) {
+    } else if (rw_f32_le(u, cfg->out_min)) {
         c->state.output = cfg->out_min;
         c->state.saturation = -1;
     } else {

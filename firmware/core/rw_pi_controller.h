@@ -30,6 +30,9 @@ typedef struct rw_pi_controller {
         float integral;    /**< integral term, output units (already multiplied by ki_per_s) */
         float output;      /**< last output, output units, always within [out_min, out_max] */
         int8_t saturation; /**< +1: last output at out_max, -1: at out_min, 0: inside */
+        float ki_dt;       /**< ki_per_s * dt_s for ki_dt_ki_per_s and ki_dt_dt_s (computed once, not per step) */
+        float ki_dt_ki_per_s; /**< the gain ki_dt belongs to */
+        float ki_dt_dt_s;     /**< the dt_s ki_dt belongs to (0: none yet) */
     } state;               /**< private history */
 } rw_pi_controller;
 

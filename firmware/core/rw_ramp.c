@@ -5,21 +5,16 @@
 
 #include "rw_defaults.h"
 
-#include <stdint.h>
-#include <string.h>
-
-/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
- * calls on the Cortex-M0+, this is a few integer instructions. */
-static bool finite_f(float x)
-{
-    uint32_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    return (bits & 0x7F800000u) != 0x7F800000u;
-}
+#include "rw_float_bits.h"
 
 void rw_ramp_init(rw_ramp *r, const rw_ramp_config *cfg)
 {
     r->cfg = *cfg;
+    r->state.step_up = 0.0f;
+    r->state.step_down = 0.0f;
+    r->state.step_rate_up_per_s = 0.0f;
+    r->state.step_rate_down_per_s = 0.0f;
+    r->state.step_dt_s = 0.0f;
     rw_ramp_reset(r);
 }
 
@@ -36,7 +31,7 @@ void rw_ramp_reset(rw_ramp *r)
 
 void rw_ramp_reset_to(rw_ramp *r, float y)
 {
-    r->state.y = finite_f(y) ? y : 0.0f;
+    r->state.y = rw_f32_finite(y) ? y : 0.0f;
 }
 
 float rw_ramp_output(const rw_ramp *r)
@@ -47,12 +42,12 @@ float rw_ramp_output(const rw_ramp *r)
 bool rw_ramp_at_target(const rw_ramp *r, float target)
 {
     /* Exact on purpose: the step lands on the target exactly (written so -Wfloat-equal is quiet). */
-    return !(r->state.y < target) && !(r->state.y > target) && finite_f(target);
+    return !rw_f32_lt(r->state.y, target) && !rw_f32_gt(r->state.y, target) && rw_f32_finite(target);
 }
 
 bool rw_ramp_config_is_valid(const rw_ramp_config *cfg)
 {
-    return finite_f(cfg->rate_up_per_s) && finite_f(cfg->rate_down_per_s);
+    return rw_f32_finite(cfg->rate_up_per_s) && rw_f32_finite(cfg->rate_down_per_s);
 }
 
 /*
@@ -64,25 +59,37 @@ bool rw_ramp_config_is_valid(const rw_ramp_config *cfg)
  * rate * dt_s per step while it is further away than that. A rate <= 0 or not finite: no limit in
  * that direction (y[k] = target).
  * dt_s <= 0, dt_s not finite or target not finite: y[k] = y[k-1].
+ * rate * dt_s is computed once per (rates, dt_s) and kept: the same value, bit for bit, as computing it
+ * every step; the comparisons run on the bit patterns (rw_float_bits.h), with the C semantics.
  */
 float rw_ramp_step(rw_ramp *r, float target, float dt_s)
 {
-    if (!finite_f(target) || !finite_f(dt_s) || dt_s <= 0.0f) {
+    if (!rw_f32_finite(target) || !rw_f32_positive_finite(dt_s)) {
         return r->state.y;
     }
     const float y = r->state.y;
     const float d = target - y;
-    if (!finite_f(d)) { /* target and y of opposite sign near FLT_MAX */
+    if (!rw_f32_finite(d)) { /* target and y of opposite sign near FLT_MAX */
         return r->state.y;
     }
-    if (d > 0.0f) {
-        const float rate = r->cfg.rate_up_per_s;
-        const float max_step = rate * dt_s;
-        r->state.y = (rate > 0.0f && finite_f(max_step) && d > max_step) ? y + max_step : target;
-    } else if (d < 0.0f) {
-        const float rate = r->cfg.rate_down_per_s;
-        const float max_step = rate * dt_s;
-        r->state.y = (rate > 0.0f && finite_f(max_step) && -d > max_step) ? y - max_step : target;
+    const float rate_up = r->cfg.rate_up_per_s;
+    const float rate_down = r->cfg.rate_down_per_s;
+    if (!rw_f32_same(dt_s, r->state.step_dt_s) || !rw_f32_same(rate_up, r->state.step_rate_up_per_s) ||
+        !rw_f32_same(rate_down, r->state.step_rate_down_per_s)) {
+        r->state.step_up = rate_up * dt_s;
+        r->state.step_down = rate_down * dt_s;
+        r->state.step_rate_up_per_s = rate_up;
+        r->state.step_rate_down_per_s = rate_down;
+        r->state.step_dt_s = dt_s;
+    }
+    if (rw_f32_positive(d)) {
+        const float max_step = r->state.step_up;
+        r->state.y = (rw_f32_positive(rate_up) && rw_f32_finite(max_step) && rw_f32_gt(d, max_step)) ? y + max_step
+                                                                                                      : target;
+    } else if (rw_f32_lt(d, 0.0f)) {
+        const float max_step = r->state.step_down;
+        r->state.y = (rw_f32_positive(rate_down) && rw_f32_finite(max_step) && rw_f32_gt(-d, max_step)) ? y - max_step
+                                                                                                          : target;
     }
     return r->state.y;
 }

@@ -21,8 +21,13 @@ typedef struct rw_ramp_config {
 typedef struct rw_ramp {
     rw_ramp_config cfg; /**< public, may be changed between steps */
     struct {
-        float y; /**< last output, units */
-    } state;     /**< private history */
+        float y;            /**< last output, units */
+        float step_up;      /**< rate_up_per_s * dt_s for the rates and dt_s below (computed once) */
+        float step_down;    /**< rate_down_per_s * dt_s */
+        float step_rate_up_per_s;   /**< the rates and dt_s the steps belong to (dt 0: none yet) */
+        float step_rate_down_per_s;
+        float step_dt_s;
+    } state;                /**< private history */
 } rw_ramp;
 
 /** Copies cfg and resets the output to 0. */

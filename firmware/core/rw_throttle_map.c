@@ -5,17 +5,10 @@
 
 #include "rw_defaults.h"
 
+#include "rw_float_bits.h"
+
 #include <stdint.h>
 #include <string.h>
-
-/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
- * calls on the Cortex-M0+, this is a few integer instructions. */
-static bool finite_f(float x)
-{
-    uint32_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    return (bits & 0x7F800000u) != 0x7F800000u;
-}
 
 #define RW_TWO_PI_F 6.28318530718f
 #define RW_S_PER_MIN_F 60.0f
@@ -23,6 +16,7 @@ static bool finite_f(float x)
 void rw_throttle_map_init(rw_throttle_map *m, const rw_throttle_map_config *cfg)
 {
     m->cfg = *cfg;
+    memset(&m->state, 0, sizeof m->state);
 }
 
 void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg)
@@ -35,40 +29,68 @@ void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg)
 
 bool rw_throttle_map_config_is_valid(const rw_throttle_map_config *cfg)
 {
-    return finite_f(cfg->kv_rpm_per_v) && cfg->kv_rpm_per_v > 0.0f && finite_f(cfg->wheel_radius_m) &&
+    return rw_f32_finite(cfg->kv_rpm_per_v) && cfg->kv_rpm_per_v > 0.0f && rw_f32_finite(cfg->wheel_radius_m) &&
            cfg->wheel_radius_m > 0.0f && cfg->pulse_min_us >= RW_ESC_PULSE_LIMIT_LOW_US &&
            cfg->pulse_min_us < cfg->pulse_max_us && cfg->pulse_max_us <= RW_ESC_PULSE_LIMIT_HIGH_US;
 }
 
+/* 2 pi r kv, or 0 when kv or r is not finite and positive (full speed = 2 pi r kv V, in m/min). */
+static float two_pi_r_kv(float kv, float r_m)
+{
+    if (!rw_f32_positive_finite(kv) || !rw_f32_positive_finite(r_m)) {
+        return 0.0f;
+    }
+    return RW_TWO_PI_F * r_m * kv;
+}
+
 /* 2 pi r kv V, i.e. 60 x the rope speed (m/s) at full throttle, or 0 when it cannot be computed. */
-static float rope_m_per_min_at_full_throttle(const rw_throttle_map *m, float battery_v)
+static float rope_m_per_min_at_full_throttle(float two_pi_r_kv_value, float battery_v)
+{
+    if (!rw_f32_positive_finite(battery_v) || !rw_f32_positive(two_pi_r_kv_value)) {
+        return 0.0f;
+    }
+    const float full_m_per_min = two_pi_r_kv_value * battery_v; /* (2 pi r kv) V: the same product */
+    return rw_f32_finite(full_m_per_min) ? full_m_per_min : 0.0f;
+}
+
+void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v)
 {
     const float kv = m->cfg.kv_rpm_per_v;
     const float r_m = m->cfg.wheel_radius_m;
-    if (!finite_f(battery_v) || !(battery_v > 0.0f) || !finite_f(kv) || !(kv > 0.0f) || !finite_f(r_m) ||
-        !(r_m > 0.0f)) {
-        return 0.0f;
+    const bool constants_changed =
+        !rw_f32_same(kv, m->state.memo_kv_rpm_per_v) || !rw_f32_same(r_m, m->state.memo_wheel_radius_m);
+    if (constants_changed) {
+        m->state.two_pi_r_kv = two_pi_r_kv(kv, r_m);
+        m->state.memo_kv_rpm_per_v = kv;
+        m->state.memo_wheel_radius_m = r_m;
     }
-    const float full_m_per_min = RW_TWO_PI_F * r_m * kv * battery_v;
-    return finite_f(full_m_per_min) ? full_m_per_min : 0.0f;
+    if (constants_changed || !rw_f32_same(battery_v, m->state.memo_battery_v)) {
+        const float full_m_per_min = rope_m_per_min_at_full_throttle(m->state.two_pi_r_kv, battery_v);
+        /* one soft-float division, once per battery voltage */
+        m->state.throttle_per_mps = rw_f32_positive(full_m_per_min) ? RW_S_PER_MIN_F / full_m_per_min : 0.0f;
+        m->state.memo_battery_v = battery_v;
+    }
 }
 
-float rw_throttle_map_feed_forward(const rw_throttle_map *m, float rope_mps, float battery_v)
+float rw_throttle_map_feed_forward(rw_throttle_map *m, float rope_mps, float battery_v)
 {
-    const float full_m_per_min = rope_m_per_min_at_full_throttle(m, battery_v);
-    if (!(full_m_per_min > 0.0f) || !finite_f(rope_mps) || !(rope_mps > 0.0f)) {
+    rw_throttle_map_prepare_battery(m, battery_v);
+    const float per_mps = m->state.throttle_per_mps;
+    if (!rw_f32_positive_finite(rope_mps) || !rw_f32_positive(per_mps)) {
         return 0.0f;
     }
-    const float throttle = (RW_S_PER_MIN_F * rope_mps) / full_m_per_min; /* one soft-float division */
-    return throttle > 1.0f ? 1.0f : throttle;
+    const float throttle = rope_mps * per_mps;
+    return rw_f32_gt(throttle, 1.0f) ? 1.0f : throttle;
 }
 
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v)
 {
-    if (!finite_f(throttle) || !(throttle > 0.0f)) {
+    if (!rw_f32_finite(throttle) || !(throttle > 0.0f)) {
         return 0.0f;
     }
-    return (throttle > 1.0f ? 1.0f : throttle) * rope_m_per_min_at_full_throttle(m, battery_v) / RW_S_PER_MIN_F;
+    const float full_m_per_min =
+        rope_m_per_min_at_full_throttle(two_pi_r_kv(m->cfg.kv_rpm_per_v, m->cfg.wheel_radius_m), battery_v);
+    return (throttle > 1.0f ? 1.0f : throttle) * full_m_per_min / RW_S_PER_MIN_F;
 }
 
 /* The pulse range actually used: the configured one narrowed into the hard 1000..2000 us limits. */
@@ -97,14 +119,15 @@ uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, float throttle)
     uint16_t lo_us;
     uint16_t hi_us;
     effective_range_us(m, &lo_us, &hi_us);
-    if (!finite_f(throttle) || !(throttle > 0.0f)) { /* NaN, -inf, negative, zero */
+    if (!rw_f32_positive_finite(throttle)) { /* NaN, -inf, +inf, negative, zero */
         return lo_us;
     }
-    if (throttle >= 1.0f) {
+    if (rw_f32_ge(throttle, 1.0f)) {
         return hi_us;
     }
     const float span_us = (float)(hi_us - lo_us);
-    const uint32_t offset_us = (uint32_t)(throttle * span_us + 0.5f); /* 0 <= . <= span: no overflow */
+    /* round half up, on the bit pattern (0 <= throttle span < 1000: in range) */
+    const uint32_t offset_us = rw_f32_round_half_up_u24(throttle * span_us);
     uint32_t pulse_us = (uint32_t)lo_us + offset_us;
     if (pulse_us > hi_us) {
         pulse_us = hi_us;

@@ -24,7 +24,14 @@ typedef struct rw_throttle_map_config {
 } rw_throttle_map_config;
 
 typedef struct rw_throttle_map {
-    rw_throttle_map_config cfg; /**< public, may be changed between calls; no private state */
+    rw_throttle_map_config cfg; /**< public, may be changed between calls */
+    struct {
+        float two_pi_r_kv;  /**< 2 pi wheel_radius_m kv_rpm_per_v for the two below (computed once) */
+        float memo_kv_rpm_per_v; /**< the kv two_pi_r_kv belongs to (0: none yet) */
+        float memo_wheel_radius_m; /**< the radius it belongs to */
+        float memo_battery_v;   /**< the battery voltage throttle_per_mps belongs to (0: none yet) */
+        float throttle_per_mps; /**< 60 / (2 pi r kv V): feed-forward throttle per m/s of rope (0: none) */
+    } state;                /**< private: precomputed values only, the map has no history */
 } rw_throttle_map;
 
 /** Copies cfg. */
@@ -34,10 +41,16 @@ void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg);
 /**
  * Feed-forward throttle fraction in [0, 1] that spins the unloaded motor so the rope moves at
  * rope_mps (m/s) on a battery of battery_v volts:
- *     throttle = 60 rope_mps / (2 pi wheel_radius_m kv_rpm_per_v battery_v), clamped to [0, 1].
+ *     throttle = 60 rope_mps / (2 pi wheel_radius_m kv_rpm_per_v battery_v), clamped to [0, 1],
+ * evaluated as rope_mps * (60 / (2 pi r kv V)): the factor is kept in m->state per battery voltage (and
+ * kv, radius), so a step with the same battery_v costs one multiplication, no division (the result may
+ * differ from the division in the last bit).
  * Returns 0 for non-finite or non-positive rope_mps or battery_v, or an invalid kv/radius.
  */
-float rw_throttle_map_feed_forward(const rw_throttle_map *m, float rope_mps, float battery_v);
+float rw_throttle_map_feed_forward(rw_throttle_map *m, float rope_mps, float battery_v);
+/** Computes the factor of rw_throttle_map_feed_forward for battery_v ahead of time (one division),
+ *  so that the next feed-forward at this voltage needs none. */
+void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v);
 /** Inverse of the feed-forward: unloaded rope speed (m/s, >= 0) at a throttle fraction (clamped
  *  to [0, 1]) and battery voltage; 0 for non-finite input or invalid config. */
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v);

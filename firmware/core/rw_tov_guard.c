@@ -5,21 +5,25 @@
 
 #include "rw_defaults.h"
 
-#include <stdint.h>
-#include <string.h>
+#include "rw_float_bits.h"
 
-/* Finite test on the bit pattern (exponent not all ones): isfinite() costs two soft-float library
- * calls on the Cortex-M0+, this is a few integer instructions. */
-static bool finite_f(float x)
+/* Keep tov_mps * margin for the current config (the same product, computed once). */
+static void refresh_min_airborne(rw_tov_guard *g)
 {
-    uint32_t bits;
-    memcpy(&bits, &x, sizeof bits);
-    return (bits & 0x7F800000u) != 0x7F800000u;
+    if (!rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) || !rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
+        g->state.min_airborne_mps = g->cfg.tov_mps * g->cfg.margin;
+        g->state.memo_tov_mps = g->cfg.tov_mps;
+        g->state.memo_margin = g->cfg.margin;
+    }
 }
 
 void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg)
 {
     g->cfg = *cfg;
+    g->state.memo_tov_mps = 0.0f;
+    g->state.memo_margin = 0.0f;
+    g->state.min_airborne_mps = 0.0f;
+    refresh_min_airborne(g);
     rw_tov_guard_reset(g);
 }
 
@@ -38,21 +42,24 @@ void rw_tov_guard_reset(rw_tov_guard *g)
 
 bool rw_tov_guard_config_is_valid(const rw_tov_guard_config *cfg)
 {
-    return finite_f(cfg->tov_mps) && cfg->tov_mps > 0.0f && finite_f(cfg->margin) && cfg->margin >= 1.0f &&
-           finite_f(cfg->collapse_time_s) && cfg->collapse_time_s >= 0.0f;
+    return rw_f32_positive_finite(cfg->tov_mps) && rw_f32_finite(cfg->margin) && rw_f32_ge(cfg->margin, 1.0f) &&
+           rw_f32_finite(cfg->collapse_time_s) && rw_f32_ge(cfg->collapse_time_s, 0.0f);
 }
 
 float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g)
 {
+    if (rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) && rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
+        return g->state.min_airborne_mps;
+    }
     return g->cfg.tov_mps * g->cfg.margin;
 }
 
 bool rw_tov_guard_setpoint_allowed(const rw_tov_guard *g, float setpoint_mps)
 {
-    if (!rw_tov_guard_config_is_valid(&g->cfg) || !finite_f(setpoint_mps)) {
+    if (!rw_tov_guard_config_is_valid(&g->cfg) || !rw_f32_finite(setpoint_mps)) {
         return false;
     }
-    return setpoint_mps >= rw_tov_guard_min_airborne_mps(g);
+    return rw_f32_ge(setpoint_mps, rw_tov_guard_min_airborne_mps(g));
 }
 
 bool rw_tov_guard_is_collapsed(const rw_tov_guard *g)
@@ -71,18 +78,19 @@ bool rw_tov_guard_is_collapsed(const rw_tov_guard *g)
  */
 bool rw_tov_guard_step(rw_tov_guard *g, float measured_mps, float dt_s)
 {
-    if (!finite_f(measured_mps) || !rw_tov_guard_config_is_valid(&g->cfg)) {
+    if (!rw_f32_finite(measured_mps) || !rw_tov_guard_config_is_valid(&g->cfg)) {
         return false;
     }
-    if (measured_mps >= g->cfg.tov_mps) {
+    refresh_min_airborne(g);
+    if (rw_f32_ge(measured_mps, g->cfg.tov_mps)) {
         g->state.below_s = 0.0f;
         g->state.collapsed = false;
         return false;
     }
-    if (finite_f(dt_s) && dt_s > 0.0f && g->state.below_s < g->cfg.collapse_time_s) {
+    if (rw_f32_positive_finite(dt_s) && rw_f32_lt(g->state.below_s, g->cfg.collapse_time_s)) {
         g->state.below_s += dt_s; /* stops counting once past the threshold: no float growth */
     }
-    if (!g->state.collapsed && g->state.below_s >= g->cfg.collapse_time_s) {
+    if (!g->state.collapsed && rw_f32_ge(g->state.below_s, g->cfg.collapse_time_s)) {
         g->state.collapsed = true;
         return true;
     }

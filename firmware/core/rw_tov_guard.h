@@ -30,6 +30,9 @@ typedef struct rw_tov_guard {
     struct {
         float below_s;  /**< time the measured speed has been continuously under tov_mps, seconds */
         bool collapsed; /**< the collapse has been reported; cleared when the speed recovers */
+        float min_airborne_mps; /**< tov_mps * margin for the two below (kept by init and step) */
+        float memo_tov_mps;     /**< the tov_mps min_airborne_mps belongs to (0: none yet) */
+        float memo_margin;      /**< the margin it belongs to */
     } state;            /**< private history */
 } rw_tov_guard;
 

@@ -12,15 +12,20 @@ Threads: a receiver thread decodes every frame and hands ACK/NACK to the waiting
 raised. A heartbeat thread sends HEARTBEAT at heartbeat_hz while connected (the device spins the
 rope down after heartbeat_timeout_s of silence).
 
-Retries: a command is retransmitted with the SAME seq and bytes after each ack_timeout_s without an
+Retries: a command is retransmitted with the SAME seq and payload after each ack_timeout_s without an
 answer (the device answers a retransmission again but never executes it twice), at most `retries`
-times, then LinkTimeout. A new command always gets a new seq.
+times, then LinkTimeout; a NACK saying the frame arrived damaged is answered by an immediate
+retransmission. A new command always gets a new seq.
+
+Signed links (protocol v2, key=...): connect() asks for the session (HELLO -> SESSION_INFO), then every
+frame carries the session id, a counter that only grows (also across processes: it follows the wall
+clock in microseconds) and a SipHash-2-4 tag; a retransmission keeps seq and checksum but gets a fresh
+counter. Provisioning (key, WiFi) goes over serial:// links only.
 """
 
 from __future__ import annotations
 
 import collections
-import os
 import queue
 import secrets
 import struct
@@ -30,17 +35,12 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 
 from robowrangler import units
-from robowrangler.errors import (AuthenticationError, NotProvisioned, CommandRefused, InvalidArgument, LinkTimeout, NotConnected, StateTimeout,
-                                 UnknownParameter)
+from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArgument, LinkTimeout, NotConnected,
+                                 StateTimeout, UnknownParameter)
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
-from robowrangler.telemetry import DeviceEvent, TelemetrySample
-from robowrangler.link_security import LinkSecurity, default_key_path, read_key_file
-from robowrangler.transport import DEFAULT_URL, Transport, UdpUrl, open_transport, parse_url
-
-def msg_id_is_session_info(msg_id: int) -> bool:
-    return msg_id == MsgId.SESSION_INFO
-
+from robowrangler.telemetry import DeviceEvent, ProvisionStatus, TelemetrySample
+from robowrangler.transport import DEFAULT_URL, Transport, open_transport, parse_url
 
 RECV_POLL_S = 0.05  # receiver thread wakes this often to notice close()
 TELEMETRY_QUEUE_LEN = 4096  # per telemetry() iterator; the oldest sample is dropped when full (~80 s at 50 Hz)
@@ -81,8 +81,7 @@ class ClientStats:
     events_received: int = 0
     events_lost: int = 0
     unexpected_messages: int = 0
-    auth_failed: int = 0
-    replayed: int = 0
+    auth_failures: int = 0
     session_changes: int = 0
 
 
@@ -128,15 +127,15 @@ class Client:
         first_seq: sequence number of the first frame (0..65535); None draws a random one so that a
             new process never repeats the bytes of a previous one inside the device's duplicate window.
         transport: an already open Transport to use instead of opening `url` (tests, custom links).
-        key: the 16-byte link key the device was provisioned with; key_file: read it from there. Over UDP
-            one of them is needed (else $ROBOWRANGLER_KEY_FILE or ~/.config/robowrangler/link.key is read);
-            over USB serial (trusted) frames go unsigned unless a key is given.
+        key: the 16-byte link key. Given, connect() asks the device for its session (HELLO ->
+            SESSION_INFO, whose tag must verify) and every frame is signed (session id, a counter that
+            only grows, SipHash-2-4 tag); signed frames from the device with a wrong tag are dropped and
+            counted (stats.auth_failures). None: unsigned frames (USB serial, a device without a key).
     """
 
     def __init__(self, url: str = DEFAULT_URL, *, ack_timeout_s: float = 0.2, retries: int = 5,
                  heartbeat_hz: float = 10.0, connect_timeout_s: float = 3.0, first_seq: int | None = None,
-                 transport: Transport | None = None, key: bytes | None = None,
-                 key_file: str | os.PathLike | None = None) -> None:
+                 transport: Transport | None = None, key: bytes | None = None) -> None:
         if transport is None:
             parse_url(url)  # raises InvalidArgument before any socket is opened
         self.url = url if transport is None else getattr(transport, "url", url)
@@ -151,17 +150,21 @@ class Client:
         if isinstance(first_seq, bool) or not isinstance(first_seq, int) or not 0 <= first_seq <= 0xFFFF:
             raise InvalidArgument("first_seq", "an integer in [0, 65535] or None", first_seq)
         self._next_seq_value = first_seq
+        if key is not None and (not isinstance(key, (bytes, bytearray)) or len(key) != gen.KEY_LEN):
+            raise InvalidArgument("key", f"{gen.KEY_LEN} bytes (a 128-bit link key)",
+                                  f"{type(key).__name__} of length {len(key) if hasattr(key, '__len__') else '?'}")
+        self._key = None if key is None else bytes(key)
+        self._session_id: int | None = None
+        self._counter = 0
+        self._hello_nonce: int | None = None
+        self._session_info: gen.Message | None = None
+        self._session_event = threading.Event()
         self._transport = transport
-        if key is None and key_file is not None:
-            key = read_key_file(key_file)
-        elif key is None and transport is None and isinstance(parse_url(url), UdpUrl):
-            key = read_key_file(default_key_path())
-        self._security = LinkSecurity(key)
-        self._session_infos: queue.Queue = queue.Queue()
         self._lock = threading.Lock()  # guards waiters, subscribers, stats, events
         self._send_lock = threading.Lock()  # seq allocation + send keep frames in seq order
         self._waiters: dict[tuple[int, int], _Waiter] = {}
         self._param_waiters: dict[int, list[_Waiter]] = collections.defaultdict(list)
+        self._status_waiters: list[_Waiter] = []
         self._subscribers: list[queue.Queue] = []
         self._events: collections.deque[DeviceEvent] = collections.deque(maxlen=EVENT_HISTORY_LEN)
         self._last_event_seq: int | None = None
@@ -186,58 +189,78 @@ class Client:
             self._transport = open_transport(self.url)
         self._stop.clear()
         self._first_telemetry.clear()
-        self._threads = [threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True)]
-        self._threads[0].start()
+        self._session_event.clear()
+        self._session_info = None
         self._connected = True
-        if self._security.signing:
-            try:
-                self._handshake()
-            except BaseException:
-                self.close()
-                raise
+        receiver = threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True)
         heartbeat = threading.Thread(target=self._heartbeat_loop, name="robowrangler-hb", daemon=True)
-        self._threads.append(heartbeat)
-        heartbeat.start()
-        if not self._first_telemetry.wait(self.connect_timeout_s):
+        self._threads = [receiver, heartbeat]
+        receiver.start()
+        try:
+            self._hello()  # unsigned and harmless: tells a keyless host why a keyed device stays silent
+            if self._key is not None:
+                self._establish_session()
+            heartbeat.start()
+            if not self._first_telemetry.wait(self.connect_timeout_s):
+                info = self._session_info
+                if self._key is None and info is not None and info.key_set:
+                    raise AuthenticationError(
+                        f"{self.url} requires signed frames (its SESSION_INFO says a key is provisioned) and no "
+                        "link key was given: pass key=... (wrangler --key-file)", url=self.url)
+                raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
+                                  "(or the SIL firmware) running and listening at that address?",
+                                  url=self.url, waited_s=self.connect_timeout_s)
+        except BaseException:
             self.close()
-            raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
-                              "(or the SIL firmware) running and listening at that address?",
-                              url=self.url, waited_s=self.connect_timeout_s)
+            raise
         return self
 
-    def _handshake(self) -> None:
-        """HELLO -> SESSION_INFO: the session to sign for. Retried every ack_timeout_s until connect_timeout_s."""
-        nonce = secrets.randbits(32)
-        deadline = time.monotonic() + self.connect_timeout_s
-        wrong_key = False
-        while time.monotonic() < deadline:
-            self._send_raw(gen.encode_frame(gen.Hello(nonce), self._next_seq()))
-            try:
-                frame, info = self._session_infos.get(timeout=min(self.ack_timeout_s, max(0.0, deadline - time.monotonic())))
-            except queue.Empty:
-                continue
-            if info.host_nonce != nonce:
-                continue
-            if not frame.signed and info.key_set == 0:
-                raise NotProvisioned(f"{self.url} has no link key: provision it over USB serial "
-                                     "(wrangler provision --port PORT --key-file FILE)")
-            if not self._security.tag_valid(frame):
-                wrong_key = True
-                continue
-            self._security.accept(frame)
-            return
-        if wrong_key:
-            raise AuthenticationError(f"{self.url} answered, but its signature does not match this key: "
-                                      "is it the key file the device was provisioned with?")
-        raise LinkTimeout(f"no SESSION_INFO from {self.url} within {self.connect_timeout_s:g} s: is the device "
-                          "(or the SIL firmware) running and listening at that address?",
-                          url=self.url, waited_s=self.connect_timeout_s)
+    def _hello(self) -> None:
+        self._hello_nonce = secrets.randbelow(2**32)
+        self._send_new(gen.Hello(self._hello_nonce), sign=False)
 
-    def _next_seq(self) -> int:
-        with self._send_lock:
-            seq = self._next_seq_value
-            self._next_seq_value = (seq + 1) & 0xFFFF
-        return seq
+    def _establish_session(self) -> None:
+        """Wait for the SESSION_INFO answering our HELLO (resending HELLO each ack_timeout_s).
+
+        An answer that does not verify with our key (wrong key, a device without one, or a forgery: HELLO
+        and its nonce travel in clear) is believed only if no verified answer follows within two more
+        HELLO rounds.
+        """
+        start = time.monotonic()
+        deadline = start + self.connect_timeout_s
+        unverified_until: float | None = None
+        while self._session_id is None:
+            self._session_event.wait(min(self.ack_timeout_s, max(0.0, deadline - time.monotonic())))
+            if self._session_id is not None:
+                break
+            now = time.monotonic()
+            if self._session_info is not None:
+                unverified_until = unverified_until or now + 2 * self.ack_timeout_s
+                if now >= unverified_until:
+                    break
+                self._session_event.clear()
+            if now >= deadline:
+                if self._session_info is not None:
+                    break
+                raise LinkTimeout(f"no SESSION_INFO from {self.url} within {self.connect_timeout_s:g} s: is the "
+                                  "device running, and does its firmware speak protocol version "
+                                  f"{gen.PROTOCOL_VERSION}?", url=self.url, waited_s=self.connect_timeout_s)
+            self._send_new(gen.Hello(self._hello_nonce), sign=False)
+        info = self._session_info
+        if info.schema_hash != gen.SCHEMA_HASH:
+            raise AuthenticationError(f"{self.url} speaks protocol schema 0x{info.schema_hash:04X}, this host "
+                                      f"0x{gen.SCHEMA_HASH:04X}: update the firmware or the host", url=self.url)
+        if self._session_id is None and not info.key_set:
+            raise AuthenticationError(f"{self.url} has no link key provisioned, so it takes no command over WiFi: "
+                                      "provision one over USB serial", url=self.url)
+        if self._session_id is None:
+            raise AuthenticationError(f"the SESSION_INFO from {self.url} is not signed with the given key: the "
+                                      "host's and the device's link keys differ", url=self.url)
+
+    @property
+    def session_id(self) -> int | None:
+        """The device session this client signs for (None: unsigned link)."""
+        return self._session_id
 
     def close(self) -> None:
         """Stop the threads and release the link; open telemetry() iterators end. Idempotent.
@@ -246,7 +269,7 @@ class Client:
         """
         self._stop.set()
         for t in self._threads:
-            if t is not threading.current_thread():
+            if t is not threading.current_thread() and t.ident is not None:  # started
                 t.join(timeout=2.0)
         self._threads = []
         if self._transport is not None:
@@ -271,9 +294,7 @@ class Client:
     def stats(self) -> ClientStats:
         """A snapshot of the link counters."""
         with self._lock:
-            sec = self._security.stats
-            snap = replace(self._stats, decode_errors_by_reason=dict(self._stats.decode_errors_by_reason),
-                           auth_failed=sec.auth_failed, replayed=sec.replayed, session_changes=sec.session_changes)
+            snap = replace(self._stats, decode_errors_by_reason=dict(self._stats.decode_errors_by_reason))
         if self._transport is not None:
             snap.framing_errors = self._transport.framing_errors
         return snap
@@ -350,6 +371,61 @@ class Client:
         """DISARMED or ARMED with the rope stopped: drive the guide to the home end (stall or limit
         switch), position 0 there. Returns when accepted; telemetry spindle_flags gets HOMED when done."""
         return State(self._command(gen.Home()).state)
+
+    # ----------------------------------------------------------------- provisioning (USB serial only)
+
+    def provision_status(self) -> ProvisionStatus:
+        """What the device has stored (PROVISION_GET -> ACK + PROVISION_STATUS). Serial links only."""
+        self._require_serial_link()
+        for _ in range(self.retries + 1):
+            waiter = _Waiter()
+            with self._lock:
+                self._status_waiters.append(waiter)
+            try:
+                self._command(gen.ProvisionGet(), param_waiter=waiter)
+                if waiter.event.wait(self.ack_timeout_s):
+                    return ProvisionStatus.from_wire(waiter.reply)
+            finally:
+                with self._lock:
+                    if waiter in self._status_waiters:
+                        self._status_waiters.remove(waiter)
+        raise LinkTimeout(f"PROVISION_GET: ACKed by {self.url} but no PROVISION_STATUS arrived after "
+                          f"{self.retries + 1} requests", url=self.url, waited_s=(self.retries + 1) * self.ack_timeout_s)
+
+    def provision(self, *, key: bytes | None = None, wifi_ssid: str | None = None,
+                  wifi_password: str | None = None, commit: bool = True) -> ProvisionStatus:
+        """Store a link key and/or WiFi credentials on the device, then (commit=True) write them to flash.
+
+        Only over a serial:// link: a key or a password never travels over WiFi, so any other link is
+        refused here, before anything is sent (InvalidArgument naming the URL). key: 16 bytes;
+        wifi_ssid: at most 32 UTF-8 bytes; wifi_password: at most 63 bytes (the device checks WPA2's
+        8-63 or empty). Error messages never contain the key or the password. Returns the status after.
+        """
+        self._require_serial_link()
+        if key is not None and (not isinstance(key, (bytes, bytearray)) or len(key) != gen.KEY_LEN):
+            raise InvalidArgument("key", f"{gen.KEY_LEN} bytes", f"{type(key).__name__} of length "
+                                  f"{len(key) if hasattr(key, '__len__') else '?'}")
+        if wifi_ssid is not None and (not isinstance(wifi_ssid, str) or len(wifi_ssid.encode()) > 32 or "\0" in wifi_ssid):
+            raise InvalidArgument("wifi_ssid", "text of at most 32 UTF-8 bytes without NUL", wifi_ssid)
+        if wifi_password is not None and (not isinstance(wifi_password, str) or len(wifi_password.encode()) > 63
+                                          or "\0" in wifi_password):
+            length = len(wifi_password.encode()) if isinstance(wifi_password, str) else "?"
+            raise InvalidArgument("wifi_password", "text of at most 63 bytes without NUL",
+                                  f"a {type(wifi_password).__name__} of {length} bytes (not shown)")
+        if key is not None:
+            self._command(gen.ProvisionSetKey(bytes(key)))
+        if wifi_ssid is not None:
+            self._command(gen.ProvisionSetWifiSsid(wifi_ssid))
+        if wifi_password is not None:
+            self._command(gen.ProvisionSetWifiPassword(wifi_password))
+        if commit:
+            self._command(gen.ProvisionCommit())
+        return self.provision_status()
+
+    def _require_serial_link(self) -> None:
+        if not self.url.startswith("serial://"):
+            raise InvalidArgument("url", "a serial:// link: provisioning (keys, WiFi passwords) never travels "
+                                  "over WiFi", self.url)
 
     def get_param(self, name: str) -> float:
         """A parameter's value on the device, in its SI unit (see robowrangler.protocol PARAMS)."""
@@ -475,13 +551,25 @@ class Client:
         if not self._connected or self._transport is None:
             raise NotConnected(f"not connected to {self.url}: call connect() or use `with Client(...)`")
 
+    def _encode(self, message: gen.Message, seq: int, *, sign: bool = True) -> bytes:
+        """Frame a message; signed (session id, next counter) when the client has a key and a session.
+
+        The counter is the larger of the last one + 1 and the wall clock in microseconds, so it keeps
+        growing across host processes within one device session (the device drops a counter that is not
+        above the last it accepted). Call with _send_lock held.
+        """
+        if not sign or self._key is None or self._session_id is None:
+            return gen.encode_frame(message, seq)
+        self._counter = max(self._counter + 1, time.time_ns() // 1000)
+        return gen.encode_frame(message, seq, key=self._key, session_id=self._session_id, counter=self._counter)
+
     def _send_new(self, message: gen.Message, waiter_key_msg_id: int | None = None,
-                  param_waiter: _Waiter | None = None) -> tuple[int, bytes, _Waiter | None]:
+                  param_waiter: _Waiter | None = None, *, sign: bool = True) -> tuple[int, bytes, _Waiter | None]:
         """Allocate a seq, encode and send; registers an ACK/NACK waiter first if asked."""
         with self._send_lock:
             seq = self._next_seq_value
             self._next_seq_value = (seq + 1) & 0xFFFF
-            frame = self._security.encode(message, seq)
+            frame = self._encode(message, seq, sign=sign)
             waiter = None
             if waiter_key_msg_id is not None:
                 waiter = _Waiter()
@@ -535,11 +623,10 @@ class Client:
                         f"{message.NAME} (seq {seq}): no ACK/NACK from {self.url} after {attempts} attempts "
                         f"in {waited_s:.2f} s; the link or the device is down", url=self.url, waited_s=waited_s)
                 self._require_connected()
-                # same seq and payload (the device answers it from its duplicate cache), but signed afresh:
-                # an identical copy would be dropped as a replay
-                with self._send_lock:
-                    frame = self._security.encode(message, seq)
-                    self._send_raw(frame)
+                if self._key is not None:  # same seq and payload (same checksum), a fresh counter
+                    with self._send_lock:
+                        frame = self._encode(message, seq)
+                self._send_raw(frame)
                 attempts += 1
                 with self._lock:
                     self._stats.retransmissions += 1
@@ -623,14 +710,14 @@ class Client:
         except Exception:  # noqa: BLE001 - any unpack failure is bad data, counted not raised
             self._count_decode_error("UNPACK")
             return
-        if msg_id_is_session_info(frame.msg_id):
-            self._session_infos.put((frame, msg))
+        if frame.signed and not self._accept_signed(frame, msg):
             return
-        if not self._security.accept(frame):
-            return  # unsigned, wrongly signed or replayed: counted in stats (auth_failed / replayed)
         with self._lock:
             self._stats.frames_received += 1
         msg_id = frame.msg_id
+        if msg_id == MsgId.SESSION_INFO:
+            self._on_session_info(frame, msg)
+            return
         if msg_id in (MsgId.ACK, MsgId.NACK):
             self._on_reply(msg)
         elif msg_id == MsgId.PARAM_VALUE:
@@ -645,6 +732,12 @@ class Client:
                         taken = True
                 if not taken:
                     self._stats.stale_param_values += 1
+        elif msg_id == MsgId.PROVISION_STATUS:
+            with self._lock:
+                for w in self._status_waiters:
+                    if w.armed and w.reply is None:
+                        w.reply = msg
+                        w.event.set()
         elif msg_id == MsgId.TELEMETRY:
             self._on_telemetry(TelemetrySample.from_wire(msg, received_s=received_s))
         elif msg_id == MsgId.EVENT:
@@ -652,6 +745,38 @@ class Client:
         else:
             with self._lock:
                 self._stats.unexpected_messages += 1
+
+    def _accept_signed(self, frame: gen.Frame, msg: gen.Message) -> bool:
+        """A signed frame from the device counts only if its tag verifies with our key; a verified frame
+        from a newer session (the device rebooted) moves the client to that session."""
+        if self._key is None:
+            return True  # nothing to check it with; an unsigned link trusts the transport
+        if not gen.tag_valid(frame, self._key):
+            with self._lock:
+                self._stats.auth_failures += 1
+            if frame.msg_id == MsgId.SESSION_INFO and msg.host_nonce == self._hello_nonce and self._session_id is None:
+                self._session_info = msg  # an answer to our HELLO signed with another key (or forged)
+                self._session_event.set()
+            return False
+        if self._session_id is not None and frame.session_id != self._session_id and frame.msg_id != MsgId.SESSION_INFO:
+            with self._send_lock:
+                self._session_id = frame.session_id
+            with self._lock:
+                self._stats.session_changes += 1
+        return True
+
+    def _on_session_info(self, frame: gen.Frame, msg: gen.Message) -> None:
+        if msg.host_nonce != self._hello_nonce:
+            with self._lock:
+                self._stats.unexpected_messages += 1  # someone else's HELLO, or a replayed answer
+            return
+        verified = self._key is not None and frame.signed  # the tag was checked by _accept_signed
+        if verified or self._session_id is None:  # an unverified answer never replaces a verified one
+            self._session_info = msg
+        if verified:
+            with self._send_lock:
+                self._session_id = msg.session_id
+        self._session_event.set()
 
     def _count_decode_error(self, reason: str) -> None:
         with self._lock:

@@ -65,6 +65,15 @@ class LinkError(RoboWranglerError, OSError):
         return self.args[0]
 
 
+class AuthenticationError(RoboWranglerError):
+    """The link key and the device do not agree: no key given where the device requires signed frames,
+    a wrong key (the device's SESSION_INFO does not verify), or a device without a provisioned key."""
+
+    def __init__(self, message: str, *, url: str) -> None:
+        super().__init__(message)
+        self.url = url
+
+
 class StateTimeout(RoboWranglerError, TimeoutError):
     """Telemetry kept arriving but the device did not reach the awaited state (or condition) in time.
     `expected` is a tuple of States or a description of the condition."""
@@ -138,6 +147,14 @@ class CommandRefused(RoboWranglerError):
         if r == NackReason.SPINDLE_UNAVAILABLE:
             return (f"the spindle servo does not answer or is in fault (fault bits 0x{self.detail & 0xFFFF:X}); "
                     "check the AX-12A's power and bus, then disarm to clear the fault")
+        if r == NackReason.NOT_ON_THIS_LINK:
+            return "provisioning is taken on the USB serial link only: connect with serial://"
+        if r == NackReason.NO_KEY:
+            return ("the device has no link key, so it takes no command over WiFi: provision one over USB serial "
+                    "(wrangler provision set --generate-key PATH)")
+        if r in (NackReason.UNSIGNED, NackReason.AUTH_FAILED, NackReason.REPLAYED):
+            return ("the frame's signature was refused (missing, wrong key, or an old session/counter): connect "
+                    "with the device's link key")
         if r == NackReason.NOT_A_COMMAND:
             return "the device does not accept this message from a host"
         if r == NackReason.UNKNOWN_MESSAGE:
@@ -194,11 +211,3 @@ def _msg_name(msg_id: int) -> str:
         return MsgId(msg_id).name
     except ValueError:
         return f"message {msg_id}"
-
-
-class AuthenticationError(RoboWranglerError):
-    """The device answers but its frames are not signed with our key (wrong key file, or another device)."""
-
-
-class NotProvisioned(RoboWranglerError):
-    """The device has no link key yet: it takes nothing over WiFi until provisioned over USB serial."""

@@ -51,6 +51,8 @@ class TelemetrySample:
     spindle_load_pct: float
     spindle_flags: SpindleFlag
     spindle_rejected: int
+    rx_auth_failed: int
+    rx_replayed: int
     received_s: float
 
     @classmethod
@@ -77,6 +79,8 @@ class TelemetrySample:
             spindle_load_pct=units.permille_to_pct(msg.spindle_load_permille),
             spindle_flags=SpindleFlag(msg.spindle_flags),
             spindle_rejected=msg.spindle_rejected,
+            rx_auth_failed=msg.rx_auth_failed,
+            rx_replayed=msg.rx_replayed,
             received_s=received_s,
         )
 
@@ -180,6 +184,30 @@ class DeviceEvent:
         if self.fault is not None:
             d["fault"] = [f.name for f in Fault if f in self.fault]
         return d
+
+
+@dataclass(frozen=True)
+class ProvisionStatus:
+    """PROVISION_STATUS: what the device has stored (the key and the WiFi password are never sent back).
+
+    boot_counter is the session id of the current boot; commits counts flash writes (wear); dirty says
+    something was set since the last commit."""
+
+    key_set: bool
+    password_set: bool
+    wifi_ssid: str
+    boot_counter: int
+    commits: int
+    config_version: int
+    dirty: bool
+
+    @classmethod
+    def from_wire(cls, msg: Any) -> ProvisionStatus:
+        return cls(bool(msg.key_set), bool(msg.password_set), msg.wifi_ssid, msg.boot_counter, msg.commits,
+                   msg.config_version, bool(msg.dirty))
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
 
 
 def _flags(bits: Fault | None) -> str:

@@ -265,6 +265,9 @@ class CoreHarness:
                            encoder_counts=self.encoder_count_offset % U32)
         self.encoder = RopeEncoder()
         self.spindle = spindle
+        self._events: list[proto.Event] = []          # sent EVENT frames, in order (cache of hal.out)
+        self._transitions: list[tuple[int, int, int, int]] = []
+        self._telemetry: list[proto.Telemetry] = []
         self.t_us = 0
         self.started = False
         self.seq = 0
@@ -299,6 +302,12 @@ class CoreHarness:
                 raw = ctypes.string_at(frame, length)
                 fr, msg = proto.decode_message(raw)  # the core must only emit well-formed frames
                 hal.out.append(Out(self.t_us // 1000, channel, raw, fr, msg))
+                if channel == "send" and isinstance(msg, proto.Event):
+                    self._events.append(msg)
+                    if msg.event == proto.EventKind.STATE_CHANGED:
+                        self._transitions.append((msg.time_ms, msg.state_from, msg.state_to, msg.arg))
+                elif channel == "send" and isinstance(msg, proto.Telemetry):
+                    self._telemetry.append(msg)
             return out
 
         def accept_peer(_ctx):
@@ -422,14 +431,16 @@ class CoreHarness:
         return [o for o in self.hal.out[since:] if o.channel == "reply"]
 
     def events(self, kind: proto.EventKind | None = None) -> list[proto.Event]:
-        return [o.msg for o in self.sent(proto.Event) if kind is None or o.msg.event == kind]
+        """EVENT messages sent so far, optionally of one kind."""
+        return [e for e in self._events if kind is None or e.event == kind]
 
     def transitions(self) -> list[tuple[int, int, int, int]]:
         """(time_ms, from, to, cause) of every STATE_CHANGED event sent so far."""
-        return [(e.time_ms, e.state_from, e.state_to, e.arg) for e in self.events(proto.EventKind.STATE_CHANGED)]
+        return list(self._transitions)
 
     def telemetry(self) -> list[proto.Telemetry]:
-        return [o.msg for o in self.sent(proto.Telemetry)]
+        """TELEMETRY messages sent so far (the live list: it grows with later ticks; do not modify)."""
+        return self._telemetry
 
     def drain(self, ticks: int = 12) -> None:
         """Runs ticks with heartbeats withheld so queued frames go out (outbox: 8 slots)."""
@@ -439,7 +450,7 @@ class CoreHarness:
     @property
     def state(self) -> proto.State:
         """The state the peer has been told last (latest STATE_CHANGED event sent; DISARMED before any)."""
-        tr = self.transitions()
+        tr = self._transitions
         return proto.State(tr[-1][2]) if tr else proto.State.DISARMED
 
     @property

@@ -23,7 +23,7 @@ class LowpassConfig(ctypes.Structure):
 
 
 class _LowpassState(ctypes.Structure):
-    _fields_ = [("y", c_float)]
+    _fields_ = [("y", c_float), ("alpha", c_float), ("alpha_tau_s", c_float), ("alpha_dt_s", c_float)]
 
 
 class Lowpass(ctypes.Structure):
@@ -35,7 +35,8 @@ class RampConfig(ctypes.Structure):
 
 
 class _RampState(ctypes.Structure):
-    _fields_ = [("y", c_float)]
+    _fields_ = [("y", c_float), ("step_up", c_float), ("step_down", c_float), ("step_rate_up_per_s", c_float),
+                ("step_rate_down_per_s", c_float), ("step_dt_s", c_float)]
 
 
 class Ramp(ctypes.Structure):
@@ -47,7 +48,8 @@ class PiConfig(ctypes.Structure):
 
 
 class _PiState(ctypes.Structure):
-    _fields_ = [("integral", c_float), ("output", c_float), ("saturation", c_int8)]
+    _fields_ = [("integral", c_float), ("output", c_float), ("saturation", c_int8), ("ki_dt", c_float),
+                ("ki_dt_ki_per_s", c_float), ("ki_dt_dt_s", c_float)]
 
 
 class Pi(ctypes.Structure):
@@ -61,7 +63,8 @@ class MtConfig(ctypes.Structure):
 
 class _MtState(ctypes.Structure):
     _fields_ = [("last_count", c_uint32), ("last_edge_us", c_uint32), ("raw_rev_per_s", c_float),
-                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool)]
+                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("two_pi_r_m", c_float),
+                ("two_pi_r_radius_m", c_float)]
 
 
 class Mt(ctypes.Structure):
@@ -73,8 +76,13 @@ class ThrottleConfig(ctypes.Structure):
                 ("pulse_max_us", c_uint16)]
 
 
+class _ThrottleState(ctypes.Structure):
+    _fields_ = [("two_pi_r_kv", c_float), ("memo_kv_rpm_per_v", c_float), ("memo_wheel_radius_m", c_float),
+                ("memo_battery_v", c_float), ("throttle_per_mps", c_float)]
+
+
 class Throttle(ctypes.Structure):
-    _fields_ = [("cfg", ThrottleConfig)]
+    _fields_ = [("cfg", ThrottleConfig), ("state", _ThrottleState)]
 
 
 class TovConfig(ctypes.Structure):
@@ -82,7 +90,8 @@ class TovConfig(ctypes.Structure):
 
 
 class _TovState(ctypes.Structure):
-    _fields_ = [("below_s", c_float), ("collapsed", c_bool)]
+    _fields_ = [("below_s", c_float), ("collapsed", c_bool), ("min_airborne_mps", c_float),
+                ("memo_tov_mps", c_float), ("memo_margin", c_float)]
 
 
 class Tov(ctypes.Structure):

@@ -105,7 +105,7 @@ def test_a_speed_under_half_a_unit_is_a_stop_without_direction_bit(ax):
     assert ax.rw_ax12_moving_speed_raw(-1.1 * half_unit_deg_s) == 1 | DIRECTION_BIT
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(st.floats(allow_nan=False, allow_infinity=False, width=32))
 def test_moving_speed_is_an_11_bit_register_with_the_sign_of_the_speed(ax, deg_s):
     raw = ax.rw_ax12_moving_speed_raw(deg_s)

@@ -273,3 +273,16 @@ def test_repeated_commands_are_idempotent_acks_without_events(rw_core):
     assert [(f, t) for _, f, t, _ in h.transitions()] == [(S.DISARMED, S.ARMED)]
     tel = h.telemetry()
     assert tel[-1].nacks == 0
+
+
+@pytest.mark.parametrize("extra_ticks", [0, 1, 2, 3])
+def test_estop_cuts_the_esc_in_its_own_tick_whatever_the_tick_schedule(rw_core, extra_ticks):
+    """The core runs the speed loop on every other tick; ESTOP must not wait for the next speed tick."""
+    h = CoreHarness(rw_core)
+    _to_state(h, S.AIRBORNE)
+    h.follow_setpoint(until=lambda: h.t_ms > 900, max_ms=300, what="steady flight")
+    for _ in range(extra_ticks):
+        h.tick()
+    assert h.pulse_us > 1100
+    assert _ack_state(h.command(Estop())) == S.ESTOP
+    assert h.pulse_us == 1000

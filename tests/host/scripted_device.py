@@ -52,6 +52,8 @@ class ScriptedDevice:
         drop_event_seqs: event_seq values whose EVENT is not sent (to test lost-event counting).
         guide_speed_mps, object_at_m: spindle speed; guide position where RETRACT secures a load (None: none).
         spindle_unavailable: spindle commands are refused SPINDLE_UNAVAILABLE.
+        key, session_id: with a key, unsigned or wrongly signed frames (but HELLO) are dropped and counted
+            in auth_failed, other sessions or non-growing counters in replayed; the device signs its frames.
         stale_param_values: PARAM_VALUEs with these values are sent around each parameter answer, as late
             duplicates of older answers would arrive (before the ACK; for PARAM_SET also after it).
     Records: received (frames with msg), executed (msg name, seq) per executed command,
@@ -59,7 +61,7 @@ class ScriptedDevice:
     """
 
     def __init__(self, *, telemetry_hz: float = 50.0, arm_hold_s: float = 0.0, state: State = State.DISARMED,
-                 ramp_mps2: float = 100.0) -> None:
+                 ramp_mps2: float = 100.0, key: bytes | None = None, session_id: int = 7) -> None:
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind(("127.0.0.1", 0))
         self.port = self._sock.getsockname()[1]
@@ -74,8 +76,15 @@ class ScriptedDevice:
         self.nack_script: dict[int, list[tuple[NackReason, int]]] = defaultdict(list)
         self.drop_event_seqs: set[int] = set()
         self.stale_param_values: list[float] = []
+        # link security: with a key every frame but HELLO must be signed for session_id with a growing counter
+        self.key = key
+        self.session_id = session_id
+        self.auth_failed = 0
+        self.replayed = 0
+        self._last_counter = 0
+        self._counter = 0
         # spindle: the guide moves at guide_speed_mps; a retract secures a load when it reaches object_at_m
-        self.guide_speed_mps = 0.5
+        self.guide_speed_mps = 1.5
         self.object_at_m: float | None = None
         self.spindle_unavailable = False
         self.homed = False
@@ -92,7 +101,7 @@ class ScriptedDevice:
         self.nacks_sent = 0
         self.target_mps = 0.0
         self.setpoint_mps = 0.0
-        self._cache: deque[tuple[int, bytes, list[bytes]]] = deque(maxlen=8)
+        self._cache: deque[tuple[int, int, list[bytes]]] = deque(maxlen=8)
         self._host = None
         self._seq = 0
         self._event_seq = 0
@@ -153,7 +162,11 @@ class ScriptedDevice:
                     self._tick(period_s)
 
     def _send(self, msg: gen.Message) -> bytes:
-        frame = gen.encode_frame(msg, self._seq)
+        if self.key is None:
+            frame = gen.encode_frame(msg, self._seq)
+        else:
+            self._counter += 1
+            frame = gen.encode_frame(msg, self._seq, key=self.key, session_id=self.session_id, counter=self._counter)
         self._seq = (self._seq + 1) & 0xFFFF
         return frame
 
@@ -172,20 +185,33 @@ class ScriptedDevice:
             self._emit([self._send(gen.Nack(err.msg_id if err.msg_id is not None else 255, err.seq or 0,
                                             err.reason, self.state, 0))])
             return
+        if frame.msg_id == MsgId.HELLO:  # unsigned, from anyone; does not make the sender the telemetry peer
+            self.received.append((frame, msg))
+            info = gen.SessionInfo(msg.host_nonce, self.session_id, int(self.key is not None), gen.SCHEMA_HASH)
+            self._sock.sendto(self._send(info), addr)
+            return
+        if self.key is not None:
+            if not frame.signed or not gen.tag_valid(frame, self.key):
+                self.auth_failed += 1
+                return
+            if frame.session_id != self.session_id or frame.counter <= self._last_counter:
+                self.replayed += 1
+                return
+            self._last_counter = frame.counter
         self._host = addr
         self._last_host_frame_s = time.monotonic()
         self.received.append((frame, msg))
         if msg.KIND != gen.MsgKind.COMMAND or self.silent:
             return
         for seq, raw, replies in self._cache:
-            if seq == frame.seq and raw == data:
+            if seq == frame.seq and raw == frame.checksum:  # same seq and checksum: a retransmission
                 self.duplicates += 1
                 self._deliver(frame.msg_id, replies)
                 return
         replies = self._execute(frame, msg)
         answers = [r for r in replies if r[3] != MsgId.EVENT]  # a retransmission is answered, events are not repeated
         if not (answers and answers[0][3] == MsgId.NACK and answers[0][10] in TRANSIT_REASONS):
-            self._cache.append((frame.seq, data, answers))  # a damaged frame's bytes are never seen again
+            self._cache.append((frame.seq, frame.checksum, answers))  # a damaged frame's bytes are never seen again
         self._deliver(frame.msg_id, replies)
 
     def _deliver(self, cmd_msg_id: int, replies: list[bytes]) -> None:
@@ -376,5 +402,5 @@ class ScriptedDevice:
             rx_bad=self.bad_frames & 0xFFFF, rx_duplicates=self.duplicates & 0xFFFF, nacks=self.nacks_sent & 0xFFFF,
             events=self._event_seq & 0xFFFF, guide_position_um=round(self.guide_m * 1e6),
             guide_target_um=round(max(self.guide_target_m, 0.0) * 1e6), spindle_load_permille=self.load_permille,
-            spindle_flags=flags)))
+            spindle_flags=flags, rx_auth_failed=self.auth_failed & 0xFFFF, rx_replayed=self.replayed & 0xFFFF)))
         self._emit(out)

@@ -106,12 +106,11 @@ def test_silent_device_gives_link_timeout_after_retries_plus_one_ack_timeouts(de
 
 
 def test_arm_retries_not_ready_with_new_seqs_until_the_hold_ends() -> None:
-    with ScriptedDevice(arm_hold_s=0.3) as device, Client(device.url, **FAST) as rw:
-        start = time.monotonic()
+    with ScriptedDevice(arm_hold_s=0.4) as device, Client(device.url, **FAST) as rw:
         assert rw.arm(timeout_s=2.0) == State.ARMED
-        assert time.monotonic() - start >= 0.25
     seqs = [seq for seq, _ in device.received_commands(MsgId.ARM)]
-    assert len(seqs) >= 3 and len(seqs) == len(set(seqs))
+    assert device.nacks_sent == len(seqs) - 1 >= 1  # every ARM but the last was refused NOT_READY
+    assert len(seqs) == len(set(seqs))
     assert device.executed_names() == ["ARM"]
 
 
@@ -178,7 +177,7 @@ def test_local_argument_errors_send_nothing(device: ScriptedDevice) -> None:
             rw.spin(math.nan)
         with pytest.raises(InvalidArgument, match="rope_speed_mps"):
             rw.spin("5")
-    assert all(m.KIND.name == "HEARTBEAT" for _, m in device.received)
+    assert {m.NAME for _, m in device.received} == {"HELLO", "HEARTBEAT"}
 
 
 def test_an_injected_transport_is_used_and_closed(device: ScriptedDevice) -> None:

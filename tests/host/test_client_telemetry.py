@@ -11,6 +11,7 @@ from robowrangler.client import Client
 from robowrangler.errors import LinkTimeout, StateTimeout
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import EventKind, Fault, MsgId, State
+from robowrangler.telemetry import TelemetrySample
 from scripted_device import ScriptedDevice, make
 
 
@@ -126,3 +127,28 @@ def test_values_from_a_newer_firmware_are_kept_not_fatal(device: ScriptedDevice)
     assert odd.state == 99 and int(odd.fault_bits) == 0x80
     assert events[0].kind == 77 and events[0].describe() == "77 ARMED -> ARMED"
     assert stats.decode_errors == 0
+
+
+SI_NAMES = {"_mmps": "_mps", "_um": "_m", "_mv": "_v", "_ms": "_s", "_permille": "_pct"}
+
+
+def _si_name(wire_name: str) -> str:
+    for wire, si in SI_NAMES.items():
+        if wire_name.endswith(wire):
+            return wire_name[: -len(wire)] + si
+    return {"battery_mv": "battery_v"}.get(wire_name, wire_name)
+
+
+def test_every_telemetry_field_on_the_wire_has_its_si_view() -> None:
+    import dataclasses
+
+    sample_fields = {f.name for f in dataclasses.fields(TelemetrySample)}
+    assert {_si_name(f.name) for f in gen.Telemetry.FIELDS} == sample_fields - {"received_s"}
+
+
+def test_si_values_are_the_wire_values_converted() -> None:
+    wire = make(gen.Telemetry, time_ms=1234, rope_speed_mmps=2990, battery_mv=11100, guide_position_um=62500,
+                spindle_load_permille=-125, heartbeat_age_ms=40, rx_replayed=3)
+    s = TelemetrySample.from_wire(wire, received_s=0.0)
+    assert (s.time_s, s.rope_speed_mps, s.battery_v, s.guide_position_m, s.spindle_load_pct, s.heartbeat_age_s,
+            s.rx_replayed) == (1.234, 2.99, 11.1, 0.0625, -12.5, 0.04, 3)

@@ -32,3 +32,14 @@ def test_unknown_parameter_suggests_close_names_or_lists_all() -> None:
     typo = UnknownParameter("tov_margn")
     assert typo.close_matches[0] == "tov_margin" and str(typo).startswith("unknown parameter 'tov_margn'; did you mean tov_margin")
     assert "known: tov_mps, tov_margin" in str(UnknownParameter("zzz"))
+
+
+@pytest.mark.parametrize("reason, text", [
+    (NackReason.NOT_ON_THIS_LINK, "connect with serial://"),
+    (NackReason.NO_KEY, "provision one over USB serial"),
+    (NackReason.AUTH_FAILED, "connect with the device's link key"),
+    (NackReason.NOT_HOMED, "command home first"),
+])
+def test_link_and_spindle_refusals_are_not_mistaken_for_damaged_frames(reason: NackReason, text: str) -> None:
+    err = CommandRefused(command_msg_id=MsgId.ARM, reason=reason, state=State.DISARMED, detail=0)
+    assert text in str(err) and "corrupts data" not in str(err)

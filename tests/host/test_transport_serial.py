@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import select
-import threading
-
 import pytest
 from cobs import cobs
 from hypothesis import given, settings
@@ -16,6 +12,7 @@ from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import MsgId, State
 from robowrangler.transport import open_transport
 from robowrangler.transport_serial import SerialTransport, encode_serial_frame
+from pty_device import PtyDevice
 from scripted_device import make
 
 
@@ -70,51 +67,6 @@ def test_serial_url_opens_the_serial_transport() -> None:
         assert isinstance(t, SerialTransport) and t.url == "serial://loop://?baud=9600"
     finally:
         t.close()
-
-
-class PtyDevice:
-    """The device end of a pty pair: answers every command with ACK (state ARMED after ARM) and sends
-    TELEMETRY every 20 ms, all COBS-framed."""
-
-    def __init__(self) -> None:
-        self.master, slave = os.openpty()
-        self.port = os.ttyname(slave)
-        self._slave = slave
-        self.commands: list[tuple[int, int]] = []
-        self.state = State.DISARMED
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._seq = 0
-
-    def __enter__(self) -> PtyDevice:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._thread.join(2.0)
-        os.close(self.master)
-        os.close(self._slave)
-
-    def _send(self, msg: gen.Message) -> None:
-        os.write(self.master, encode_serial_frame(gen.encode_frame(msg, self._seq)))
-        self._seq = (self._seq + 1) & 0xFFFF
-
-    def _run(self) -> None:
-        buf = b""
-        while not self._stop.is_set():
-            ready, _, _ = select.select([self.master], [], [], 0.02)
-            if ready:
-                buf += os.read(self.master, 1024)
-                *chunks, buf = buf.split(b"\x00")
-                for chunk in chunks:
-                    frame, msg = gen.decode_message(cobs.decode(chunk))
-                    if msg.KIND == gen.MsgKind.COMMAND:
-                        self.commands.append((frame.msg_id, frame.seq))
-                        if frame.msg_id == MsgId.ARM:
-                            self.state = State.ARMED
-                        self._send(gen.Ack(frame.msg_id, frame.seq, self.state))
-            self._send(make(gen.Telemetry, time_ms=1000, state=self.state, esc_pulse_us=1000, battery_mv=12000))
 
 
 def test_client_commands_a_device_over_a_real_serial_port() -> None:

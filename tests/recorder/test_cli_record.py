@@ -7,7 +7,6 @@ so a recorder next to another commanding host sees only part of the stream (see 
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -91,22 +90,39 @@ def test_record_without_a_device_writes_the_file_and_exits_link_timeout(tmp_path
     assert not rec.truncated and len(rec.telemetry["seq"]) == 0 and rec.meta["source"] == "sil"
 
 
-def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path) -> None:
-    out = tmp_path / "killed.mcap"
+def _recorder_process(url: str, out: Path, sig: int, *, lines: int) -> tuple[subprocess.Popen, list[int], str]:
+    """Start `wrangler record` in its own process, wait for `lines` progress lines, send `sig`.
+
+    Returns the process (exited), the telemetry counts of the progress lines, and its stdout."""
     proc = subprocess.Popen(
         [sys.executable, "-c", "from robowrangler.cli.main import entry_point; entry_point()",
-         "--url", live_sil.cmd_url, "record", str(out), "--no-params"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+         "--url", url, "record", str(out), "--no-params"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
     progress = []  # "wrangler: killed.mcap:    2.0 s, 100 telemetry, ..." every 2 s
     try:
         for line in proc.stderr:
             if "telemetry," in line:
                 progress.append(int(line.split(" telemetry,")[0].rsplit(" ", 1)[1]))
-                if len(progress) == 2:
+                if len(progress) == lines:
                     break
     finally:
-        os.kill(proc.pid, signal.SIGKILL)
-        proc.wait(timeout=10)
+        proc.send_signal(sig)
+        stdout, _ = proc.communicate(timeout=10)
+    return proc, progress, stdout
+
+
+def test_ctrl_c_ends_the_recording_with_a_complete_file_and_exit_0(live_sil: SilSession, tmp_path: Path) -> None:
+    out = tmp_path / "stopped.mcap"
+    proc, progress, stdout = _recorder_process(live_sil.cmd_url, out, signal.SIGINT, lines=1)
+    assert proc.returncode == ExitStatus.OK and "recorded" in stdout
+    rec = read_recording(out)
+    assert not rec.truncated and len(rec.telemetry["seq"]) >= progress[-1]
+
+
+def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path,
+                                                              wrangler) -> None:
+    out = tmp_path / "killed.mcap"
+    proc, progress, _ = _recorder_process(live_sil.cmd_url, out, signal.SIGKILL, lines=2)
     assert proc.returncode == -signal.SIGKILL
     written = progress[-1]  # telemetry the recorder had written when it printed the line
     rec = read_recording(out)
@@ -115,3 +131,5 @@ def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSessi
     # at most one unfinished chunk (<= 0.5 s = 25 frames at 50 Hz) is lost; a few more may have come after the line
     assert written - 30 <= got <= written + 15, (written, got)
     assert rec.telemetry["seq"].tolist() == sorted(rec.telemetry["seq"].tolist())
+    status, text, err = wrangler("inspect", str(out))
+    assert status == ExitStatus.OK and "TRUNCATED" in text and "truncated" in err

@@ -93,3 +93,17 @@ def test_a_recording_written_with_only_mcap_and_the_schema_files_reads_back(tmp_
     summary = summarize(rec)
     assert summary["channels"] == {"/device/telemetry": 100, "/loop/observation": 10, "/sim/plant_truth": 100}
     assert summary["telemetry"]["states"] == ["SPINUP", "AIRBORNE"]
+
+
+def test_the_example_in_schema_md_writes_a_readable_recording(tmp_path: Path, monkeypatch) -> None:
+    import re
+
+    text = (ROOT / "protocol" / "recording" / "schema.md").read_text()
+    code = re.search(r"## 4\..*?```python\n(.*?)```", text, re.S).group(1)
+    monkeypatch.chdir(ROOT)
+    exec(code.replace('"run.mcap"', repr(str(tmp_path / "run.mcap"))), {})
+
+    from robowrangler.recorder import read_recording
+
+    rec = read_recording(tmp_path / "run.mcap")
+    assert rec.topic_counts == {"/sim/plant_truth": 500} and rec.chunks == 20 and not rec.truncated

@@ -88,3 +88,20 @@ def test_command_schema_ties_fields_to_the_message() -> None:
     assert first_error({**base, "message": "ARM", "fields": {}}, schema) is None
     assert first_error({**base, "message": "ARM", "fields": {"rope_speed_mps": 4.0}}, schema) is not None
     assert first_error({**base, "message": "SET_ROPE_SPEED", "fields": {}}, schema) is not None
+
+
+def test_plant_truth_takes_extra_values_only_with_a_unit_suffix() -> None:
+    schema = json.loads(sg.CHANNELS["/sim/plant_truth"][2])
+    assert first_error({"time_s": 1.0, "rope_tension_n": 0.02, "tip_height_m": None}, schema) is None
+    assert "unexpected field 'tension'" in first_error({"time_s": 1.0, "tension": 0.02}, schema)
+    assert "expected number or null" in first_error({"time_s": 1.0, "drag_n": "high"}, schema)
+    assert "missing required field 'time_s'" in first_error({"rope_speed_mps": 1.0}, schema)
+
+
+def test_loop_observation_points_are_x_z_pairs() -> None:
+    schema = json.loads(sg.CHANNELS["/loop/observation"][2])
+    obs = {"time_s": 0.5, "camera_id": "cam0", "phi_rad": 0.2, "points_m": [[0.0, 0.0], [0.3, 0.1]]}
+    assert first_error(obs, schema) is None
+    assert "/points_m/1: expected at most 2 items" in first_error({**obs, "points_m": [[0, 0], [0.3, 0.1, 0.0]]},
+                                                                  schema)
+    assert "expected at least 2 items" in first_error({**obs, "points_m": [[0.0, 0.0]]}, schema)

@@ -17,7 +17,6 @@ from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.cli.main import main
 from robowrangler.client import Client
 from robowrangler.errors import CommandRefused
-from robowrangler.link_security import write_key_file
 from robowrangler.protocol.generated import NackReason, State
 from robowrangler_sim.sil import SilSession
 
@@ -30,9 +29,15 @@ def live_sil(native_build_dir: Path) -> Iterator[SilSession]:
         yield sil
 
 
+def write_key_file(path: Path, key: bytes) -> Path:
+    path.write_text(key.hex() + "\n")
+    path.chmod(0o600)
+    return path
+
+
 def wrangler(sil: SilSession, *argv: str) -> tuple[ExitStatus, list[dict], str]:
     out, err = io.StringIO(), io.StringIO()
-    key_file = write_key_file(Path(sil.state_file).with_name("link.key"), sil.key, force=True)
+    key_file = write_key_file(Path(sil.state_file).with_name("link.key"), sil.key)
     status = main(["--url", sil.cmd_url, "--key-file", str(key_file), "--json", *argv], Environment(out, err, {}))
     lines = [json.loads(line) for line in out.getvalue().splitlines() if line.strip()]
     return status, lines, err.getvalue()

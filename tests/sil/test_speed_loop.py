@@ -81,7 +81,7 @@ def test_estop_cuts_the_throttle_at_once_and_latches(host: ScriptedHost) -> None
 def test_heartbeat_loss_spins_down_within_the_timeout(host: ScriptedHost) -> None:
     host.arm_and_spin(6000)
     host.heartbeats_enabled = False
-    last_frame_ms = host.last_telemetry.time_ms - host.last_telemetry.heartbeat_age_ms
+    last_frame_ms = host.last_sent_us // 1000
     host.run_for(2.0)
     spindown = next(e for e in host.received.events
                     if e.event == gen.EventKind.STATE_CHANGED and e.state_to == gen.State.SPINDOWN)

@@ -15,7 +15,7 @@ from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import EventKind, Fault, State
 from robowrangler_sim.sil import SilSession
 from robowrangler_sim.sil.plant_faults import (BatterySag, EncoderDropout, EscNotResponding, RopeBreak,
-                                               StalledControlLoop)
+                                               SpindleStall, StalledControlLoop)
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 
 TARGET_MMPS = 5000
@@ -127,10 +127,31 @@ def test_rope_break_under_load_the_speed_loop_holds_the_speed(flying: ScriptedHo
     assert not [e for e in events_since(flying, t0_ms) if e[1] != EventKind.STATE_CHANGED]  # nothing reported
 
 
-@pytest.mark.skip(reason="spindle stall: not injected from here yet; the spindle plant joined the SIL session during "
-                  "this work and tests/sil/test_spindle.py covers its stall and silent-servo cases")
-def test_spindle_stall() -> None:
-    raise AssertionError("not written yet")
+def test_spindle_stall_in_flight_is_a_spindle_fault_and_the_rope_keeps_flying(native_build_dir: Path) -> None:
+    with SilSession(speedup=None, trace_every=1) as sil:
+        host = ScriptedHost(sil)
+        host.run_for(0.6)
+        assert isinstance(host.command(gen.Home()), gen.Ack)
+        assert host.run_until(lambda h: h.last_telemetry.spindle_flags & gen.SpindleFlag.HOMED, timeout_s=40.0)
+        host.arm_and_spin(TARGET_MMPS, settle_s=1.0)
+        assert isinstance(host.command(gen.SetLoop(120_000)), gen.Ack)  # shrink the loop while flying
+        host.run_for(0.5)
+        t0_ms = start_ms(host)
+        guide_mm = sil.spindle.guide_position_mm
+        SpindleStall(start_s=t0_ms / 1000).install(sil)
+        host.run_for(1.5)
+        ev = events_since(host, t0_ms)
+        raised = [e for e in ev if e[1] == EventKind.FAULT_RAISED]
+        assert len(raised) == 1 and raised[0][3] == Fault.SPINDLE_STALL
+        stall_time_ms = 1000 * gen.PARAMS_BY_NAME["spindle_stall_time_s"].default
+        assert stall_time_ms <= raised[0][0] - t0_ms <= stall_time_ms + 200  # + the servo loading up
+        assert abs(sil.spindle.guide_position_mm - guide_mm) < 0.2  # jammed: the guide stops (servo lag)
+        refused = host.command(gen.SetLoop(100_000))
+        assert isinstance(refused, gen.Nack) and refused.reason == gen.NackReason.SPINDLE_UNAVAILABLE
+        t = host.last_telemetry
+        assert t.state == State.AIRBORNE and abs(t.rope_speed_mmps - TARGET_MMPS) <= 100  # the rope is not dropped
+        assert t.fault_bits == Fault.SPINDLE_STALL and not t.spindle_flags & gen.SpindleFlag.MOVING
+        host.close()
 
 
 def test_battery_sag_is_reported_in_telemetry(flying: ScriptedHost) -> None:

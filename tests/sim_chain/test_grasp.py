@@ -25,15 +25,15 @@ def default_table(table):
 @pytest.mark.parametrize("name, secured", [("chips_can", True), ("mug", True), ("tennis_ball", False)])
 def test_grasp_reproduces_the_table_i_outcome(default_table, name, secured):
     out = run_grasp(name, table=default_table)
-    assert out.secured is secured, (f"{name}: follow {out.follow_ratio:.2f}, mean pull force "
-                                    f"{out.mean_pull_force_n:.3f} N vs drag {out.drag_force_n:.3f} N")
+    assert out.secured is secured, (f"{name}: follow {out.follow_ratio:.2f}, rope touching "
+                                    f"{out.touching_fraction:.0%}, mean rope force {out.mean_pull_force_n:.3f} N")
     if secured:
-        # dragged towards the module by the rope, which pressed on it through the pull
+        # dragged towards the module by the rope, which kept hold of it through the pull
         assert out.object_displacement_m[0] < -0.1
-        assert out.mean_pull_force_n > 0.3 * out.drag_force_n
+        assert out.touching_fraction > 0.8 and out.mean_pull_force_n > 0.05
     else:
-        # the rope never held the ball: whatever moved it, the chain force stayed far below a drag
-        assert out.mean_pull_force_n < 0.1 * out.drag_force_n
+        # the rope lost the ball: out of contact for most of the judged pull
+        assert out.touching_fraction < 0.5
 
 
 def test_script_phases_drive_speed_guide_and_base():

@@ -49,3 +49,19 @@ def test_every_object_has_its_mass_and_rests_on_the_floor(table):
         moved = np.linalg.norm(plant.object_pos_m(name) - start[name])
         assert moved < 0.01, f"{name} moved {moved:.3f} m resting on the floor"
         assert math.isclose(np.linalg.norm(plant.object_quat_wxyz(name)), 1.0, rel_tol=1e-9)
+
+
+def test_trash_can_rests_and_door_handle_is_a_fixed_fixture(table):
+    placements = (ObjectPlacement(spec=OBJECTS["trash_can"], pos_m=(1.5, 0.0, 0.0)),
+                  ObjectPlacement(spec=OBJECTS["door_handle"], pos_m=(3.0, 0.06, 0.0)))
+    plant = ChainPlant(table=table, objects=placements, floor_height_m=0.0,
+                       initial=PlantInputs(rope_speed_mps=5.0, base_pos_m=(0.0, 0.0, 1.0)))
+    m = plant.model
+    assert m.body_mass[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "trash_can")] == pytest.approx(8.0)
+    handle = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "door_handle")
+    assert m.body_jntnum[handle] == 0  # welded to the world
+    start = plant.object_pos_m("trash_can")
+    plant.advance(duration_s=1.0)
+    assert np.linalg.norm(plant.object_pos_m("trash_can") - start) < 0.005
+    np.testing.assert_allclose(plant.object_pos_m("door_handle"), [3.0, 0.06, 0.0])
+    assert plant.outputs().object_secured == {"trash_can": False}

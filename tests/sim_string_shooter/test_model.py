@@ -4,7 +4,7 @@ contact, determinism, typed errors."""
 import numpy as np
 import pytest
 
-from robowrangler_sim.string_shooter import (Capsule, Cylinder, HalfSpace, ModuleGeometry, ModuleMotion, NipParams,
+from robowrangler_sim.string_shooter import (AirParams, Capsule, Cylinder, HalfSpace, ModuleGeometry, ModuleMotion, NipParams,
                                              RopeParams, ShooterParams, Sphere, StringShooter,
                                              StringShooterParamError)
 from robowrangler_sim.string_shooter.contact import Box, signed_distance_m
@@ -130,3 +130,28 @@ def test_tap_gives_the_rope_the_impulse_asked_for():
 def test_bad_input_raises_a_typed_error_naming_the_argument(make, name):
     with pytest.raises(StringShooterParamError, match=name.replace("[", r"\[").replace("]", r"\]")):
         make()
+
+
+def test_moving_module_in_still_air_equals_still_module_in_wind():
+    """Galilean check: translating the module at U through still air gives the same loop, relative to the
+    module, as a module standing in a wind of -U."""
+    u = np.array([1.5, 0.0, 0.3])
+    moving = StringShooter(ShooterParams(), loop_length_m=1.0,
+                           motion=ModuleMotion(wheel_speed_mps=5.0, base_position_m=lambda t: np.outer(t, u)))
+    windy = StringShooter(ShooterParams().with_(air=AirParams(wind_mps=tuple(-u))), loop_length_m=1.0,
+                          motion=ModuleMotion(wheel_speed_mps=5.0))
+    for sim in (moving, windy):
+        sim.step_for(1.5)
+    a, b = moving.frame().points_m - moving.time_s * u, windy.frame().points_m
+    assert a.shape == b.shape
+    assert np.abs(a - b).max() < 1e-6
+
+
+def test_a_yawing_module_leaves_the_loop_trailing_behind():
+    yaw_rate = 1.0  # rad/s, counter-clockwise seen from above
+    sim = _sim(motion=ModuleMotion(wheel_speed_mps=5.0, yaw_rad=lambda t: yaw_rate * t))
+    sim.step_for(2.0)
+    f = sim.frame()
+    lateral = np.array([-np.sin(2.0), np.cos(2.0), 0.0])  # module's left, at t = 2 s
+    tip = f.points_m[np.argmax(np.linalg.norm(f.points_m - f.points_m[0], axis=1))]
+    assert (tip - f.points_m[0]) @ lateral < -0.01  # the tip lags: it sits to the module's right

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from robowrangler_sim.shape_table import ShapeTable, resample_by_arc_length
+from robowrangler_sim.shape_table import ShapeTable
 from robowrangler_sim.string_shooter import ShooterParams
 from robowrangler_sim.string_shooter.shape import roundness
 from robowrangler_sim.string_shooter.shape_export import DEFAULT_TABLE_PATH, steady_contour_xz_m

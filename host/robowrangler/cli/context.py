@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -12,10 +12,11 @@ import click
 
 from robowrangler.cli.environment import Environment
 from robowrangler.client import Client
-from robowrangler.link_security import default_key_path
-from robowrangler.transport import SerialUrl, parse_url
+from robowrangler.errors import InvalidArgument
+from robowrangler.protocol.generated import KEY_LEN
 
 URL_ENV_VAR = "ROBOWRANGLER_URL"
+KEY_FILE_ENV_VAR = "ROBOWRANGLER_KEY_FILE"
 DEFAULT_TIMEOUT_S = 3.0
 
 
@@ -31,25 +32,18 @@ class CliContext:
 
     url: link URL (--url, else $ROBOWRANGLER_URL, else the default); timeout_s: --timeout [s], used
     as the connect timeout, the longest telemetry gap and the ARM NOT_READY retry window;
-    json_mode: --json; key_file: --key-file (else $ROBOWRANGLER_KEY_FILE, else ~/.config/robowrangler/link.key).
+    json_mode: --json.
     """
 
     env: Environment
     url: str
     timeout_s: float = DEFAULT_TIMEOUT_S
     json_mode: bool = False
-    key_file: str | None = None
-
-    def resolved_key_file(self) -> Path:
-        return Path(self.key_file).expanduser() if self.key_file else default_key_path(self.env.environ)
+    key: bytes | None = field(default=None, repr=False)  # the link key: never printed
 
     def client(self) -> Client:
-        """A Client for this run's URL (not yet connected: use it in a `with`). Over USB serial the key is
-        optional (a trusted link); over UDP it is read from the key file."""
-        path = self.resolved_key_file()
-        if isinstance(parse_url(self.url), SerialUrl) and not path.exists():
-            return Client(self.url, connect_timeout_s=self.timeout_s)
-        return Client(self.url, connect_timeout_s=self.timeout_s, key_file=path)
+        """A Client for this run's URL (not yet connected: use it in a `with`)."""
+        return Client(self.url, connect_timeout_s=self.timeout_s, key=self.key)
 
     # -- output: machine output on stdout only with --json, prose on stderr
     def result(self, data: dict[str, Any], human: str) -> None:
@@ -78,6 +72,23 @@ class CliContext:
         """Prose for the user on stderr (both modes)."""
         self.env.stderr.write(f"wrangler: {text}\n")
         self.env.stderr.flush()
+
+
+def read_key_file(path: str) -> bytes:
+    """The link key from a file holding it as 32 hex digits (whitespace ignored). The key is never echoed:
+    errors name the file and what is wrong with it, not its content."""
+    try:
+        text = Path(path).read_text()
+    except OSError as err:
+        raise InvalidArgument("--key-file", "a readable file with the link key", f"{path} ({err.strerror})") from None
+    digits = "".join(text.split())
+    try:
+        key = bytes.fromhex(digits)
+    except ValueError:
+        key = b""
+    if len(key) != KEY_LEN:
+        raise InvalidArgument("--key-file", f"{2 * KEY_LEN} hex digits", f"{path} with {len(digits)} characters")
+    return key
 
 
 def _jsonable(value: Any) -> Any:

@@ -17,12 +17,12 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import keys, monitor, motion, param, record, sil, spindle
-from robowrangler.cli.context import DEFAULT_TIMEOUT_S, URL_ENV_VAR, CliContext, OutputClosed
+from robowrangler.cli import monitor, motion, param, provision, record, sil, spindle
+from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_ENV_VAR, CliContext, OutputClosed,
+                                      read_key_file)
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
-from robowrangler.link_security import KeyFileError
-from robowrangler.errors import (AuthenticationError, NotProvisioned, CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
+from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
                                  UnknownParameter)
 from robowrangler.transport import DEFAULT_URL, parse_url
 
@@ -30,10 +30,9 @@ COMMANDS: list[click.Command] = [
     motion.arm, motion.disarm, motion.spin, motion.spindown, motion.estop,
     spindle.home, spindle.loop, spindle.relax, spindle.retract, spindle.grasp, spindle.release,
     monitor.status, monitor.watch,
-    param.param,
+    param.param, provision.provision, provision.keygen,
     sil.sil_command, sil.demo_command,
     record.record, record.inspect, record.replay,
-    keys.keygen, keys.provision,
 ]
 
 _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStatus) + "."
@@ -43,20 +42,22 @@ _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStat
 @click.option("--url", default=None, metavar="URL",
               help=f"Link: udp://HOST:PORT or serial:///dev/ttyACM0?baud=115200 "
                    f"[env {URL_ENV_VAR}; default {DEFAULT_URL}]")
-@click.option("--key-file", "key_file", default=None, metavar="PATH",
-              help="Link key file [env ROBOWRANGLER_KEY_FILE; default ~/.config/robowrangler/link.key]; "
-                   "create one with `wrangler keygen`.")
 @click.option("--json", "json_mode", is_flag=True, help="Machine output on stdout: one JSON object, JSON lines for streams.")
 @click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.0, min_open=True), default=DEFAULT_TIMEOUT_S,
               show_default=True, metavar="SECONDS",
               help="Connect timeout, longest telemetry gap, and ARM retry window.")
+@click.option("--key-file", "key_file", default=None, metavar="PATH",
+              help=f"File with the 128-bit link key (32 hex digits) for signed frames [env {KEY_FILE_ENV_VAR}; "
+                   "default: unsigned frames].")
 @click.pass_context
-def cli(click_ctx: click.Context, url: str | None, key_file: str | None, json_mode: bool, timeout_s: float) -> None:
+def cli(click_ctx: click.Context, url: str | None, json_mode: bool, timeout_s: float, key_file: str | None) -> None:
     """Command a RoboWrangler rope lasso (board or SIL) over UDP or USB serial."""
     env: Environment = click_ctx.obj
     url = url or env.environ.get(URL_ENV_VAR) or DEFAULT_URL
     parse_url(url)  # a malformed URL is a usage error before anything is opened
-    click_ctx.obj = CliContext(env=env, url=url, timeout_s=timeout_s, json_mode=json_mode, key_file=key_file)
+    key_file = key_file or env.environ.get(KEY_FILE_ENV_VAR)
+    key = read_key_file(key_file) if key_file else None
+    click_ctx.obj = CliContext(env=env, url=url, timeout_s=timeout_s, json_mode=json_mode, key=key)
 
 
 for _command in COMMANDS:
@@ -89,8 +90,6 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
         return _fail(env, json_mode, ExitStatus.CTRL_C, err, "interrupted")
     except (InvalidArgument, UnknownParameter) as err:
         return _fail(env, json_mode, ExitStatus.USAGE, err, str(err))
-    except (AuthenticationError, NotProvisioned, KeyFileError) as err:
-        return _fail(env, json_mode, ExitStatus.AUTH, err, str(err))
     except CommandRefused as err:
         return _fail(env, json_mode, ExitStatus.NACK, err, str(err),
                      command=err.command, reason=_name(err.reason), state=_name(err.state), detail=err.detail)

@@ -6,13 +6,16 @@ these commands run, so the rest of the CLI works on a host without them.
 
 from __future__ import annotations
 
+import os
+import tempfile
 import time
+from pathlib import Path
 
 import click
 
 from robowrangler.cli.context import CliContext, pass_context
 from robowrangler.errors import RoboWranglerError
-from robowrangler.link_security import generate_key, read_key_file, write_key_file
+
 
 
 class SimulatorUnavailable(RoboWranglerError):
@@ -44,28 +47,32 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
-    over its (pseudo-terminal) USB serial with your key file, as a board would be; the serial path is printed.
+    over its (pseudo-terminal) USB serial with --key-file's key (or a new one, whose file is printed), as a
+    board would be.
     """
     sil_pkg, _ = _sil_modules()
-    key_path = ctx.resolved_key_file()
-    if not key_path.exists():
-        write_key_file(key_path, generate_key())
-        ctx.note(f"no key file at {key_path}: created one (mode 0600) and provisioned the SIL device with it")
     try:
         session = sil_pkg.SilSession(speedup=None if unpaced else speedup, seed=seed, cmd_port=cmd_port,
-                                     trace_every=0, key=read_key_file(key_path), state_file=state_file)
+                                     trace_every=0, key=ctx.key, state_file=state_file)
         session.start()
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
+    key_note = "your --key-file"
+    if ctx.key is None:  # a fresh key for this run, in a private file the other commands can use
+        key_path = Path(tempfile.mkdtemp(prefix="wrangler_sil_")) / "link.key"
+        fd = os.open(key_path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        with os.fdopen(fd, "w") as f:
+            f.write(session.key.hex() + "\n")
+        key_note = f"a new key in {key_path} (export ROBOWRANGLER_KEY_FILE={key_path})"
     try:
         session.run_in_background()
         if ctx.json_mode:
             ctx.json_line({"type": "ready", "url": session.cmd_url, "serial": session.serial_path,
-                           "key_file": str(key_path), "speedup": None if unpaced else speedup})
+                           "key": key_note, "speedup": None if unpaced else speedup})
         else:
             pace = "unpaced" if unpaced else f"speed-up {speedup:g}x"
             ctx.note(f"SIL device on {session.cmd_url} ({pace}), USB serial {session.serial_path}, "
-                     f"key {key_path}; Ctrl-C to stop")
+                     f"provisioned with {key_note}; Ctrl-C to stop")
         while duration_s is None or session.time_s < duration_s:
             session.check()
             time.sleep(0.05)

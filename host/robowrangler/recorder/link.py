@@ -107,7 +107,8 @@ class LinkRecorder:
             return
         with self._lock:
             if msg.KIND != gen.MsgKind.COMMAND:
-                self.heartbeats_sent += msg.KIND == gen.MsgKind.HEARTBEAT
+                if msg.KIND == gen.MsgKind.HEARTBEAT:
+                    self.heartbeats_sent += 1
                 return
             key = (msg.MSG_ID, header.seq)
             if key in self._pending:

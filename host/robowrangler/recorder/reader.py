@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
-from mcap.exceptions import McapError
+from mcap.exceptions import McapError, UnsupportedCompressionError
 from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
 from mcap.stream_reader import CRCValidationError, StreamReader, breakup_chunk
 
@@ -205,6 +205,10 @@ class _Loader:
                 except CRCValidationError as err:
                     raise CorruptRecording(self.path, f"chunk {self.chunks + 1}: CRC mismatch, the chunk's bytes "
                                            "are damaged") from err
+                except UnsupportedCompressionError as err:
+                    raise RecordingError(self.path, f"chunk {self.chunks + 1} is compressed with "
+                                         f"{record.compression!r}, which needs a package this host lacks ({err}); "
+                                         "write recordings uncompressed (see schema.md)") from err
                 except Exception as err:  # noqa: BLE001 - any parse failure inside a chunk is damage
                     raise CorruptRecording(self.path, f"chunk {self.chunks + 1}: unreadable "
                                            f"({type(err).__name__}: {err})") from err

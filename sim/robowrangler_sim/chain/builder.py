@@ -91,9 +91,8 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
     _sub(asset, "texture", name="sky", type="skybox", builtin="gradient", rgb1=(0.55, 0.7, 0.9),
          rgb2=(0.95, 0.95, 1.0), width="256", height="256")
 
-    default = _sub(root, "default")
-    _sub(default, "geom", solimp=(params.contact_impedance_min, params.contact_impedance_max,
-                                  params.contact_impedance_width_m, 0.5, 2))
+    rope_solimp = (params.contact_impedance_min, params.contact_impedance_max, params.contact_impedance_width_m,
+                   0.5, 2)
     world = _sub(root, "worldbody")
     _sub(world, "light", name="sun", pos=(0.5, -1.0, 4.0), dir=(-0.1, 0.25, -1), diffuse=(0.8, 0.8, 0.8),
          directional="true")
@@ -119,7 +118,7 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
         _sub(body, "joint", name=f"outplane_{i}", axis=(0, 0, 1), **common)
         upper = i < params.n_upper
         _sub(body, "geom", name=f"link_{i}", type="capsule", size=(r, link_len / 2), pos=(link_len / 2, 0, 0),
-             euler=(0, math.pi / 2, 0), mass=params.link_mass_kg,
+             euler=(0, math.pi / 2, 0), mass=params.link_mass_kg, solimp=rope_solimp, solmix="1000",
              rgba=(0.95, 0.45, 0.1, 1) if upper else (0.95, 0.75, 0.2, 1),
              friction=(params.rope_friction, 0.005, 0.0001), **_bits(CHAIN_BITS))
         _sub(body, "geom", name=f"link_{i}_visual", type="capsule", size=(params.visual_rope_radius_m, link_len / 2),
@@ -140,7 +139,7 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
     if floor_height_m is not None:
         contact = _sub(root, "contact")
         for i in range(n):
-            _sub(contact, "pair", geom1="floor", geom2=f"link_{i}", condim="3",
+            _sub(contact, "pair", geom1="floor", geom2=f"link_{i}", condim="3", solimp=rope_solimp,
                  margin=params.rope_floor_clearance_m, friction=(params.floor_friction, params.floor_friction,
                                                                  0.005, 0.0001, 0.0001))
     if params.closure_constraint_timeconst_s > 0:

@@ -16,12 +16,11 @@ Script (all times in simulated seconds, GraspScript fields):
   4. hold      (hold_s): guide kept; nothing moves.
   5. pull      (pull_s): the module moves back by ``pull_m`` and up by ``lift_m`` (the robot's leg).
 
-Judgement (GraspOutcome.secured), over the second half of the pull (the first half takes up the
-slack between the loop and the object): the object's centre of mass followed the module
-(displacement along the pull direction >= ``follow_fraction`` of the module's) AND the rope dragged
-it: the mean chain-on-object normal force is at least ``drag_force_fraction`` of the force that
-slides the object on the floor (floor friction x weight). An object the rope only pushes
-ahead of itself (a ball rolling away) or leaves behind is "slipped". Positions and forces come from
+Judgement (GraspOutcome.secured, secured.SecuredMonitor), over the second half of the pull (the
+first half takes up the slack between the loop and the object): the rope keeps hold of the object
+(touches it in >= ``contact_fraction`` of the samples) and the object's centre of mass follows the
+module (displacement along the pull >= ``follow_fraction`` of the module's). A ball knocked ahead
+(rolling on, out of contact) or an object left behind has slipped. Positions and forces come from
 MuJoCo contacts; nothing is decided by a rule on the object's shape.
 """
 
@@ -36,6 +35,7 @@ from robowrangler_sim.chain.errors import ChainModelError
 from robowrangler_sim.chain.objects import ObjectPlacement, ObjectSpec, get_object
 from robowrangler_sim.chain.params import ChainParams
 from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxyz
+from robowrangler_sim.chain.secured import SecuredMonitor
 from robowrangler_sim.shape_table import ShapeTable
 
 
@@ -58,7 +58,7 @@ class GraspScript:
     pull_m: float = 0.3
     lift_m: float = 0.0
     follow_fraction: float = 0.5
-    drag_force_fraction: float = 0.3
+    contact_fraction: float = 0.8
 
     def __post_init__(self) -> None:
         for name in ("position_s", "relax_s", "retract_s", "hold_s", "pull_s"):
@@ -81,10 +81,11 @@ class GraspOutcome:
         secured: True if held (see module doc), False if it slipped out.
         follow_ratio: object displacement along the pull / module displacement, second half of the
             pull (1 = moves with the module).
-        final_chain_force_n: chain-on-object normal force at the end, N.
-        mean_pull_force_n: mean chain-on-object normal force, second half of the pull, N.
-        drag_force_n: force that slides the object on the floor (floor friction x weight), N.
-        max_chain_force_n: the largest chain-on-object normal force seen, N.
+        final_chain_force_n: net chain-on-object force at the end, N.
+        mean_pull_force_n: mean net chain-on-object force, second half of the pull, N.
+        touching_fraction: share of the second-half samples in which the rope touches the object.
+        drag_force_n: force that slides the object on the floor (larger friction of the pair x weight), N.
+        max_chain_force_n: the largest net chain-on-object force seen, N.
         object_displacement_m: shape (3,), object centre-of-mass change over the whole script.
         trace: per-sample dict rows (time_s, phase, object_pos_m, chain_force_n, guide_mm, base_pos_m).
     """
@@ -94,6 +95,7 @@ class GraspOutcome:
     follow_ratio: float
     final_chain_force_n: float
     mean_pull_force_n: float
+    touching_fraction: float
     drag_force_n: float
     max_chain_force_n: float
     object_displacement_m: np.ndarray
@@ -177,39 +179,33 @@ def run_grasp(obj: ObjectSpec | str, *, table: ShapeTable, params: ChainParams |
     plant, base = grasp_scene(spec, table=table, params=params, script=script, seed=seed)
     name = spec.name
     start = plant.object_com_m(name)
-    pull_forces: list[float] = []
+    drag = max(params.floor_friction, spec.friction) * spec.mass_kg * 9.81
+    monitor = SecuredMonitor(drag_force_n=drag, window_s=0.5 * script.pull_s,
+                             follow_fraction=script.follow_fraction,
+                             contact_fraction=script.contact_fraction)
     trace: list[dict] = []
-    pull_start_obj = None
-    t_judge_s = script.duration_s - 0.5 * script.pull_s
     max_force = 0.0
     n = int(round(script.duration_s / sample_s))
     for k in range(n):
         phase, inputs = grasp_inputs(script, k * sample_s, base_pos_m=base)
-        t_s = k * sample_s
-        judging = phase == "pull" and t_s >= t_judge_s - 1e-9
-        if judging and pull_start_obj is None:
-            pull_start_obj = plant.object_com_m(name)
         plant.advance(inputs, duration_s=sample_s)
-        chain_f, _, _ = plant.contact_forces_n()
-        max_force = max(max_force, chain_f[name])
-        if judging:
-            pull_forces.append(chain_f[name])
-        trace.append(dict(time_s=plant.time_s, phase=phase, object_pos_m=plant.object_com_m(name),
-                          chain_force_n=chain_f[name], guide_mm=inputs.guide_position_mm,
-                          base_pos_m=np.asarray(inputs.base_pos_m)))
+        force = float(np.linalg.norm(plant.chain_object_net_force_n()[name]))
+        max_force = max(max_force, force)
+        com = plant.object_com_m(name)
+        if phase == "pull":
+            monitor.update(time_s=plant.time_s, object_com_m=com, base_pos_m=np.asarray(inputs.base_pos_m),
+                           chain_force_n=force)
+        trace.append(dict(time_s=plant.time_s, phase=phase, object_pos_m=com, chain_force_n=force,
+                          guide_mm=inputs.guide_position_mm, base_pos_m=np.asarray(inputs.base_pos_m)))
         if on_sample is not None:
             on_sample(plant, phase)
     end = plant.object_com_m(name)
-    pull_vec = 0.5 * np.array([-script.pull_m, 0.0, script.lift_m])
-    if pull_start_obj is None or np.linalg.norm(pull_vec) == 0:
-        follow = 0.0
-    else:
-        follow = float(np.dot(end - pull_start_obj, pull_vec) / np.dot(pull_vec, pull_vec))
+    follow = monitor.follow_ratio
     final_force = trace[-1]["chain_force_n"] if trace else 0.0
-    mean_pull = float(np.mean(pull_forces)) if pull_forces else 0.0
-    drag = params.floor_friction * spec.mass_kg * 9.81
-    secured = follow >= script.follow_fraction and mean_pull >= script.drag_force_fraction * drag
+    mean_pull = monitor.mean_force_n
+    secured = monitor.secured and not np.isnan(follow)
     return GraspOutcome(object_name=name, secured=bool(secured), follow_ratio=follow,
-                        final_chain_force_n=float(final_force), mean_pull_force_n=mean_pull, drag_force_n=drag,
+                        final_chain_force_n=float(final_force), mean_pull_force_n=mean_pull,
+                        touching_fraction=monitor.touching_fraction, drag_force_n=drag,
                         max_chain_force_n=float(max_force),
                         object_displacement_m=end - start, trace=trace)

@@ -61,10 +61,11 @@ class ChainParams:
         floor_friction: sliding friction of the floor/table plane.
         rope_floor_clearance_m: the chain rests this far above the floor (contact margin of the explicit
             chain-floor pairs), so that it meets objects above their bottom rim (see docs).
-        contact_impedance_min, contact_impedance_max, contact_impedance_width_m: MuJoCo solimp of every
-            geom. MuJoCo scales a contact's softness with the effective mass it acts on; on 2e-5 kg links
-            the default (0.9, 0.95, 1 mm) lets a heavy object squeeze the rope through the floor and
-            under its rim. Impedance near 1 makes rope contacts nearly hard (docs/chain_model.md).
+        contact_impedance_min, contact_impedance_max, contact_impedance_width_m: MuJoCo solimp of the
+            rope's contacts (the rope's value dominates its pairs through solmix; objects, floor and
+            module keep MuJoCo's default). MuJoCo scales a contact's softness with the effective mass it
+            acts on; on 2e-5 kg links the default (0.9, 0.95, 1 mm) lets a heavy object squeeze the rope
+            through the floor and under its rim. Impedance near 1 makes rope contacts nearly hard.
     """
 
     n_links: int = 20

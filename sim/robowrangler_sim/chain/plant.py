@@ -30,6 +30,7 @@ from robowrangler_sim.chain.errors import ChainDivergenceError, ChainModelError
 from robowrangler_sim.chain.lift import LiftState
 from robowrangler_sim.chain.objects import ObjectPlacement
 from robowrangler_sim.chain.params import ChainParams
+from robowrangler_sim.chain.secured import SecuredMonitor
 from robowrangler_sim.chain.targets import ShapeTargets
 from robowrangler_sim.shape_table import ShapeTable
 
@@ -80,6 +81,11 @@ class PlantOutputs:
         chain_floor_force_n: total normal force between chain and floor, N.
         object_pos_m: {object name: shape (3,) body origin}.
         object_quat_wxyz: {object name: shape (4,)}.
+        chain_object_net_force_n: {object name: shape (3,) net chain force (normal + friction), N}.
+        object_secured: {free object name: bool}, SecuredMonitor over the outputs() calls of the last
+            ``secured_window_s`` (rope presses on it; if the module moved, it followed).
+        rope_tension_n: closure load (constraint force, or tendon spring force in free flight), N;
+            what the spindle's load would feel.
     """
 
     time_s: float
@@ -93,6 +99,9 @@ class PlantOutputs:
     chain_floor_force_n: float
     object_pos_m: dict
     object_quat_wxyz: dict
+    chain_object_net_force_n: dict
+    object_secured: dict
+    rope_tension_n: float
 
 
 def base_inclination_rad(quat_wxyz: np.ndarray) -> float:
@@ -129,12 +138,13 @@ class ChainPlant:
             the loop collapsed into a doubled line along the launch axis (see _rest_angles).
         seed: seeds the optional initial joint noise (same seed -> same trajectory).
         initial_noise_rad: standard deviation of noise added to the initial joint angles.
+        secured_window_s: window of the per-object SecuredMonitor fed by outputs().
     """
 
     def __init__(self, *, table: ShapeTable, params: ChainParams | None = None,
                  objects: tuple[ObjectPlacement, ...] = (), floor_height_m: float | None = None,
                  initial: PlantInputs | None = None, airborne: bool = True, seed: int = 0,
-                 initial_noise_rad: float = 0.0) -> None:
+                 initial_noise_rad: float = 0.0, secured_window_s: float = 1.0) -> None:
         if not isinstance(table, ShapeTable):
             raise ChainModelError(f"table: expected a ShapeTable, got {type(table).__name__}")
         self.params = params if params is not None else ChainParams()
@@ -186,6 +196,10 @@ class ChainPlant:
                 if m.geom_bodyid[g] == bid:
                     self._geom_object[g] = o.spec.name
         self._chain_geoms = set(self._link_geom.tolist())
+        self._monitors = {
+            o.spec.name: SecuredMonitor(drag_force_n=max(self.params.floor_friction, o.spec.friction)
+                                        * o.spec.mass_kg * 9.81, window_s=secured_window_s)
+            for o in self.objects if o.spec.free}
         self._link_len_m = -1.0
         self._lift_applied = -1.0
         self._steps = 0
@@ -401,10 +415,19 @@ class ChainPlant:
                                   f"got {name!r}") from None
 
     def contact_forces_n(self) -> tuple[dict, dict, float]:
-        """Normal contact forces: (chain->object per object, module->object per object, chain<->floor)."""
+        """Normal contact forces: (chain->object per object, module->object per object, chain<->floor), N."""
+        chain_obj, module_obj, chain_floor, _ = self._contact_summary()
+        return chain_obj, module_obj, chain_floor
+
+    def chain_object_net_force_n(self) -> dict:
+        """Net force (normal + friction) of the chain on each object, {name: shape (3,) world}, N."""
+        return self._contact_summary()[3]
+
+    def _contact_summary(self) -> tuple[dict, dict, float, dict]:
         d = self.data
         chain_obj = {k: 0.0 for k in self._object_body}
         module_obj = {k: 0.0 for k in self._object_body}
+        net = {k: np.zeros(3) for k in self._object_body}
         chain_floor = 0.0
         for i in range(d.ncon):
             c = d.contact[i]
@@ -417,17 +440,40 @@ class ChainPlant:
             fn = abs(float(self._force6[0]))
             if any(in_chain) and obj:
                 chain_obj[obj] += fn
+                # contact frame rows: normal (geom1 -> geom2), tangents; the force acts on geom2
+                f_world = c.frame.reshape(3, 3).T @ self._force6[:3]
+                net[obj] += f_world if g2 in self._geom_object else -f_world
             elif any(in_chain) and self._floor_geom in (g1, g2):
                 chain_floor += fn
             elif obj and self._module_geom in (g1, g2):
                 module_obj[obj] += fn
-        return chain_obj, module_obj, chain_floor
+        return chain_obj, module_obj, chain_floor, net
+
+    def rope_tension_n(self) -> float:
+        """Load on the closure, N: the constraint force when the closure constraint is active, else the
+        tendon spring force."""
+        d = self.data
+        if self._closure_eq >= 0 and d.eq_active[self._closure_eq]:
+            for i in range(d.nefc):
+                if d.efc_type[i] == mujoco.mjtConstraint.mjCNSTR_EQUALITY and d.efc_id[i] == self._closure_eq:
+                    # connect: three rows (x, y, z); collect their forces
+                    return float(np.linalg.norm(d.efc_force[i:i + 3]))
+            return 0.0
+        return float(abs(d.ten_length[0] * self.model.tendon_stiffness[0]))
 
     def outputs(self) -> PlantOutputs:
-        chain_obj, module_obj, chain_floor = self.contact_forces_n()
+        """Named outputs now; also feeds each object's SecuredMonitor (call it once per bridge tick)."""
+        chain_obj, module_obj, chain_floor, net = self._contact_summary()
+        base = self.data.mocap_pos[0].copy()
+        for name, mon in self._monitors.items():
+            mon.update(time_s=self.time_s, object_com_m=self.object_com_m(name), base_pos_m=base,
+                       chain_force_n=float(np.linalg.norm(net[name])))
         return PlantOutputs(
             time_s=self.time_s, loop_tip_pos_m=self.loop_tip_pos_m(), closure_gap_m=self.closure_gap_m(),
             loop_length_m=self._loop_length_m, phi_rad=self._phi_rad, lift=self.lift,
             chain_object_force_n=chain_obj, module_object_force_n=module_obj, chain_floor_force_n=chain_floor,
             object_pos_m={k: self.object_pos_m(k) for k in self._object_body},
-            object_quat_wxyz={k: self.object_quat_wxyz(k) for k in self._object_body})
+            object_quat_wxyz={k: self.object_quat_wxyz(k) for k in self._object_body},
+            chain_object_net_force_n=net,
+            object_secured={k: m.secured for k, m in self._monitors.items()},
+            rope_tension_n=self.rope_tension_n())

@@ -12,7 +12,8 @@ from __future__ import annotations
 import os
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
-os.environ.setdefault("PYOPENGL_PLATFORM", os.environ["MUJOCO_GL"] if os.environ["MUJOCO_GL"] != "glfw" else "")
+if os.environ["MUJOCO_GL"] in ("osmesa", "egl"):
+    os.environ.setdefault("PYOPENGL_PLATFORM", os.environ["MUJOCO_GL"])
 
 from pathlib import Path  # noqa: E402
 

@@ -28,16 +28,18 @@ def run_table_i(*, params: ChainParams | None = None, script: GraspScript | None
         spec = OBJECTS[name]
         rows.append(dict(object=name, shape_class=spec.shape_class, expected=spec.expected_outcome or "-",
                          outcome="secured" if out.secured else "slipped", follow_ratio=out.follow_ratio,
-                         mean_pull_force_n=out.mean_pull_force_n, drag_force_n=out.drag_force_n))
+                         touching=out.touching_fraction, mean_pull_force_n=out.mean_pull_force_n,
+                         drag_force_n=out.drag_force_n))
     return rows
 
 
 def markdown(rows: list[dict]) -> str:
-    lines = ["| object | class | paper | plant-level SIL | follow | mean pull force (N) | drag force (N) |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| object | class | paper | plant level | follow | rope touching | mean rope force (N) | "
+             "slide force (N) |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['object']} | {r['shape_class']} | {r['expected']} | {r['outcome']} | "
-                     f"{r['follow_ratio']:.2f} | {r['mean_pull_force_n']:.3f} | {r['drag_force_n']:.3f} |")
+                     f"{r['follow_ratio']:.2f} | {100 * r['touching']:.0f} % | {r['mean_pull_force_n']:.3f} | "
+                     f"{r['drag_force_n']:.3f} |")
     return "\n".join(lines)
 
 

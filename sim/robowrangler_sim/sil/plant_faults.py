@@ -16,7 +16,8 @@ unhooks it. Faults act on what crosses the boundary, never inside the plant:
 * StalledControlLoop: the firmware misses its ticks for duration_s (no SIL_SENSORS; the ESC keeps its last
   pulse and the plant runs on); the next tick the firmware sees one long dt.
 
-A spindle stall is not here yet (tests/sil/test_spindle.py covers the spindle plant's own stall).
+* SpindleStall: the lead screw jams for the window (the spindle plant's ``stalled`` input): the guide stops
+  while the servo keeps pushing, so its load register rises.
 """
 
 from __future__ import annotations
@@ -171,6 +172,29 @@ class BatterySag(_WindowedFault):
         sil.sensor_filters.remove(self)
 
 
+class SpindleStall(_WindowedFault):
+    """The lead screw jams from start_s for duration_s (None = for ever): sets the spindle plant's ``stalled``."""
+
+    def __init__(self, *, start_s: float, duration_s: float | None = None) -> None:
+        super().__init__(start_s=start_s, duration_s=duration_s)
+        self._sil: SilSession | None = None
+
+    def __call__(self, sensors: SensorValues | None) -> SensorValues | None:
+        self._sil.spindle.stalled = self.active_at(self._sil.plant.time_us)
+        return sensors
+
+    def install(self, sil: SilSession) -> SpindleStall:
+        if getattr(sil, "spindle", None) is None:
+            raise ValueError("sil: expected a SilSession with a spindle plant, got one without")
+        self._sil = sil
+        sil.sensor_filters.insert(0, self)
+        return self
+
+    def remove(self, sil: SilSession) -> None:
+        sil.sensor_filters.remove(self)
+        sil.spindle.stalled = False
+
+
 class StalledControlLoop(_WindowedFault):
     """The firmware's control loop stalls for duration_s: it gets no SIL_SENSORS, so it runs no tick."""
 
@@ -194,4 +218,4 @@ class StalledControlLoop(_WindowedFault):
         sil.sensor_filters.remove(self)
 
 
-__all__ = ["BatterySag", "EncoderDropout", "EscNotResponding", "RopeBreak", "StalledControlLoop"]
+__all__ = ["BatterySag", "EncoderDropout", "EscNotResponding", "RopeBreak", "SpindleStall", "StalledControlLoop"]

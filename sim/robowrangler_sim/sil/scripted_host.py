@@ -51,6 +51,7 @@ class ScriptedHost:
         self._sock.setblocking(False)
         self._dest = ("127.0.0.1", sil.cmd_port)
         self.frames_sent = 0
+        self.last_sent_us = 0
         self.seq = 0
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeats_enabled = True
@@ -78,6 +79,7 @@ class ScriptedHost:
         """Send bytes as one datagram (malformed frames too); counted for the lockstep barrier."""
         self._sock.sendto(data, self._dest)
         self.frames_sent += 1
+        self.last_sent_us = self.sil.plant.time_us  # the firmware takes it in the next tick
 
     def frame(self, message: gen.Message, seq: int, *, signed: bool = True) -> bytes:
         """The bytes of message with seq: signed for the session with the next counter (HELLO unsigned)."""

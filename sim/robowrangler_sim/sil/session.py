@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import secrets
 import tempfile
 import threading
 import time
@@ -18,14 +19,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from robowrangler.link_security import generate_key
-from robowrangler.provisioning import Provisioner, ProvisionStatus
+from robowrangler.protocol.generated import KEY_LEN
+from robowrangler.telemetry import ProvisionStatus
 from robowrangler.transport_serial import SerialTransport
 from robowrangler_sim.plants import DriveParams, DrivePlant
 from robowrangler_sim.plants.spindle import SpindleParams, SpindlePlant
 from robowrangler_sim.sil.errors import SilError, SilFirmwareError
 from robowrangler_sim.sil.firmware import FirmwareProcess
 from robowrangler_sim.sil.lockstep import LockstepLink
+from robowrangler_sim.sil.provisioning_jig import Provisioner
 
 
 @dataclass(frozen=True)
@@ -108,7 +110,7 @@ class SilSession:
         self.last_esc_pulse_us = 0
         self.sensor_filters: list[SensorFilter] = []
         self.actuator_filters: list[ActuatorFilter] = []
-        self.key = generate_key() if key is None else bytes(key)
+        self.key = secrets.token_bytes(KEY_LEN) if key is None else bytes(key)
         self._provision_on_start = provision
         self._tmpdir = None if state_file is not None else tempfile.TemporaryDirectory(prefix="rw_sil_")
         self.state_file = Path(state_file) if state_file is not None else Path(self._tmpdir.name) / "flash.bin"

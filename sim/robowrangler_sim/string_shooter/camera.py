@@ -199,3 +199,54 @@ def render_loop(points_m, camera: PinholeCamera, *, seed: int, style: ImageStyle
     image = np.clip(np.round(img), 0, 255).astype(np.uint8)
     contour, _ = camera.project(instants[len(instants) // 2])
     return RenderedImage(image=image, coverage=cov, contour_px=contour)
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One synthetic camera frame of a run.
+
+    Attributes:
+        frame_index: counter from 0; time_s: middle of the exposure (simulation clock).
+        rendered: the image and its ground truth.
+        loop_xz_m: shape (M, 2), the true contour in the shape-table frame at time_s.
+        phi_rad, rope_speed_mps: the module inclination and the rope speed at time_s.
+    """
+
+    frame_index: int
+    time_s: float
+    rendered: RenderedImage
+    loop_xz_m: np.ndarray
+    phi_rad: float
+    rope_speed_mps: float
+
+
+def film(sim, camera: PinholeCamera, *, duration_s: float, fps_hz: float = 30.0, exposure_s: float = 0.004,
+         sub_frames: int = 4, seed: int = 0, style: ImageStyle | None = None):
+    """Advance ``sim`` (a StringShooter) for ``duration_s`` and yield a CameraFrame every 1 / fps_hz.
+
+    Each image averages ``sub_frames`` instants spread over ``exposure_s`` (motion blur); frame k uses
+    the noise seed (seed, k), so the same seed gives the same film.
+    """
+    if not (np.isfinite(fps_hz) and fps_hz > 0):
+        raise StringShooterParamError(f"fps_hz: expected > 0, got {fps_hz!r}")
+    period = 1.0 / fps_hz
+    if not (0.0 <= exposure_s < period):
+        raise StringShooterParamError(f"exposure_s: expected in [0, {period:.4f}) at {fps_hz} fps, got {exposure_s!r}")
+    if int(sub_frames) < 1:
+        raise StringShooterParamError(f"sub_frames: expected >= 1, got {sub_frames!r}")
+    n_frames = int(round(duration_s * fps_hz))
+    step = exposure_s / sub_frames
+    for k in range(n_frames):
+        sim.step_for(period - exposure_s)
+        instants, middle = [], None
+        for j in range(sub_frames):
+            sim.step_for(step)
+            frame = sim.frame()
+            instants.append(frame.points_m)
+            if j == sub_frames // 2:
+                middle = frame
+        rendered = render_loop(instants, camera, seed=int(np.random.SeedSequence([seed, k]).generate_state(1)[0]),
+                               style=style, rope_diameter_m=sim.params.rope.diameter_m)
+        yield CameraFrame(frame_index=k, time_s=middle.time_s, rendered=rendered,
+                          loop_xz_m=middle.loop_plane_xz_m(), phi_rad=middle.phi_rad,
+                          rope_speed_mps=middle.rope_speed_mps)

@@ -360,9 +360,13 @@ def advance(pos, vel, rest, label, sc, prm, obstacles, E, vE, R, vR, e1, dR, whe
             re = sc[S_REST_EXIT]
             f = (re - ds) / re
             # the eyelet lip turns the material into the direction of the exit segment
-            tx = pos[n - 1, 0] - E[k, 0]
-            ty = pos[n - 1, 1] - E[k, 1]
-            tz = pos[n - 1, 2] - E[k, 2]
+            # the eyelet at the end of this step (the nodes have moved already)
+            ex_ = E[k, 0] + dt * vE[k, 0]
+            ey_ = E[k, 1] + dt * vE[k, 1]
+            ez_ = E[k, 2] + dt * vE[k, 2]
+            tx = pos[n - 1, 0] - ex_
+            ty = pos[n - 1, 1] - ey_
+            tz = pos[n - 1, 2] - ez_
             tl = np.sqrt(tx * tx + ty * ty + tz * tz)
             if tl > 1e-12:
                 tseg[0], tseg[1], tseg[2] = tx / tl, ty / tl, tz / tl
@@ -370,7 +374,8 @@ def advance(pos, vel, rest, label, sc, prm, obstacles, E, vE, R, vR, e1, dR, whe
                 tseg[0], tseg[1], tseg[2] = e1[k, 0], e1[k, 1], e1[k, 2]
             for c in range(3):
                 vmat = vE[k, c] + u_exit * tseg[c]
-                pos[n, c] = E[k, c] + f * (pos[n - 1, c] - E[k, c])
+                e_c = E[k, c] + dt * vE[k, c]
+                pos[n, c] = e_c + f * (pos[n - 1, c] - e_c)
                 vel[n, c] = vmat + f * (vel[n - 1, c] - vmat)
             label[n] = sc[S_EXIT_LABEL] - (re - ds)
             rest[n - 1] = ds
@@ -408,7 +413,8 @@ def advance(pos, vel, rest, label, sc, prm, obstacles, E, vE, R, vR, e1, dR, whe
             f = (rr - ds) / rr
             for c in range(3):
                 vmat = vR[k, c] + u_ret * dR[k, c]
-                pos[0, c] = R[k, c] + f * (pos[1, c] - R[k, c])
+                r_c = R[k, c] + dt * vR[k, c]
+                pos[0, c] = r_c + f * (pos[1, c] - r_c)
                 vel[0, c] = vmat + f * (vel[1, c] - vmat)
             label[0] = label[1] - ds
             rest[0] = ds

@@ -209,7 +209,10 @@ class StringShooter:
         # material flows from the exit toward the return: against the node order
         tang = np.gradient(self.pos[:n], axis=0)
         tang /= np.linalg.norm(tang, axis=1, keepdims=True)
-        self.vel[:n] = -u0 * tang
+        # plus the module's own velocity (that of the eyelet at t = 0): a loop carried along by the module
+        s1 = self.motion.sample(np.array([self.dt_s]), p.geometry)
+        v_module = (s1["exit_m"][0] - exit_m) / self.dt_s
+        self.vel[:n] = -u0 * tang + v_module[None]
         self.rest[: n - 1] = ds
         self.label[:n] = -s_nodes
         for i, row in enumerate(self.obstacles):

@@ -1,32 +1,20 @@
-"""Provisioning over USB serial: the link key, the WiFi credentials and the parameters, written to flash.
+"""The SIL device's factory provisioning jig: PROVISION_* over its USB serial while the plant clock stands still.
 
-USB serial is the one trusted link (physical access): PROVISION_* messages are refused over WiFi, and the
-key never travels anywhere else. Each step is a command answered by ACK or NACK; PROVISION_COMMIT writes
-one versioned record with a CRC; PROVISION_GET reads back what is stored (never the key or the password).
+Hosts provision a board with robowrangler's Client over serial:// (`wrangler provision set`), which waits on
+the wall clock. A SIL session provisions its device at start instead, between lockstep ticks that do not
+advance the plant (``pump``), so that provisioning leaves no trace in the simulated timeline and runs stay
+reproducible. Each step is a command answered by ACK or NACK; PROVISION_COMMIT writes the record.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 
 from robowrangler.errors import CommandRefused, LinkTimeout
 from robowrangler.protocol import generated as gen
+from robowrangler.telemetry import ProvisionStatus
 from robowrangler.transport import Transport
-
-
-@dataclass(frozen=True)
-class ProvisionStatus:
-    """What the device has stored (PROVISION_STATUS)."""
-
-    key_set: bool
-    password_set: bool
-    wifi_ssid: str
-    boot_counter: int
-    commits: int
-    config_version: int
-    dirty: bool
 
 
 class Provisioner:
@@ -79,9 +67,7 @@ class Provisioner:
 
     def status(self) -> ProvisionStatus:
         self.command(gen.ProvisionGet())
-        st = self._wait(lambda m: isinstance(m, gen.ProvisionStatus))
-        return ProvisionStatus(bool(st.key_set), bool(st.password_set), st.wifi_ssid, st.boot_counter, st.commits,
-                               st.config_version, bool(st.dirty))
+        return ProvisionStatus.from_wire(self._wait(lambda m: isinstance(m, gen.ProvisionStatus)))
 
     def provision(self, *, key: bytes | None = None, wifi_ssid: str | None = None, wifi_password: str | None = None,
                   params: Mapping[str, float] | None = None) -> ProvisionStatus:

@@ -1,0 +1,108 @@
+/*
+ * rw_float_bits.h - single-precision tests and comparisons on the IEEE-754 bit pattern.
+ *
+ * The Cortex-M0+ has no FPU: every float comparison is a libgcc call (__gtsf2, __ltsf2, ... about 40-50
+ * instructions with the call) and isfinite() is two of them. These inline helpers give exactly the
+ * same answers as the C operators (NaN compares false, -0 == +0, infinities ordered) in a few integer
+ * instructions. Bit-pattern equality (rw_f32_same) is what the controllers use to know whether a
+ * precomputed constant still belongs to the current configuration and dt.
+ * Portable core header: no Arduino header, no heap.
+ */
+#ifndef RW_FLOAT_BITS_H
+#define RW_FLOAT_BITS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Always inlined: each is a handful of instructions, a call would double it (gcc -Os keeps calls). */
+#if defined(__GNUC__)
+#define RW_F32_INLINE static inline __attribute__((always_inline))
+#else
+#define RW_F32_INLINE static inline
+#endif
+
+#define RW_F32_EXP_MASK 0x7F800000u
+#define RW_F32_ABS_MASK 0x7FFFFFFFu
+
+RW_F32_INLINE uint32_t rw_f32_bits(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    return bits;
+}
+
+/* isfinite(x): the exponent is not all ones. */
+RW_F32_INLINE bool rw_f32_finite(float x)
+{
+    return (rw_f32_bits(x) & RW_F32_EXP_MASK) != RW_F32_EXP_MASK;
+}
+
+RW_F32_INLINE bool rw_f32_isnan(float x)
+{
+    return (rw_f32_bits(x) & RW_F32_ABS_MASK) > RW_F32_EXP_MASK;
+}
+
+/* x > 0.0f (true for +inf, false for NaN and both zeros). */
+RW_F32_INLINE bool rw_f32_positive(float x)
+{
+    const uint32_t bits = rw_f32_bits(x);
+    return bits != 0u && bits <= RW_F32_EXP_MASK;
+}
+
+/* x > 0.0f and finite. */
+RW_F32_INLINE bool rw_f32_positive_finite(float x)
+{
+    const uint32_t bits = rw_f32_bits(x);
+    return bits != 0u && bits < RW_F32_EXP_MASK;
+}
+
+/* Monotonic integer key of a non-NaN float: a < b exactly when key(a) < key(b); key(-0) == key(+0). */
+RW_F32_INLINE int32_t rw_f32_key(float x)
+{
+    const uint32_t bits = rw_f32_bits(x);
+    return (bits & 0x80000000u) != 0u ? -(int32_t)(bits & RW_F32_ABS_MASK) : (int32_t)bits;
+}
+
+/* a < b, a <= b, a > b, a >= b with the C semantics (false when either is NaN). */
+RW_F32_INLINE bool rw_f32_lt(float a, float b)
+{
+    return !rw_f32_isnan(a) && !rw_f32_isnan(b) && rw_f32_key(a) < rw_f32_key(b);
+}
+
+RW_F32_INLINE bool rw_f32_le(float a, float b)
+{
+    return !rw_f32_isnan(a) && !rw_f32_isnan(b) && rw_f32_key(a) <= rw_f32_key(b);
+}
+
+RW_F32_INLINE bool rw_f32_gt(float a, float b)
+{
+    return rw_f32_lt(b, a);
+}
+
+RW_F32_INLINE bool rw_f32_ge(float a, float b)
+{
+    return rw_f32_le(b, a);
+}
+
+/* The same bit pattern (used for "is this cached constant still valid": stricter than ==). */
+RW_F32_INLINE bool rw_f32_same(float a, float b)
+{
+    return rw_f32_bits(a) == rw_f32_bits(b);
+}
+
+/* floor(x + 0.5) for 0 <= x < 2^24 from the bit pattern (round half up of the exact value; x < 0.5 and
+ * NaN-free non-positive x give 0). The caller guarantees the range; no soft-float call. */
+RW_F32_INLINE uint32_t rw_f32_round_half_up_u24(float x)
+{
+    const uint32_t bits = rw_f32_bits(x);
+    const int32_t exp2 = (int32_t)(bits >> 23) - 127; /* x = m 2^(exp2 - 23) */
+    if ((bits & 0x80000000u) != 0u || exp2 < -1) {
+        return 0u;
+    }
+    const uint32_t mantissa = (bits & 0x007FFFFFu) | 0x00800000u;
+    const uint32_t shift = (uint32_t)(23 - exp2); /* 0..24 for x < 2^24 */
+    return shift == 0u ? mantissa : (mantissa + (1u << (shift - 1u))) >> shift;
+}
+
+#endif /* RW_FLOAT_BITS_H */
