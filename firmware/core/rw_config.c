@@ -38,3 +38,16 @@ bool rw_config_valid(const rw_config *c)
     return c->magic == RW_CONFIG_MAGIC && c->version == RW_CONFIG_VERSION && c->size == sizeof *c &&
            c->crc32 == rw_crc32(c, (uint32_t)offsetof(rw_config, crc32));
 }
+
+void rw_config_set_key(rw_config *c, const uint8_t key[RW_KEY_LEN])
+{
+    memcpy(c->key, key, RW_KEY_LEN);
+    c->key_set = 1u;
+    rw_config_seal(c);
+}
+
+void rw_config_set_params(rw_config *c, const float values[RW_PARAM_COUNT])
+{
+    memcpy(c->params, values, sizeof c->params);
+    rw_config_seal(c);
+}

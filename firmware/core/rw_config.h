@@ -40,6 +40,10 @@ void rw_config_defaults(rw_config *c);
 bool rw_config_valid(const rw_config *c);
 /* Recompute the CRC after a change. */
 void rw_config_seal(rw_config *c);
+/* Store the parameter values (RW_PARAM_COUNT floats, SI) and reseal. */
+void rw_config_set_params(rw_config *c, const float values[RW_PARAM_COUNT]);
+/* Store a link key (key_set = 1) and reseal. */
+void rw_config_set_key(rw_config *c, const uint8_t key[RW_KEY_LEN]);
 /* CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF). */
 uint32_t rw_crc32(const void *data, uint32_t len);
 

@@ -1,6 +1,7 @@
 #include "rw_core.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "rw_core_internal.h"
@@ -107,8 +108,12 @@ void rw_core_init(rw_core *core)
     rw_spindle_init(&core->state.spindle, &spindle);
     rw_core_apply_params(core);
     core->state.state = RW_STATE_DISARMED;
+    core->state.peer_link = RW_LINK_WIFI; /* until a host is heard, the WiFi HAL drops what has no peer */
     core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
 }
+
+/* Bindings hand rw_config_set_params the core's address for its parameter values. */
+_Static_assert(offsetof(rw_core, params) == 0, "rw_core.params must stay the first member");
 
 size_t rw_core_sizeof(void)
 {
@@ -400,7 +405,7 @@ static void load_config(rw_core *core, const rw_hal *hal)
         rw_core_apply_params(core);
     } else {
         rw_config_defaults(c);
-        memcpy(c->params, core->params.value, sizeof c->params);
+        rw_config_set_params(c, core->params.value);
     }
     c->boot_counter += 1u;
     rw_config_seal(c);

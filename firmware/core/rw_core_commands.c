@@ -388,10 +388,9 @@ static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame
             return refuse(RW_NACK_REASON_STORE_FAILED, 0);
         }
         rw_config next = *c;
-        memcpy(next.params, core->params.value, sizeof next.params);
+        rw_config_set_params(&next, core->params.value);
         if (core->state.key_staged) {
-            memcpy(next.key, core->state.staged_key, RW_KEY_LEN);
-            next.key_set = 1u;
+            rw_config_set_key(&next, core->state.staged_key);
         }
         next.commits += 1u;
         rw_config_seal(&next);

@@ -18,7 +18,7 @@ import math
 import platform
 import sys
 from collections import deque
-from ctypes import POINTER, c_size_t, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
+from ctypes import CFUNCTYPE, POINTER, c_bool, c_size_t, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
 from dataclasses import dataclass, field
 
 from robowrangler.protocol import generated as proto
@@ -82,12 +82,25 @@ class _HalSpindle(ctypes.Structure):
     _fields_ = [("ctx", c_void_p), ("read", _SpindleRead), ("write_moving_speed_raw", _SpindleWrite)]
 
 
+_ConfigLoad = CFUNCTYPE(c_bool, c_void_p, c_void_p, c_size_t)
+_ConfigSave = CFUNCTYPE(c_bool, c_void_p, c_void_p, c_size_t)
+
+
+class _HalConfigStore(ctypes.Structure):
+    _fields_ = [("ctx", c_void_p), ("load", _ConfigLoad), ("save", _ConfigSave)]
+
+
 class _Hal(ctypes.Structure):
-    # spindle: NULL when no spindle is fitted. Interfaces added to rw_hal later must be appended here
-    # too; the trailing NULL pointers keep an older mirror from handing the core garbage meanwhile.
+    # spindle: NULL when no spindle is fitted; serial: NULL (no USB serial). Interfaces added to rw_hal
+    # later must be appended here too; the trailing NULL pointers keep an older mirror from handing the
+    # core garbage meanwhile.
     _fields_ = [("esc", POINTER(_HalEsc)), ("encoder", POINTER(_HalEncoder)), ("battery", POINTER(_HalBattery)),
                 ("link", POINTER(_HalLink)), ("scheduler", POINTER(_HalScheduler)), ("spindle", POINTER(_HalSpindle)),
-                ("_reserved_null", c_void_p * 4)]
+                ("serial", c_void_p), ("config", POINTER(_HalConfigStore)), ("_reserved_null", c_void_p * 2)]
+
+
+TEST_KEY = bytes(range(16))  # the harness's provisioned link key (its "flash" holds it); never a real one
+SESSION_ID = 1  # a fresh flash record has boot counter 0: the first boot is session 1
 
 
 def declare_core(lib: ctypes.CDLL) -> ctypes.CDLL:
@@ -100,6 +113,12 @@ def declare_core(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.rw_core_tick.argtypes = [c_void_p, POINTER(_Hal), c_uint32]
     lib.rw_core_set_param.restype = ctypes.c_int
     lib.rw_core_set_param.argtypes = [c_void_p, c_uint8, ctypes.c_float]
+    lib.rw_config_defaults.restype = None
+    lib.rw_config_defaults.argtypes = [c_void_p]
+    lib.rw_config_set_params.restype = None
+    lib.rw_config_set_params.argtypes = [c_void_p, c_void_p]  # rw_core's params.value is at offset 0
+    lib.rw_config_set_key.restype = None
+    lib.rw_config_set_key.argtypes = [c_void_p, ctypes.c_char_p]
     return lib
 
 
@@ -340,6 +359,26 @@ class CoreHarness:
         self._sched = _HalScheduler(None, ovr)
         self._hal = _Hal(ctypes.pointer(self._esc), ctypes.pointer(self._enc), ctypes.pointer(self._bat),
                          ctypes.pointer(self._link), ctypes.pointer(self._sched))
+        # the flash: a record with TEST_KEY, as if provisioned over USB serial; writes are kept in self.flash
+        self.flash: bytes | None = None
+
+        def config_load(_ctx, buf, length):
+            if self.flash is not None:
+                ctypes.memmove(buf, self.flash, min(length, len(self.flash)))
+                return len(self.flash) == length
+            self.lib.rw_config_defaults(buf)
+            self.lib.rw_config_set_params(buf, self.core)  # the parameters set before the first tick
+            self.lib.rw_config_set_key(buf, TEST_KEY)
+            return True
+
+        def config_save(_ctx, buf, length):
+            self.flash = ctypes.string_at(buf, length)
+            return True
+
+        self._config_cbs = [_ConfigLoad(config_load), _ConfigSave(config_save)]
+        self._config = _HalConfigStore(None, *self._config_cbs)
+        self._hal.config = ctypes.pointer(self._config)
+        self.counter = 0
         if self.spindle is not None:
             self._callbacks += [_SpindleRead(spindle_read), _SpindleWrite(spindle_write)]
             self._spin = _HalSpindle(None, self._callbacks[-2], self._callbacks[-1])
@@ -389,8 +428,13 @@ class CoreHarness:
         self.seq = (self.seq + 1) & 0xFFFF
         return self.seq
 
-    def frame(self, msg: proto.Message, *, seq: int | None = None) -> bytes:
-        return proto.encode_frame(msg, self.next_seq() if seq is None else seq)
+    def frame(self, msg: proto.Message, *, seq: int | None = None, signed: bool = True) -> bytes:
+        """msg framed as a host sends it over WiFi: signed with TEST_KEY for the session, counter + 1."""
+        seq = self.next_seq() if seq is None else seq
+        if not signed:
+            return proto.encode_frame(msg, seq)
+        self.counter += 1
+        return proto.encode_frame(msg, seq, key=TEST_KEY, session_id=SESSION_ID, counter=self.counter)
 
     def queue(self, data: bytes) -> bytes:
         """Queues one datagram for the link (received on a coming tick); returns it."""

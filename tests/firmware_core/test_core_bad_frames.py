@@ -7,9 +7,11 @@ the rx_bad / nacks counters."""
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 
-from core_harness import CoreHarness, raw_frame, telemetry_without
+from core_harness import SESSION_ID, TEST_KEY, CoreHarness, raw_frame, telemetry_without
 from robowrangler.protocol import generated as proto
 from robowrangler.protocol.generated import NackReason, SetRopeSpeed, State
 
@@ -26,6 +28,15 @@ def _patched(data: bytes, index: int, value: int) -> bytes:
 
 
 # (case id, datagram, reason, (cmd_msg_id, cmd_seq) the NACK must carry)
+_FAR_AHEAD = itertools.count(10**12)
+
+
+def _signed(msg: proto.Message) -> bytes:
+    """Signed by the harness's key with counters far ahead of any the harness uses (growing, so that the
+    cases stay fresh when sent in a row): authentic frames."""
+    return proto.encode_frame(msg, SEQ, key=TEST_KEY, session_id=SESSION_ID, counter=next(_FAR_AHEAD))
+
+
 CASES = [
     ("shorter_than_header", GOOD[:6], NackReason.TRUNCATED, UNREAD),
     ("one_byte", b"\xb7", NackReason.TRUNCATED, UNREAD),
@@ -40,11 +51,11 @@ CASES = [
     ("checksum", _patched(GOOD, 8, GOOD[8] ^ 0x01), NackReason.BAD_CHECKSUM, (SPEED_ID, SEQ)),
     ("other_schema", raw_frame(SPEED_ID, SEQ, GOOD[7:11], crc_extra=0x1111), NackReason.BAD_CHECKSUM, (SPEED_ID, SEQ)),
     ("unknown_message", raw_frame(99, SEQ, b"\x01\x02"), NackReason.UNKNOWN_MESSAGE, (99, SEQ)),
-    ("telemetry_sent_to_device", proto.encode_frame(proto.Telemetry(*([0] * len(proto.Telemetry.FIELDS))), SEQ), NackReason.NOT_A_COMMAND,
+    ("telemetry_sent_to_device", _signed(proto.Telemetry(*([0] * len(proto.Telemetry.FIELDS)))), NackReason.NOT_A_COMMAND,
      (proto.MsgId.TELEMETRY, SEQ)),
-    ("ack_sent_to_device", proto.encode_frame(proto.Ack(12, 1, 2), SEQ), NackReason.NOT_A_COMMAND,
+    ("ack_sent_to_device", _signed(proto.Ack(12, 1, 2)), NackReason.NOT_A_COMMAND,
      (proto.MsgId.ACK, SEQ)),
-    ("sil_sensors_sent_to_device", proto.encode_frame(proto.SilSensors(*([0] * len(proto.SilSensors.FIELDS))), SEQ), NackReason.NOT_A_COMMAND,
+    ("sil_sensors_sent_to_device", _signed(proto.SilSensors(*([0] * len(proto.SilSensors.FIELDS)))), NackReason.NOT_A_COMMAND,
      (proto.MsgId.SIL_SENSORS, SEQ)),
 ]
 
