@@ -7,6 +7,7 @@ so a recorder next to another commanding host sees only part of the stream (see 
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -19,6 +20,8 @@ import pytest
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.recorder import read_recording
 from robowrangler_sim.sil import SilSession
+
+TEST_KEY = bytes(range(16))  # the suite's link key (conftest.py provisions the live SIL with it)
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -62,7 +65,7 @@ def test_record_survives_link_loss_and_records_the_open_gap(native_build_dir: Pa
                                                             wrangler) -> None:
     out = tmp_path / "lost.mcap"
     result = {}
-    with SilSession(speedup=1.0) as sil:
+    with SilSession(speedup=1.0, key=TEST_KEY) as sil:
         sil.run_in_background()
         sil.wait_until(0.6)
         recorder = threading.Thread(target=lambda: result.update(
@@ -90,14 +93,16 @@ def test_record_without_a_device_writes_the_file_and_exits_link_timeout(tmp_path
     assert not rec.truncated and len(rec.telemetry["seq"]) == 0 and rec.meta["source"] == "sil"
 
 
-def _recorder_process(url: str, out: Path, sig: int, *, lines: int) -> tuple[subprocess.Popen, list[int], str]:
+def _recorder_process(url: str, out: Path, sig: int, *, lines: int,
+                      key_file: Path) -> tuple[subprocess.Popen, list[int], str]:
     """Start `wrangler record` in its own process, wait for `lines` progress lines, send `sig`.
 
     Returns the process (exited), the telemetry counts of the progress lines, and its stdout."""
     proc = subprocess.Popen(
         [sys.executable, "-c", "from robowrangler.cli.main import entry_point; entry_point()",
          "--url", url, "record", str(out), "--no-params"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+        env={**os.environ, "ROBOWRANGLER_KEY_FILE": str(key_file)})
     progress = []  # "wrangler: killed.mcap:    2.0 s, 100 telemetry, ..." every 2 s
     try:
         for line in proc.stderr:
@@ -111,18 +116,19 @@ def _recorder_process(url: str, out: Path, sig: int, *, lines: int) -> tuple[sub
     return proc, progress, stdout
 
 
-def test_ctrl_c_ends_the_recording_with_a_complete_file_and_exit_0(live_sil: SilSession, tmp_path: Path) -> None:
+def test_ctrl_c_ends_the_recording_with_a_complete_file_and_exit_0(live_sil: SilSession, tmp_path: Path,
+                                                                    key_file: Path) -> None:
     out = tmp_path / "stopped.mcap"
-    proc, progress, stdout = _recorder_process(live_sil.cmd_url, out, signal.SIGINT, lines=1)
+    proc, progress, stdout = _recorder_process(live_sil.cmd_url, out, signal.SIGINT, lines=1, key_file=key_file)
     assert proc.returncode == ExitStatus.OK and "recorded" in stdout
     rec = read_recording(out)
     assert not rec.truncated and len(rec.telemetry["seq"]) >= progress[-1]
 
 
-def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path,
+def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path, key_file: Path,
                                                               wrangler) -> None:
     out = tmp_path / "killed.mcap"
-    proc, progress, _ = _recorder_process(live_sil.cmd_url, out, signal.SIGKILL, lines=2)
+    proc, progress, _ = _recorder_process(live_sil.cmd_url, out, signal.SIGKILL, lines=2, key_file=key_file)
     assert proc.returncode == -signal.SIGKILL
     written = progress[-1]  # telemetry the recorder had written when it printed the line
     rec = read_recording(out)

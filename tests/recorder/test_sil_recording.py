@@ -16,6 +16,8 @@ from robowrangler.recorder import LinkRecorder, RecordingTransport, RecordingWri
 from robowrangler.transport import Transport, open_transport
 from robowrangler_sim.sil import SilSession
 
+TEST_KEY = bytes(range(16))  # the suite's link key (conftest.py provisions the live SIL with it)
+
 
 def test_recording_of_a_spin_holds_the_telemetry_the_client_saw(live_sil: SilSession, tmp_path: Path) -> None:
     path = tmp_path / "spin.mcap"
@@ -23,7 +25,7 @@ def test_recording_of_a_spin_holds_the_telemetry_the_client_saw(live_sil: SilSes
     with RecordingWriter(path, source="sil", seed=0, device_url=live_sil.cmd_url) as writer:
         recorder = LinkRecorder(writer)
         transport = RecordingTransport(open_transport(live_sil.cmd_url), recorder)
-        with Client(live_sil.cmd_url, transport=transport) as rw:
+        with Client(live_sil.cmd_url, transport=transport, key=TEST_KEY) as rw:
             stop = threading.Event()
             stream = rw.telemetry()
 
@@ -105,7 +107,7 @@ def test_datagrams_lost_on_the_link_are_recorded_as_gaps(live_sil: SilSession, t
     with RecordingWriter(path, source="sil") as writer:
         recorder = LinkRecorder(writer)
         lossy = DroppingTransport(open_transport(live_sil.cmd_url), drop)
-        with Client(live_sil.cmd_url, transport=RecordingTransport(lossy, recorder)):
+        with Client(live_sil.cmd_url, transport=RecordingTransport(lossy, recorder), key=TEST_KEY):
             deadline = time.monotonic() + 5.0
             while lossy.index < 100 and time.monotonic() < deadline:
                 time.sleep(0.05)

@@ -109,7 +109,7 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
             if client is None:
                 connect_s = ctx.timeout_s if remaining_s is None else min(ctx.timeout_s, remaining_s)
                 try:
-                    client = Client(ctx.url, connect_timeout_s=connect_s,
+                    client = Client(ctx.url, connect_timeout_s=connect_s, key=ctx.key,
                                     transport=RecordingTransport(open_transport(ctx.url), recorder)).connect()
                 except LinkTimeout:
                     if not waiting_noted:
