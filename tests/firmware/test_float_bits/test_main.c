@@ -64,6 +64,38 @@ static void test_round_half_up_is_floor_of_x_plus_half(void)
     }
 }
 
+/* p 2^e2 as a float (exact: p <= 2^24). */
+static float rebuild(uint32_t p, int32_t e2)
+{
+    return ldexpf((float)p, e2);
+}
+
+/* x k_odd 2^k_shift rounded by rw_f32_mul_small equals the float multiplication, bit for bit, over a
+ * sweep of rope speeds, guide positions and wheel speeds (and their neighbours one ulp apart). */
+static void test_mul_small_equals_the_float_multiply(void)
+{
+    uint32_t state = 12345u;
+    for (unsigned i = 0u; i < 200000u; ++i) {
+        state = state * 1664525u + 1013904223u; /* LCG: reproducible */
+        const float x = (float)(state >> 8) * (1.0f / 16777216.0f) * (i % 2u ? 70.0f : 2000.0f);
+        volatile float k1000 = 1000.0f;
+        volatile float k60 = 60.0f;
+        const float want1000 = x * k1000;
+        const float want60 = x * k60;
+        int32_t e2;
+        uint32_t p = rw_f32_mul_small(x, 125u, 3, &e2);
+        TEST_ASSERT_EQUAL_FLOAT(want1000, rebuild(p, e2));
+        TEST_ASSERT_TRUE(rebuild(p, e2) == want1000);
+        p = rw_f32_mul_small(x, 15u, 2, &e2);
+        TEST_ASSERT_TRUE(rebuild(p, e2) == want60);
+        p = rw_f32_mul_small(-x, 125u, 3, &e2); /* the magnitude */
+        TEST_ASSERT_TRUE(rebuild(p, e2) == want1000);
+    }
+    int32_t e2;
+    TEST_ASSERT_EQUAL_UINT32(0u, rw_f32_mul_small(0.0f, 125u, 3, &e2));
+    TEST_ASSERT_EQUAL_UINT32(0u, rw_f32_mul_small(1.0e-40f, 125u, 3, &e2));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -71,5 +103,6 @@ int main(void)
     RUN_TEST(test_classification_matches_math_h);
     RUN_TEST(test_same_is_bit_equality);
     RUN_TEST(test_round_half_up_is_floor_of_x_plus_half);
+    RUN_TEST(test_mul_small_equals_the_float_multiply);
     return UNITY_END();
 }
