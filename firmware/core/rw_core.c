@@ -435,9 +435,13 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
         .spindle_flags = spindle_flags(&core->state.spindle),
         .spindle_rejected = core->state.spindle.state.turns.state.rejected,
     };
-    uint8_t frame[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_telemetry_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
-    rw_outbox_push(&core->state.outbox, RW_OUTBOX_TELEMETRY, frame, len);
+    /* encoded straight into its outbox slot (no copy); a full outbox drops it (counted), as a push would */
+    rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_TELEMETRY);
+    uint16_t seq = core->state.tx_seq++;
+    if (slot != NULL) {
+        size_t len = rw_msg_telemetry_encode(&msg, seq, slot->bytes, sizeof slot->bytes);
+        rw_outbox_commit(&core->state.outbox, slot, RW_OUTBOX_TELEMETRY, len);
+    }
 }
 
 /* round(1000 / telemetry_rate_hz) ms, computed once per rate (a float division is ~350 instructions). */

@@ -120,10 +120,21 @@ RW_F32_INLINE uint32_t rw_f32_mul_small(float x, uint32_t k_odd, int32_t k_shift
     }
     uint32_t p = ((bits & 0x007FFFFFu) | 0x00800000u) * k_odd; /* < 2^31 */
     int32_t e = (int32_t)biased - 150 + k_shift;                 /* |x| = m 2^(biased - 150) */
+    uint32_t top = p >> 24; /* < 128: the bits beyond a 24-bit significand, found in three steps */
     uint32_t drop = 0u;
-    while ((p >> drop) >= 0x01000000u) {
-        ++drop;
+    if (top >= 16u) {
+        top >>= 4;
+        drop = 4u;
     }
+    if (top >= 4u) {
+        top >>= 2;
+        drop += 2u;
+    }
+    if (top >= 2u) {
+        top >>= 1;
+        drop += 1u;
+    }
+    drop += top; /* top is 0 or 1 here */
     if (drop > 0u) {
         const uint32_t rem = p & ((1u << drop) - 1u);
         const uint32_t half = 1u << (drop - 1u);
