@@ -5,7 +5,8 @@ core through its fake HAL to AIRBORNE (ARM, HOME by the limit switch, SET_ROPE_S
 the matching speed, heartbeats, then SET_LOOP so the spindle position loop is moving the guide), then profiles
 single rw_core_tick calls:
 
-  quiet        AIRBORNE, speed loop active, nothing received, no telemetry due
+  quiet        AIRBORNE, speed loop active, nothing received, no telemetry due (with the alternating schedule
+               of rw_core.h this is a speed tick: estimator + ramp + PI + feed-forward, setpoint still ramping)
   telemetry    the same, telemetry packed and sent
   command      SET_ROPE_SPEED received, decoded, executed and ACKed, telemetry packed (queued: the core sends
                at most one datagram per tick, so the ACK goes out and the telemetry in the next tick)
@@ -17,6 +18,7 @@ single rw_core_tick calls:
                spindle step every 10th tick and the telemetry pack at their own phases): the worst case of the
                periodic work; the table then names the ticks of the cycle by what ran in them
 
+The target for the periodic work is cycle_max under 10 % of a 1 kHz tick (4,800 modelled cycles).
 Prints instructions, modelled cycles (see tests/firmware_arm/arm_harness_emulator.py for the Cortex-M0+ cycle
 model) and the CPU load of that tick at 1 kHz on 48 MHz, then what dominates the heaviest tick per function
 and per group (soft-float, CRC, memcpy/memset, integer division, codec, core, fake HAL).

@@ -28,6 +28,54 @@ static uint16_t sat_u16(float x)
     return (uint16_t)rw_f32_round_half_up_u24(x);
 }
 
+/* sat_u16(x k) for k = k_odd 2^k_shift (1000 = 125 2^3, 60 = 15 2^2): the same product, rounded as the
+ * float multiply rounds it (rw_f32_mul_small), then rounded half up and saturated as sat_u16 does, with
+ * no soft-float call (__aeabi_fmul is ~120 instructions on the M0+). */
+static uint16_t sat_u16_times(float x, uint32_t k_odd, int32_t k_shift)
+{
+    if (!rw_f32_positive(x)) {
+        return 0u;
+    }
+    if (!rw_f32_finite(x)) {
+        return 65535u;
+    }
+    int32_t exp2;
+    const uint32_t p = rw_f32_mul_small(x, k_odd, k_shift, &exp2); /* x k = p 2^exp2, p <= 2^24 */
+    if (exp2 >= 0) {
+        return 65535u; /* >= 2^23 */
+    }
+    const uint32_t shift = (uint32_t)-exp2;
+    if (shift >= 26u) {
+        return 0u; /* < 0.5 */
+    }
+    const uint32_t rounded = (p + (1u << (shift - 1u))) >> shift;
+    return rounded >= 65535u ? 65535u : (uint16_t)rounded;
+}
+
+/* (int32_t)(x k) for k = k_odd 2^k_shift: the float product truncated towards zero, without soft-float
+ * calls; NaN gives 0, values beyond the int32 range saturate. */
+static int32_t trunc_i32_times(float x, uint32_t k_odd, int32_t k_shift)
+{
+    if (rw_f32_isnan(x)) {
+        return 0;
+    }
+    const bool negative = (rw_f32_bits(x) & 0x80000000u) != 0u;
+    uint32_t magnitude = 0x80000000u; /* saturated */
+    if (rw_f32_finite(x)) {
+        int32_t exp2;
+        const uint32_t p = rw_f32_mul_small(x, k_odd, k_shift, &exp2);
+        if (exp2 < 0) {
+            magnitude = (uint32_t)-exp2 >= 32u ? 0u : p >> (uint32_t)-exp2;
+        } else if (exp2 <= 7) {
+            magnitude = p << (uint32_t)exp2; /* <= 2^31 */
+        }
+    }
+    if (negative) {
+        return magnitude >= 0x80000000u ? INT32_MIN : -(int32_t)magnitude;
+    }
+    return magnitude >= 0x80000000u ? INT32_MAX : (int32_t)magnitude;
+}
+
 /* (float)dt_us 1e-6, capped at RW_CORE_MAX_CONTROL_DT_S: the same value, kept for the dt_us it was
  * computed for (the tick period repeats, a conversion and a multiply are ~100 instructions each). */
 static float capped_dt_s(uint32_t dt_us, uint32_t *memo_us, float *memo_s)
@@ -416,17 +464,16 @@ static void load_config(rw_core *core, const rw_hal *hal)
 
 static void queue_telemetry(rw_core *core, const rw_hal *hal)
 {
-    core->state.rpm = rw_mt_speed_estimator_rpm(&core->state.speed); /* only telemetry reads it */
     const rw_core_counters *c = &core->state.counters;
     uint32_t age_ms = core->state.uptime_ms - core->state.last_host_frame_ms;
     rw_msg_telemetry msg = {
         .time_ms = core->state.uptime_ms,
         .state = core->state.state,
         .fault_bits = core->state.fault_bits,
-        .rope_speed_target_mmps = sat_u16(core->state.target_mps * 1000.0f),
-        .rope_speed_setpoint_mmps = sat_u16(core->state.setpoint_mps * 1000.0f),
-        .rope_speed_mmps = sat_u16(core->state.measured_mps * 1000.0f),
-        .motor_rpm = sat_u16(core->state.rpm),
+        .rope_speed_target_mmps = sat_u16_times(core->state.target_mps, 125u, 3), /* x 1000 */
+        .rope_speed_setpoint_mmps = sat_u16_times(core->state.setpoint_mps, 125u, 3),
+        .rope_speed_mmps = sat_u16_times(core->state.measured_mps, 125u, 3),
+        .motor_rpm = sat_u16_times(rw_mt_speed_estimator_rev_per_s(&core->state.speed), 15u, 2), /* x 60 */
         .esc_pulse_us = core->state.pulse_us,
         .battery_mv = core->state.battery_mv,
         .heartbeat_age_ms = age_ms > 65535u ? 65535u : (uint16_t)age_ms,
@@ -436,17 +483,21 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
         .nacks = c->nacks,
         .events = c->events,
         .tick_overruns = hal->scheduler != NULL ? (uint16_t)hal->scheduler->tick_overruns(hal->scheduler->ctx) : 0u,
-        .guide_position_um = (int32_t)(core->state.spindle.state.position_mm * 1000.0f),
-        .guide_target_um = (int32_t)(core->state.spindle.state.target_mm * 1000.0f),
+        .guide_position_um = trunc_i32_times(core->state.spindle.state.position_mm, 125u, 3), /* x 1000 */
+        .guide_target_um = trunc_i32_times(core->state.spindle.state.target_mm, 125u, 3),
         .spindle_load_permille = core->state.spindle.state.load_permille,
         .spindle_flags = spindle_flags(&core->state.spindle),
         .spindle_rejected = core->state.spindle.state.turns.state.rejected,
         .rx_auth_failed = c->rx_auth_failed,
         .rx_replayed = c->rx_replayed,
     };
-    uint8_t frame[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_telemetry_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
-    rw_outbox_push(&core->state.outbox, RW_OUTBOX_TELEMETRY, frame, len);
+    /* encoded straight into its outbox slot (no copy); a full outbox drops it (counted), as a push would */
+    rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_TELEMETRY);
+    uint16_t seq = core->state.tx_seq++;
+    if (slot != NULL) {
+        size_t len = rw_msg_telemetry_encode(&msg, seq, slot->bytes, sizeof slot->bytes);
+        rw_outbox_commit(&core->state.outbox, slot, RW_OUTBOX_TELEMETRY, len);
+    }
 }
 
 /* round(1000 / telemetry_rate_hz) ms, computed once per rate (a float division is ~350 instructions). */

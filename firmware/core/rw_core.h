@@ -132,7 +132,6 @@ typedef struct rw_core {
         float target_mps;         /* commanded rope speed */
         float setpoint_mps;       /* ramped setpoint */
         float measured_mps;
-        float rpm;
         float battery_v;
         uint16_t battery_mv;
         uint16_t pulse_us;

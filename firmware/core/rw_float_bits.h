@@ -105,4 +105,47 @@ RW_F32_INLINE uint32_t rw_f32_round_half_up_u24(float x)
     return shift == 0u ? mantissa : (mantissa + (1u << (shift - 1u))) >> shift;
 }
 
+/* The float product |x| k_odd 2^k_shift (k_odd odd, < 128), rounded to nearest even exactly as the float
+ * multiplication rounds it, returned as significand 2^(*exp2) with the significand in [2^23, 2^24] (0 for
+ * a zero or subnormal x, whose product lies far below any unit converted to). x finite; the product may
+ * exceed FLT_MAX where the float multiply would give infinity (callers saturate long before). Costs a
+ * 32-bit multiply and a few shifts instead of __aeabi_fmul. */
+RW_F32_INLINE uint32_t rw_f32_mul_small(float x, uint32_t k_odd, int32_t k_shift, int32_t *exp2)
+{
+    const uint32_t bits = rw_f32_bits(x);
+    const uint32_t biased = (bits >> 23) & 0xFFu;
+    if (biased == 0u) {
+        *exp2 = 0;
+        return 0u;
+    }
+    uint32_t p = ((bits & 0x007FFFFFu) | 0x00800000u) * k_odd; /* < 2^31 */
+    int32_t e = (int32_t)biased - 150 + k_shift;                 /* |x| = m 2^(biased - 150) */
+    uint32_t top = p >> 24; /* < 128: the bits beyond a 24-bit significand, found in three steps */
+    uint32_t drop = 0u;
+    if (top >= 16u) {
+        top >>= 4;
+        drop = 4u;
+    }
+    if (top >= 4u) {
+        top >>= 2;
+        drop += 2u;
+    }
+    if (top >= 2u) {
+        top >>= 1;
+        drop += 1u;
+    }
+    drop += top; /* top is 0 or 1 here */
+    if (drop > 0u) {
+        const uint32_t rem = p & ((1u << drop) - 1u);
+        const uint32_t half = 1u << (drop - 1u);
+        p >>= drop;
+        if (rem > half || (rem == half && (p & 1u) != 0u)) {
+            ++p; /* may reach 2^24: still exact */
+        }
+        e += (int32_t)drop;
+    }
+    *exp2 = e;
+    return p;
+}
+
 #endif /* RW_FLOAT_BITS_H */

@@ -7,12 +7,9 @@ void rw_outbox_reset(rw_outbox *o)
     memset(o, 0, sizeof *o);
 }
 
-bool rw_outbox_push(rw_outbox *o, rw_outbox_class cls, const uint8_t *frame, size_t len)
+/* The slot a frame of class cls takes: a free one, else (replies and events) the oldest telemetry. */
+static rw_outbox_slot *slot_for(rw_outbox *o, rw_outbox_class cls)
 {
-    if (len == 0u || len > RW_MAX_FRAME_LEN) {
-        ++o->state.dropped;
-        return false;
-    }
     rw_outbox_slot *free_slot = NULL;
     rw_outbox_slot *oldest_telemetry = NULL;
     for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
@@ -27,21 +24,52 @@ bool rw_outbox_push(rw_outbox *o, rw_outbox_class cls, const uint8_t *frame, siz
     if (free_slot == NULL && cls != RW_OUTBOX_TELEMETRY) {
         free_slot = oldest_telemetry; /* a reply or event displaces stale telemetry */
     }
-    if (free_slot == NULL) {
+    return free_slot;
+}
+
+rw_outbox_slot *rw_outbox_reserve(rw_outbox *o, rw_outbox_class cls)
+{
+    rw_outbox_slot *slot = slot_for(o, cls);
+    if (slot == NULL) {
         ++o->state.dropped;
+    }
+    return slot;
+}
+
+bool rw_outbox_commit(rw_outbox *o, rw_outbox_slot *slot, rw_outbox_class cls, size_t len)
+{
+    if (len == 0u || len > RW_MAX_FRAME_LEN) {
+        ++o->state.dropped;
+        if (slot->used) { /* its old frame was overwritten */
+            slot->used = false;
+            --o->state.used;
+        }
         return false;
     }
-    if (free_slot->used) {
+    if (slot->used) {
         ++o->state.dropped;
     } else {
         ++o->state.used;
     }
-    memcpy(free_slot->bytes, frame, len);
-    free_slot->len = (uint8_t)len;
-    free_slot->cls = (uint8_t)cls;
-    free_slot->used = true;
-    free_slot->order = o->state.next_order++;
+    slot->len = (uint8_t)len;
+    slot->cls = (uint8_t)cls;
+    slot->used = true;
+    slot->order = o->state.next_order++;
     return true;
+}
+
+bool rw_outbox_push(rw_outbox *o, rw_outbox_class cls, const uint8_t *frame, size_t len)
+{
+    if (len == 0u || len > RW_MAX_FRAME_LEN) {
+        ++o->state.dropped;
+        return false;
+    }
+    rw_outbox_slot *slot = rw_outbox_reserve(o, cls);
+    if (slot == NULL) {
+        return false;
+    }
+    memcpy(slot->bytes, frame, len);
+    return rw_outbox_commit(o, slot, cls, len);
 }
 
 const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o)

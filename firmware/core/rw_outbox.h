@@ -40,6 +40,13 @@ typedef struct rw_outbox {
 void rw_outbox_reset(rw_outbox *o);
 /* Queue a frame; returns false (and counts a drop) when no slot is left for it. */
 bool rw_outbox_push(rw_outbox *o, rw_outbox_class cls, const uint8_t *frame, size_t len);
+/* The same in two steps, so a frame can be encoded straight into its slot (no copy): reserve the slot a
+ * frame of class cls would take (NULL, a drop counted, when there is none), write up to RW_MAX_FRAME_LEN
+ * bytes into slot->bytes, then commit with the length. A commit with length 0 or over RW_MAX_FRAME_LEN
+ * counts a drop and leaves the slot free (a displaced telemetry frame is lost either way). Nothing else
+ * may touch the outbox between the two calls. */
+rw_outbox_slot *rw_outbox_reserve(rw_outbox *o, rw_outbox_class cls);
+bool rw_outbox_commit(rw_outbox *o, rw_outbox_slot *slot, rw_outbox_class cls, size_t len);
 /* The next frame to send (highest priority, oldest first), or NULL; pop it after sending. */
 const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o);
 void rw_outbox_pop(rw_outbox *o, const rw_outbox_slot *slot);

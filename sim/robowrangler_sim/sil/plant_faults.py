@@ -2,22 +2,21 @@
 
 Each fault is an object with a time window [start_s, start_s + duration_s) in simulated seconds
 (duration_s None = until the end) and ``install(sil)``, which hooks it into a SilSession through the
-session's ``sensor_filters`` / ``actuator_filters`` (or the plant's settable inputs); ``remove(sil)``
-unhooks it. Faults act on what crosses the boundary, never inside the plant:
+session's ``sensor_filters`` / ``actuator_filters``; ``remove(sil)`` unhooks it. Faults act on what
+crosses the boundary or on the plants' settable inputs, never on plant internals:
 
 * EncoderDropout: the encoder count and edge time the firmware reads freeze (a broken encoder cable).
 * EscNotResponding: the ESCs ignore the firmware's pulse; the plant's ESC gets its minimum pulse (zero
   throttle: bridge off, the motor coasts).
 * RopeBreak: the loop is gone: the external load and the exposed rope's air drag vanish
-  (``external_rope_load_n`` = 0, ``rope_exposed_length_m`` = 0, re-applied every tick). The rope's inertia (m_rope r^2 in the plant's total inertia) has no
-  settable input, so it stays: the plant needs a hook for that (reported).
+  (``external_rope_load_n`` = 0, ``rope_exposed_length_m`` = 0, re-applied every tick). The rope's
+  inertia (m_rope r^2 in the plant's total inertia) has no settable input, so it stays (reported).
 * BatterySag: the pack's terminal voltage sinks linearly to target_v over ramp_s by a growing auxiliary
   load (``battery_aux_current_a``), so the motors see the sag as well as the ADC.
-* StalledControlLoop: the firmware misses its ticks for duration_s (no SIL_SENSORS; the ESC keeps its last
-  pulse and the plant runs on); the next tick the firmware sees one long dt.
-
 * SpindleStall: the lead screw jams for the window (the spindle plant's ``stalled`` input): the guide stops
   while the servo keeps pushing, so its load register rises.
+* StalledControlLoop: the firmware misses its ticks for duration_s (no SIL_SENSORS; the ESC keeps its last
+  pulse and the plant runs on); the next tick the firmware sees one long dt.
 """
 
 from __future__ import annotations

@@ -5,6 +5,7 @@
  */
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 #include <unity.h>
 
 #include "rw_mt_speed_estimator.h"
@@ -168,6 +169,32 @@ static void test_backward_count_keeps_estimate(void)
     TEST_ASSERT_FLOAT_WITHIN(1e-3f, 125.0f, rw_mt_speed_estimator_raw_rev_per_s(&est));
 }
 
+/* The M/T quotient (integer long division on the core) is the correctly rounded float division of the
+ * exact operands: the same bits as dn 1e6 / (cpr dT) computed in float, for edge counts and intervals
+ * across the whole range the integer path takes. */
+static void test_quotient_equals_the_float_division_bit_for_bit(void)
+{
+    const uint32_t dns[] = {1u, 2u, 3u, 7u, 13u, 64u, 500u, 1073u};
+    const uint32_t dts[] = {1u, 3u, 97u, 250u, 999u, 1000u, 2000u, 4093u, 65521u, 99999u};
+    for (unsigned i = 0u; i < sizeof dns / sizeof dns[0]; ++i) {
+        for (unsigned j = 0u; j < sizeof dts / sizeof dts[0]; ++j) {
+            setUp();
+            const uint32_t t0 = 5000u;
+            rw_mt_speed_estimator_step(&est, 100u, t0, t0, 0.001f);
+            rw_mt_speed_estimator_step(&est, 100u + dns[i], t0 + dts[j], t0 + dts[j], 0.001f);
+            volatile float num = (float)dns[i] * 1.0e6f;
+            volatile float den = (float)CPR * (float)dts[j];
+            const float expected = num / den;
+            const float got = rw_mt_speed_estimator_raw_rev_per_s(&est);
+            uint32_t expected_bits;
+            uint32_t got_bits;
+            memcpy(&expected_bits, &expected, sizeof expected_bits);
+            memcpy(&got_bits, &got, sizeof got_bits);
+            TEST_ASSERT_EQUAL_HEX32(expected_bits, got_bits);
+        }
+    }
+}
+
 static void test_invalid_config_reads_zero(void)
 {
     est.cfg.counts_per_rev = 0u;
@@ -188,5 +215,6 @@ int main(void)
     RUN_TEST(test_first_step_only_latches);
     RUN_TEST(test_backward_count_keeps_estimate);
     RUN_TEST(test_invalid_config_reads_zero);
+    RUN_TEST(test_quotient_equals_the_float_division_bit_for_bit);
     return UNITY_END();
 }

@@ -135,9 +135,55 @@ static void test_empty_or_oversized_frames_are_refused(void)
     TEST_ASSERT_EQUAL_MEMORY(frame, s->bytes, RW_MAX_FRAME_LEN);
 }
 
+/* Encoding in place: reserve + write + commit queues exactly like a push; a full outbox refuses the
+ * reservation (a drop), a failed encode (length 0) frees the slot again; an empty outbox is cheap to peek
+ * and stays empty after every slot is popped. */
+static void test_reserve_and_commit_queue_like_a_push(void)
+{
+    push_tagged(RW_OUTBOX_EVENT, 1u, true);
+    rw_outbox_slot *slot = rw_outbox_reserve(&box, RW_OUTBOX_TELEMETRY);
+    TEST_ASSERT_NOT_NULL(slot);
+    memset(slot->bytes, 2u, 5u);
+    slot->bytes[0] = (uint8_t)RW_OUTBOX_TELEMETRY;
+    TEST_ASSERT_TRUE(rw_outbox_commit(&box, slot, RW_OUTBOX_TELEMETRY, 5u));
+    slot = rw_outbox_reserve(&box, RW_OUTBOX_TELEMETRY);
+    TEST_ASSERT_FALSE(rw_outbox_commit(&box, slot, RW_OUTBOX_TELEMETRY, 0u)); /* encode failed */
+    TEST_ASSERT_EQUAL_UINT16(1u, rw_outbox_dropped(&box));
+    pop_expect(RW_OUTBOX_EVENT, 1u);
+    pop_expect(RW_OUTBOX_TELEMETRY, 2u);
+    TEST_ASSERT_NULL(rw_outbox_peek(&box));
+    for (uint8_t i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
+        push_tagged(RW_OUTBOX_REPLY, i, true);
+    }
+    TEST_ASSERT_NULL(rw_outbox_reserve(&box, RW_OUTBOX_TELEMETRY));
+    TEST_ASSERT_EQUAL_UINT16(2u, rw_outbox_dropped(&box));
+    for (uint8_t i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
+        pop_expect(RW_OUTBOX_REPLY, i);
+    }
+    TEST_ASSERT_NULL(rw_outbox_peek(&box));
+}
+
+/* A telemetry slot displaced by an event whose encode then fails is gone, not sent half-overwritten. */
+static void test_failed_commit_over_displaced_telemetry_frees_the_slot(void)
+{
+    for (uint8_t i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
+        push_tagged(RW_OUTBOX_TELEMETRY, i, true);
+    }
+    rw_outbox_slot *slot = rw_outbox_reserve(&box, RW_OUTBOX_EVENT);
+    TEST_ASSERT_NOT_NULL(slot);
+    memset(slot->bytes, 0xEE, 4u);
+    TEST_ASSERT_FALSE(rw_outbox_commit(&box, slot, RW_OUTBOX_EVENT, 0u));
+    for (uint8_t i = 1u; i < RW_OUTBOX_SLOTS; ++i) {
+        pop_expect(RW_OUTBOX_TELEMETRY, i);
+    }
+    TEST_ASSERT_NULL(rw_outbox_peek(&box));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
+    RUN_TEST(test_reserve_and_commit_queue_like_a_push);
+    RUN_TEST(test_failed_commit_over_displaced_telemetry_frees_the_slot);
     RUN_TEST(test_empty_outbox_has_nothing_to_send);
     RUN_TEST(test_priority_reply_event_telemetry_then_age);
     RUN_TEST(test_full_of_telemetry_new_telemetry_is_dropped);

@@ -83,6 +83,20 @@ static void test_defaults_valid(void)
     TEST_ASSERT_EQUAL_UINT16(2000u, cfg.pulse_max_us);
 }
 
+/* The factor prepared for a battery voltage gives the feed-forward of the law to the last bit or so; a
+ * new voltage or a new kv is followed at once. */
+static void test_prepared_battery_factor_follows_voltage_and_kv(void)
+{
+    rw_throttle_map_prepare_battery(&map, 14.8f);
+    const float at_14v8 = rw_throttle_map_feed_forward(&map, 5.0f, 14.8f);
+    TEST_ASSERT_FLOAT_WITHIN(2e-7f, (60.0f * 5.0f) / (6.28318530718f * 0.015f * 1400.0f * 14.8f), at_14v8);
+    TEST_ASSERT_FLOAT_WITHIN(2e-7f, at_14v8 * 14.8f / 12.0f, rw_throttle_map_feed_forward(&map, 5.0f, 12.0f));
+    map.cfg.kv_rpm_per_v = 700.0f;
+    TEST_ASSERT_FLOAT_WITHIN(4e-7f, 2.0f * at_14v8, rw_throttle_map_feed_forward(&map, 5.0f, 14.8f));
+    map.cfg.kv_rpm_per_v = 0.0f; /* invalid: no feed-forward */
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_throttle_map_feed_forward(&map, 5.0f, 14.8f));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -93,5 +107,6 @@ int main(void)
     RUN_TEST(test_out_of_range_config_narrowed);
     RUN_TEST(test_pulse_round_trip);
     RUN_TEST(test_defaults_valid);
+    RUN_TEST(test_prepared_battery_factor_follows_voltage_and_kv);
     return UNITY_END();
 }
