@@ -41,7 +41,7 @@ def wrangler(*argv: str, environ: dict[str, str] | None = None) -> Run:
 
 def test_exit_statuses_are_the_documented_numbers() -> None:
     assert {s.name: int(s) for s in ExitStatus} == {"OK": 0, "ERROR": 1, "USAGE": 2, "NACK": 3, "LINK_TIMEOUT": 4,
-                                                    "CTRL_C": 130}
+                                                    "AUTH": 5, "CTRL_C": 130}
 
 
 def test_arm_ok_human_and_json(device: ScriptedDevice) -> None:
@@ -248,7 +248,7 @@ def test_signed_link_from_a_key_file(tmp_path) -> None:
         via_env = wrangler("--url", device.url, "--json", "disarm", environ={"ROBOWRANGLER_KEY_FILE": str(key_file)})
         assert via_env.status == ExitStatus.OK
         keyless = wrangler("--url", device.url, "--timeout", "0.3", "--json", "status")
-        assert keyless.status == ExitStatus.ERROR and keyless.json["error"] == "AuthenticationError"
+        assert keyless.status == ExitStatus.AUTH and keyless.json["error"] == "AuthenticationError"
     assert key.hex() not in run.stdout + run.stderr + keyless.stdout + keyless.stderr
 
 

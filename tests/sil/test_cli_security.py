@@ -47,7 +47,7 @@ def test_provision_over_usb_then_command_over_udp(blank_sil: SilSession, tmp_pat
     run("keygen", str(key_file))
     udp = ["--url", blank_sil.cmd_url, "--key-file", str(key_file), "--timeout", "1"]
     status, _, err = run(*udp, "arm")
-    assert status != ExitStatus.OK and "provision" in err  # no key on the device yet: it takes nothing
+    assert status == ExitStatus.AUTH and "provision" in err  # no key on the device yet: it takes nothing
     status, out, err = run("--url", f"serial://{blank_sil.serial_path}", "provision", "set",
                            "--link-key-file", str(key_file), "--wifi-ssid", "lab")
     assert status == ExitStatus.OK, err
@@ -63,7 +63,7 @@ def test_a_wrong_key_is_named_as_such(blank_sil: SilSession, tmp_path: Path) -> 
     serial = f"serial://{blank_sil.serial_path}"
     assert run("--url", serial, "provision", "set", "--link-key-file", str(good))[0] == ExitStatus.OK
     status, _, err = run("--url", blank_sil.cmd_url, "--key-file", str(bad), "--timeout", "1", "status")
-    assert status != ExitStatus.OK and "key" in err and err.count("\n") == 1
+    assert status == ExitStatus.AUTH and "key" in err and err.count("\n") == 1
     assert run("--url", blank_sil.cmd_url, "--key-file", str(good), "--timeout", "1", "status")[0] == ExitStatus.OK
 
 

@@ -22,7 +22,7 @@ from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_E
                                       read_key_file)
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
-from robowrangler.errors import (CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
+from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
                                  UnknownParameter)
 from robowrangler.transport import DEFAULT_URL, parse_url
 
@@ -95,6 +95,8 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
                      command=err.command, reason=_name(err.reason), state=_name(err.state), detail=err.detail)
     except LinkTimeout as err:
         return _fail(env, json_mode, ExitStatus.LINK_TIMEOUT, err, str(err), url=err.url, waited_s=err.waited_s)
+    except AuthenticationError as err:
+        return _fail(env, json_mode, ExitStatus.AUTH, err, str(err), url=err.url)
     except RoboWranglerError as err:
         return _fail(env, json_mode, ExitStatus.ERROR, err, str(err))
     except OSError as err:
