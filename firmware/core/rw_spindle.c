@@ -7,6 +7,8 @@
 
 /* Below this measured guide speed the guide counts as not moving (stall and homing checks), mm/s. */
 #define RW_SPINDLE_STILL_MMPS 0.3f
+/* Under this drive (a few tenths of a mm from the target) a stall is not judged: the guide barely moves. */
+#define RW_SPINDLE_MIN_STALL_DRIVE_PCT 10.0f
 
 void rw_spindle_init(rw_spindle *s, const rw_spindle_config *cfg)
 {
@@ -125,7 +127,13 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
         } else {
             s->state.target_reported = false;
             cmd = clampf(s->cfg.kp_per_s * error, -s->cfg.max_speed_mmps, s->cfg.max_speed_mmps);
-            if (held_for(s, fabsf(load_pct) >= s->cfg.stall_load_pct && still, dt_s)) {
+            /* wheel mode is open-loop drive: a blocked servo loads to about its drive level, which the P law
+             * lowers near the target, so the stall threshold follows the drive (and stall_load_pct caps it) */
+            float drive_pct = (float)(rw_ax12_moving_speed_raw(cmd / mm_per_deg(s)) & RW_AX12_MAGNITUDE_MASK) *
+                              (100.0f / 1023.0f);
+            float threshold_pct = 0.7f * drive_pct < s->cfg.stall_load_pct ? 0.7f * drive_pct : s->cfg.stall_load_pct;
+            if (held_for(s, drive_pct >= RW_SPINDLE_MIN_STALL_DRIVE_PCT && fabsf(load_pct) >= threshold_pct && still,
+                         dt_s)) {
                 outcome = RW_SPINDLE_STALLED;
                 rw_spindle_stop(s);
                 cmd = 0.0f;
@@ -149,8 +157,9 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
         break;
     }
 
-    /* 3. soft limits (once homed): never drive further out of [min, max] */
-    if (s->state.homed && ((pos <= s->cfg.guide_min_mm && cmd < 0.0f) || (pos >= s->cfg.guide_max_mm && cmd > 0.0f))) {
+    /* 3. soft limits (once homed, except while homing again): never drive further out of [min, max] */
+    if (s->state.homed && s->state.mode != RW_SPINDLE_HOMING &&
+        ((pos <= s->cfg.guide_min_mm && cmd < 0.0f) || (pos >= s->cfg.guide_max_mm && cmd > 0.0f))) {
         cmd = 0.0f;
     }
     s->state.command_mmps = cmd;

@@ -47,7 +47,7 @@ class MultiturnConfig(ctypes.Structure):
 
 class _MultiturnState(ctypes.Structure):
     _fields_ = [("angle_deg", c_float), ("initialized", c_bool), ("dead_reckoning", c_bool),
-                ("rejected", c_uint16)]
+                ("rejected", c_uint16), ("agree", c_uint8), ("candidate_deg", c_float)]
 
 
 class MultiturnStruct(ctypes.Structure):

@@ -132,12 +132,6 @@ def test_wrong_speed_in_the_dead_zone_is_resynchronised_on_exit(rw_core, rpm, di
     assert mt.rejected == 0
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_multiturn.c rw_multiturn_config_defaults sets dead_zone_margin_deg = 6, exactly the drift of a "
-    "10 % speed overestimate over the 60 degree zone: the prediction leaves the band a step before the servo "
-    "leaves the dead zone, garbage within max_jump_deg is accepted (up to 25 degrees off) and, when the next "
-    "true reading is then over max_jump_deg away, the estimate is lost for good (at 5 rpm: 345 degrees off, "
-    "15950 rejections in 20 turns); dead-zone garbage also counts as rejected; a margin of 10 degrees passes"))
 def test_ten_percent_speed_overestimate_in_the_dead_zone_takes_no_garbage(rw_core):
     failures = []
     for rpm in SPEEDS_RPM:
@@ -152,6 +146,16 @@ def test_ten_percent_speed_overestimate_in_the_dead_zone_takes_no_garbage(rw_cor
                     failures.append(f"{rpm} rpm x{direction:+.0f} seed {seed}: {garbage_taken.sum()} garbage "
                                     f"taken, worst {worst:.1f} deg, {mt.rejected} rejected")
     assert not failures, "; ".join(failures)
+
+
+AGREE = 4  # RW_MULTITURN_AGREE: readings that must agree before the first reference is taken
+
+
+def _referenced(mt: Multiturn, position_deg: float) -> None:
+    """A still servo read AGREE times: the estimator takes its first reference there."""
+    for _ in range(AGREE):
+        mt.step(valid=True, position_deg=position_deg, speed_deg_s=0.0, dt_s=DT_S)
+    assert mt.initialized
 
 
 def test_single_impossible_jump_is_rejected_and_counted(rw_core):
@@ -174,7 +178,7 @@ def test_single_impossible_jump_is_rejected_and_counted(rw_core):
 def test_jump_just_under_the_limit_is_accepted_and_just_over_is_rejected(rw_core):
     mt = Multiturn(rw_core)
     limit = multiturn_defaults(rw_core).max_jump_deg
-    mt.step(valid=True, position_deg=100.0, speed_deg_s=0.0, dt_s=DT_S)
+    _referenced(mt, 100.0)
     assert mt.step(valid=True, position_deg=100.0 + limit - 0.5, speed_deg_s=0.0, dt_s=DT_S) == pytest.approx(
         100.0 + limit - 0.5, abs=1e-4)
     assert mt.rejected == 0
@@ -201,10 +205,6 @@ def test_start_in_the_dead_zone_dead_reckons_until_the_first_usable_reading(rw_c
     assert mt.rejected == 0
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_multiturn.c rw_multiturn_step initialises on the first reading inside 6..294 deg; at "
-    "power-up in the dead zone that is garbage (96 % of random register values are 'usable'), and once the "
-    "estimate is more than max_jump_deg off, every true reading is rejected as an impossible jump for good"))
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_start_in_the_dead_zone_with_garbage_readings_never_initialises_on_garbage(rw_core, seed):
     servo = SimServo(rw_core, start_deg=330.0, speed_deg_s=20.0 * 6.0, seed=seed)
@@ -217,10 +217,6 @@ def test_start_in_the_dead_zone_with_garbage_readings_never_initialises_on_garba
     assert np.abs(est[ref:] - truth[ref:] - offset).max() < TRACK_TOL_DEG
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_multiturn.c rw_multiturn_step rejects every reading farther than max_jump_deg from the "
-    "prediction, with no way back: after the servo moved while unobserved (silent bus, speed unknown) the "
-    "estimate never re-synchronises although every following reading agrees"))
 def test_a_displacement_confirmed_by_consistent_readings_is_taken_after_a_few_steps(rw_core):
     mt = Multiturn(rw_core)
     for _ in range(10):
@@ -236,7 +232,7 @@ def test_a_displacement_confirmed_by_consistent_readings_is_taken_after_a_few_st
 
 def test_no_answer_dead_reckons_and_flags(rw_core):
     mt = Multiturn(rw_core)
-    mt.step(valid=True, position_deg=100.0, speed_deg_s=0.0, dt_s=DT_S)
+    _referenced(mt, 100.0)
     assert mt.initialized and not mt.dead_reckoning
     out = mt.step(valid=False, position_deg=250.0, speed_deg_s=60.0, dt_s=0.1)
     assert out == pytest.approx(106.0, abs=1e-4), "no answer: the reading is ignored, the speed integrated"
@@ -246,7 +242,7 @@ def test_no_answer_dead_reckons_and_flags(rw_core):
 def test_dead_reckoning_flag_follows_the_predicted_angle_band(rw_core):
     margin = multiturn_defaults(rw_core).dead_zone_margin_deg
     mt = Multiturn(rw_core)
-    mt.step(valid=True, position_deg=290.0, speed_deg_s=0.0, dt_s=DT_S)
+    _referenced(mt, 290.0)
     flags = []
     for k in range(80):
         mt.step(valid=True, position_deg=1023 * 300.0 / 1023.0, speed_deg_s=100.0, dt_s=DT_S)
@@ -274,7 +270,7 @@ def test_nan_position_is_not_a_reading(rw_core):
 
 def test_reset_forgets_the_reference(rw_core):
     mt = Multiturn(rw_core)
-    mt.step(valid=True, position_deg=100.0, speed_deg_s=0.0, dt_s=DT_S)
+    _referenced(mt, 100.0)
     mt.step(valid=True, position_deg=250.0, speed_deg_s=0.0, dt_s=DT_S)
     assert mt.rejected == 1
     mt.reset()

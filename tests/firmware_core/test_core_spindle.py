@@ -130,11 +130,6 @@ def test_homing_stall_needs_load_and_stillness_held_for_the_stall_time(rw_core):
     assert sp.homed and sp.mode == Mode.IDLE and sp.moving_speed_raw == 0
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_spindle.c rw_spindle_step applies the soft limits (step 3) in HOMING mode once homed: "
-    "homing again zeroes the drive whenever the estimate reads <= guide_min_mm; at the real stop the estimate "
-    "jitters around 0, the drive and the load drop every few steps, the stall timer restarts, and homing never "
-    "ends (and stops short of the stop if the believed 0 lies before it)"))
 def test_homing_again_when_already_homed_finds_the_end_stop(rw_core):
     rig = Rig(rw_core)
     rig.home()
@@ -247,11 +242,6 @@ def test_blocked_guide_is_a_stall_after_the_stall_time(rw_core):
     assert len(rig.outcomes) == 1
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "core bug: rw_spindle.c rw_spindle_step POSITION stall check compares the load with the absolute "
-    "stall_load_pct (50 %), but in wheel mode a blocked servo only loads to its drive level, which the P loop "
-    "lowers near the target: blocked within about 1 mm of the target (command under 3.9 mm/s = 49 % drive) "
-    "it pushes forever with no STALLED and no TARGET_REACHED"))
 def test_guide_blocked_just_short_of_its_target_is_a_stall(rw_core):
     rig = Rig(rw_core)
     rig.home()

@@ -4,8 +4,7 @@
  *
  * A simulated servo drives it: the true angle advances at a set speed; the register is angle x 1023 / 300
  * with reading noise in 0..300 degrees and garbage (uniform 0..1023) in the 60 degree dead zone; the
- * present speed is quantised to 0.111 rpm. Known core bugs are checked the way pytest's strict xfail does:
- * while the bug is there the test is IGNORED with the reason, once fixed it FAILS to be turned into a test.
+ * present speed is quantised to 0.111 rpm.
  */
 #include <math.h>
 #include <stdbool.h>
@@ -197,11 +196,9 @@ static void test_wrong_speed_in_the_dead_zone_is_resynchronised(void)
     }
 }
 
-static void test_known_bug_ten_percent_overestimate_takes_garbage(void)
+static void test_ten_percent_overestimate_takes_no_garbage(void)
 {
-    /* rw_multiturn_config_defaults: dead_zone_margin_deg = 6 is exactly the drift of a 10 % speed
-     * overestimate over the 60 degree zone; the prediction leaves the band before the servo leaves the
-     * dead zone and garbage within max_jump_deg is taken (a margin of 8-10 degrees fixes it). */
+    /* a 10 % speed overestimate drifts 6 degrees over the 60 degree zone: the 10 degree margin covers it */
     int taken = 0;
     for (uint32_t seed = 0u; seed < 6u; ++seed) {
         for (int dir = -1; dir <= 1; dir += 2) {
@@ -211,10 +208,7 @@ static void test_known_bug_ten_percent_overestimate_takes_garbage(void)
             taken += track(&s, steps_for_turns(20.5f, 20.0f), 1.1f, 0, 0.0f).garbage_taken;
         }
     }
-    if (taken > 0) {
-        TEST_IGNORE_MESSAGE("known core bug: 6 deg dead-zone margin takes garbage at a +10 % speed error");
-    }
-    TEST_FAIL_MESSAGE("fixed: make this a plain test (no garbage at +10 % speed error)");
+    TEST_ASSERT_EQUAL_INT_MESSAGE(0, taken, "dead-zone garbage taken at a +10 % speed error");
 }
 
 static void test_single_impossible_jump_is_rejected_and_counted(void)
@@ -234,10 +228,19 @@ static void test_single_impossible_jump_is_rejected_and_counted(void)
     TEST_ASSERT_EQUAL_UINT16(1u, mt.state.rejected);
 }
 
+/* A still servo read RW_MULTITURN_AGREE times: the first reference is taken there. */
+static void reference_at(float position_deg)
+{
+    for (unsigned i = 0u; i < RW_MULTITURN_AGREE; ++i) {
+        (void)rw_multiturn_step(&mt, true, position_deg, 0.0f, DT_S);
+    }
+    TEST_ASSERT_TRUE(mt.state.initialized);
+}
+
 static void test_jump_limit_edges(void)
 {
     const float limit = mt.cfg.max_jump_deg;
-    (void)rw_multiturn_step(&mt, true, 100.0f, 0.0f, DT_S);
+    reference_at(100.0f);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f + limit - 0.5f, rw_multiturn_step(&mt, true, 100.0f + limit - 0.5f, 0.0f, DT_S));
     TEST_ASSERT_EQUAL_UINT16(0u, mt.state.rejected);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f + limit - 0.5f,
@@ -263,10 +266,9 @@ static void test_start_in_the_dead_zone_dead_reckons_until_a_usable_reading(void
     TEST_ASSERT_EQUAL_UINT16(0u, mt.state.rejected);
 }
 
-static void test_known_bug_power_up_in_the_dead_zone_initialises_on_garbage(void)
+static void test_power_up_in_the_dead_zone_never_references_garbage(void)
 {
-    /* rw_multiturn_step initialises on the first reading inside the usable band; at power-up in the dead
-     * zone that is garbage, and once more than max_jump_deg off every true reading is rejected. */
+    /* the first reference needs RW_MULTITURN_AGREE readings that agree: dead-zone garbage never does */
     int lost = 0;
     for (uint32_t seed = 1u; seed <= 3u; ++seed) {
         setUp();
@@ -278,15 +280,12 @@ static void test_known_bug_power_up_in_the_dead_zone_initialises_on_garbage(void
         const track_result r = track(&s, steps_for_turns(3.0f, 20.0f), 1.0f, 0, offset);
         lost += (off_turn >= TRACK_TOL_DEG || r.max_err_deg >= TRACK_TOL_DEG) ? 1 : 0;
     }
-    if (lost > 0) {
-        TEST_IGNORE_MESSAGE("known core bug: power-up in the dead zone takes garbage as the reference");
-    }
-    TEST_FAIL_MESSAGE("fixed: make this a plain test (power-up in the dead zone is referenced correctly)");
+    TEST_ASSERT_EQUAL_INT_MESSAGE(0, lost, "power-up in the dead zone lost the reference");
 }
 
 static void test_no_answer_dead_reckons(void)
 {
-    (void)rw_multiturn_step(&mt, true, 100.0f, 0.0f, DT_S);
+    reference_at(100.0f);
     TEST_ASSERT_TRUE(mt.state.initialized);
     TEST_ASSERT_FALSE(mt.state.dead_reckoning);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, 106.0f, rw_multiturn_step(&mt, false, 250.0f, 60.0f, 0.1f));
@@ -307,7 +306,7 @@ static void test_bad_input_holds_the_angle(void)
 
 static void test_reset_forgets_the_reference(void)
 {
-    (void)rw_multiturn_step(&mt, true, 100.0f, 0.0f, DT_S);
+    reference_at(100.0f);
     (void)rw_multiturn_step(&mt, true, 250.0f, 0.0f, DT_S);
     TEST_ASSERT_EQUAL_UINT16(1u, mt.state.rejected);
     rw_multiturn_reset(&mt);
@@ -323,11 +322,11 @@ int main(void)
     RUN_TEST(test_twenty_turns_at_20_rpm);
     RUN_TEST(test_twenty_turns_at_59_rpm);
     RUN_TEST(test_wrong_speed_in_the_dead_zone_is_resynchronised);
-    RUN_TEST(test_known_bug_ten_percent_overestimate_takes_garbage);
+    RUN_TEST(test_ten_percent_overestimate_takes_no_garbage);
     RUN_TEST(test_single_impossible_jump_is_rejected_and_counted);
     RUN_TEST(test_jump_limit_edges);
     RUN_TEST(test_start_in_the_dead_zone_dead_reckons_until_a_usable_reading);
-    RUN_TEST(test_known_bug_power_up_in_the_dead_zone_initialises_on_garbage);
+    RUN_TEST(test_power_up_in_the_dead_zone_never_references_garbage);
     RUN_TEST(test_no_answer_dead_reckons);
     RUN_TEST(test_bad_input_holds_the_angle);
     RUN_TEST(test_reset_forgets_the_reference);

@@ -6,7 +6,7 @@
  * speed register, linear torque-speed line, 20 ms lag, T8 lead screw, hard stops at 0 and the stroke,
  * rope resisting beyond a grasp point, dead-zone garbage in the position register) stepped every 10 ms
  * after the core as rw_core does (read, step, write); and hand-made readings where a law or a timing is
- * checked exactly. Known core bugs: IGNORED with the reason while present, FAIL once fixed.
+ * checked exactly.
  */
 #include <math.h>
 #include <stdbool.h>
@@ -255,18 +255,14 @@ static void test_homing_stall_needs_load_and_stillness_for_the_stall_time(void)
     TEST_ASSERT_TRUE(rw_spindle_is_homed(&sp));
 }
 
-static void test_known_bug_homing_again_never_ends(void)
+static void test_homing_again_ends_at_the_stop(void)
 {
-    /* rw_spindle_step applies the soft limits in HOMING once homed: at the stop the estimate jitters
-     * around guide_min_mm, the drive is cut every few steps, the load drops, homing never ends. */
+    /* the soft limits do not apply while homing: re-homing drives to the stop and stalls there */
     home_by_stall();
     rw_spindle_move_to(&sp, 10.0f);
     TEST_ASSERT_TRUE(run_until(RW_SPINDLE_TARGET_REACHED, 10.0f));
     rw_spindle_home(&sp);
-    if (!run_until(RW_SPINDLE_HOMED_BY_STALL, 10.0f)) {
-        TEST_IGNORE_MESSAGE("known core bug: homing again when homed never ends (soft limit applied in HOMING)");
-    }
-    TEST_FAIL_MESSAGE("fixed: make this a plain test (re-homing ends at the stop)");
+    TEST_ASSERT_TRUE_MESSAGE(run_until(RW_SPINDLE_HOMED_BY_STALL, 10.0f), "re-homing ends at the stop");
 }
 
 static void test_position_loop_is_p_law_saturated_and_zero_in_tolerance(void)
@@ -471,7 +467,7 @@ int main(void)
     RUN_TEST(test_homing_by_stall_finds_the_end_stop);
     RUN_TEST(test_homing_by_switch);
     RUN_TEST(test_homing_stall_needs_load_and_stillness_for_the_stall_time);
-    RUN_TEST(test_known_bug_homing_again_never_ends);
+    RUN_TEST(test_homing_again_ends_at_the_stop);
     RUN_TEST(test_position_loop_is_p_law_saturated_and_zero_in_tolerance);
     RUN_TEST(test_target_reached_once_per_target);
     RUN_TEST(test_move_across_dead_zones_tracks_and_reports_once);
