@@ -11,7 +11,11 @@
  *     send() copy the frame into harness_tx[] and count it (harness_tx_kind tells which of the two);
  *   - spindle: an AX-12A in wheel mode that always answers; it turns at the written moving speed (1023 =
  *     59 rpm, about 12 position units per 10 ms read), reads 1023 in its 60 degree dead zone, load
- *     harness_spindle_load_raw, limit switch harness_spindle_switch (so HOME can finish by switch).
+ *     harness_spindle_load_raw, limit switch harness_spindle_switch (so HOME can finish by switch);
+ *   - config store: a fresh device provisioned with the test key harness_test_key (bytes 0..15, never a
+ *     real one): harness_init puts rw_config_defaults + rw_config_set_key in harness_flash, load() reads it,
+ *     save() keeps what the core writes (its boot counter: the first boot is session 1). Frames on the link
+ *     must therefore be signed with that key for harness_session_id().
  * On reset: copy .data, zero .bss, then main() ticks the core every simulated millisecond forever. */
 #include <stddef.h>
 #include <stdint.h>
@@ -35,6 +39,9 @@ uint32_t harness_tx_count;                 /* out: datagrams out since init */
 uint32_t harness_pulse_us;                 /* out: last ESC pulse written, microseconds */
 uint32_t harness_spindle_switch;           /* in: home limit switch closed (1) or open (0) */
 uint16_t harness_spindle_load_raw;         /* in: present load register */
+const uint8_t harness_test_key[RW_KEY_LEN] = { 0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u };
+rw_config harness_flash;                   /* the fake flash: the stored configuration record */
+uint32_t harness_flash_saves;              /* out: save() calls since init */
 rw_core harness_core;
 
 /* Fake encoder: edges every 60e6 / (rpm * 64) microseconds of the tick clock (the current rpm). */
@@ -151,12 +158,34 @@ static uint32_t fake_tick_overruns(void *ctx)
     return 0u;
 }
 
+static bool fake_config_load(void *ctx, void *buf, size_t len)
+{
+    (void)ctx;
+    if (len != sizeof harness_flash) {
+        return false;
+    }
+    memcpy(buf, &harness_flash, len);
+    return true;
+}
+
+static bool fake_config_save(void *ctx, const void *buf, size_t len)
+{
+    (void)ctx;
+    if (len != sizeof harness_flash) {
+        return false;
+    }
+    memcpy(&harness_flash, buf, len);
+    ++harness_flash_saves;
+    return true;
+}
+
 static const rw_hal_esc_output harness_esc = { NULL, fake_esc_write };
 static const rw_hal_encoder harness_encoder = { NULL, fake_encoder_read };
 static const rw_hal_battery harness_battery = { NULL, fake_battery_read_mv };
 static const rw_hal_link harness_link = { NULL, fake_link_recv, fake_link_reply, fake_link_accept_peer, fake_link_send };
 static const rw_hal_scheduler harness_scheduler = { NULL, fake_tick_overruns };
 static const rw_hal_spindle harness_spindle = { NULL, fake_spindle_read, fake_spindle_write };
+static const rw_hal_config_store harness_config = { NULL, fake_config_load, fake_config_save };
 const rw_hal harness_hal = {
     .esc = &harness_esc,
     .encoder = &harness_encoder,
@@ -164,6 +193,7 @@ const rw_hal harness_hal = {
     .link = &harness_link,
     .scheduler = &harness_scheduler,
     .spindle = &harness_spindle,
+    .config = &harness_config,
 };
 
 /* Entry points for the emulator (called with the AAPCS: arguments in r0.., return in r0). */
@@ -171,6 +201,7 @@ void harness_init(void);
 void harness_set_clock(uint32_t now_us);
 void harness_tick(uint32_t now_us);
 uint8_t harness_state(void);
+uint32_t harness_session_id(void);
 
 void harness_init(void)
 {
@@ -183,6 +214,9 @@ void harness_init(void)
     harness_battery_mv = 14800u;
     harness_rx_len = 0u;
     harness_tx_count = 0u;
+    rw_config_defaults(&harness_flash);
+    rw_config_set_key(&harness_flash, harness_test_key);
+    harness_flash_saves = 0u;
     rw_core_init(&harness_core);
 }
 
@@ -202,6 +236,12 @@ void harness_tick(uint32_t now_us)
 uint8_t harness_state(void)
 {
     return rw_core_state(&harness_core);
+}
+
+/* The session id of this boot (the stored boot counter after the first tick). */
+uint32_t harness_session_id(void)
+{
+    return rw_core_session_id(&harness_core);
 }
 
 int main(void);

@@ -11,6 +11,7 @@ target_link_options(rw_arm_tick_harness PRIVATE
     -nostartfiles
     # entry points only the emulator calls: roots for --gc-sections
     -Wl,--undefined=harness_state -Wl,--undefined=harness_set_clock -Wl,--undefined=harness_init
+    -Wl,--undefined=harness_session_id -Wl,--undefined=harness_test_key -Wl,--undefined=rw_siphash24
     -T${CMAKE_CURRENT_LIST_DIR}/samd21g18a.ld
     -Wl,-Map=${CMAKE_CURRENT_BINARY_DIR}/rw_arm_tick_harness.map
     -Wl,--print-memory-usage)

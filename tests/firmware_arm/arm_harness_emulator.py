@@ -11,6 +11,10 @@ single-cycle multiplier the SAMD21 has): data processing 1, load/store 2, LDM/ST
 its flash with one wait state; sequential fetches are partly hidden, so the real figure lies between this
 count and about 1.5x it.
 
+The harness's fake flash holds the test key (TEST_KEY, bytes 0..15), so the emulated core enforces the
+signed link: every frame but HELLO must be signed for its session (session_id()) with a growing counter;
+SignedHost builds such frames.
+
 Used by tests/firmware_arm/test_arm_build.py and bench/bench_tick_instructions.py.
 """
 
@@ -39,6 +43,7 @@ STACK_TOP = RAM_BASE + RAM_SIZE
 RETURN_ADDRESS = FLASH_BASE + FLASH_SIZE - 0x10
 HARNESS_TX_REPLY = 1
 HARNESS_TX_SEND = 2
+TEST_KEY = bytes(range(16))  # harness_test_key in arm_tick_harness.c: the provisioned key, never a real one
 
 
 class ArmToolchainMissing(RuntimeError):
@@ -131,7 +136,9 @@ class CallProfile:
     per_function: instructions per function name; per_class: instructions per class
     ("alu", "load_store", "multiple", "branch", "call"); runtime_by_caller: instructions spent in runtime
     library routines (libgcc soft-float and division, memcpy/memset, libm) per nearest calling function of
-    ours, found with a shadow call stack; stack_bytes: deepest stack use below the caller's stack pointer.
+    ours, found with a shadow call stack; stack_bytes: deepest stack use below the caller's stack pointer;
+    inclusive / inclusive_cycles: instructions / modelled cycles spent inside each function named in the
+    call's inclusive_roots, callees included (e.g. the whole of rw_frame_tag_valid with its SipHash).
     """
 
     instructions: int = 0
@@ -140,6 +147,8 @@ class CallProfile:
     per_class: Counter = field(default_factory=Counter)
     runtime_by_caller: Counter = field(default_factory=Counter)
     stack_bytes: int = 0
+    inclusive: Counter = field(default_factory=Counter)
+    inclusive_cycles: Counter = field(default_factory=Counter)
 
 
 def is_runtime_routine(name: str) -> bool:
@@ -201,15 +210,21 @@ class HarnessEmulator:
                     self.uc.mem_write(seg["p_vaddr"], seg.data())
         self.uc.mem_write(RETURN_ADDRESS, b"\x00\xbf" * 4)  # NOPs, never executed
         self._profile: CallProfile | None = None
-        self._pending: tuple[int, int, int] | None = None  # (address, size, base cycles) of a branch/call
+        # (address, size, base cycles, inclusive roots active) of a conditional branch awaiting its outcome
+        self._pending: tuple[int, int, int, tuple[str, ...]] | None = None
+        self._roots: tuple[str, ...] = ()
         self._stack: list[str] = []
         from unicorn.arm_const import UC_ARM_REG_SP
 
         self._sp_reg = UC_ARM_REG_SP
 
     # ---- calls -----------------------------------------------------------------------------------
-    def call(self, name: str, *args: int, count: bool = False, max_instructions: int = 5_000_000) -> tuple[int, CallProfile | None]:
-        """Call the function `name` with up to four integer arguments; returns (r0, profile or None)."""
+    def call(self, name: str, *args: int, count: bool = False, max_instructions: int = 5_000_000,
+             inclusive_roots: tuple[str, ...] = ()) -> tuple[int, CallProfile | None]:
+        """Call the function `name` with up to four integer arguments; returns (r0, profile or None).
+
+        With count=True, the profile's inclusive counters cover the functions named in inclusive_roots.
+        """
         from unicorn import UC_HOOK_CODE
         from unicorn.arm_const import UC_ARM_REG_LR, UC_ARM_REG_PC, UC_ARM_REG_R0, UC_ARM_REG_SP
 
@@ -225,6 +240,7 @@ class HarnessEmulator:
         self._profile = CallProfile() if count else None
         self._pending = None
         self._stack = []
+        self._roots = tuple(inclusive_roots)
         if count:
             hook = self.uc.hook_add(UC_HOOK_CODE, self._on_instruction)
             self.uc.ctl_flush_tb()  # blocks translated before the hook existed would run unhooked
@@ -241,11 +257,14 @@ class HarnessEmulator:
         return self.uc.reg_read(UC_ARM_REG_R0), self._profile
 
     def _settle_branch(self, next_address: int) -> None:
-        address, size, base = self._pending
+        address, size, base, active = self._pending
         taken = next_address != address + size
         hw = struct.unpack("<H", self.uc.mem_read(address, 2))[0]
         is_conditional = (hw >> 12) == 0b1101
-        self._profile.cycles += base + (1 if (taken and is_conditional) else 0)
+        cycles = base + (1 if (taken and is_conditional) else 0)
+        self._profile.cycles += cycles
+        for root in active:
+            self._profile.inclusive_cycles[root] += cycles
         self._pending = None
 
     def _on_instruction(self, uc, address: int, size: int, _user) -> None:  # noqa: ANN001
@@ -272,10 +291,15 @@ class HarnessEmulator:
         if is_runtime_routine(func):
             caller = next((f for f in reversed(stack) if not is_runtime_routine(f)), "?")
             prof.runtime_by_caller[caller] += 1
+        active = tuple(root for root in self._roots if root in stack) if self._roots else ()
+        for root in active:
+            prof.inclusive[root] += 1
         if cls == "branch" and (hw >> 12) == 0b1101:
-            self._pending = (address, size, cycles)
+            self._pending = (address, size, cycles, active)
         else:
             prof.cycles += cycles
+            for root in active:
+                prof.inclusive_cycles[root] += cycles
 
     # ---- memory helpers --------------------------------------------------------------------------
     def read_u32(self, name: str) -> int:
@@ -320,17 +344,71 @@ class HarnessEmulator:
     def state(self) -> int:
         return self.call("harness_state")[0] & 0xFF
 
-    def tick(self, now_us: int, *, count: bool = False) -> tuple[list[tuple[int, bytes]], CallProfile | None]:
+    def session_id(self) -> int:
+        """The session id of the core's current boot (its stored boot counter; 1 after the first tick)."""
+        return self.call("harness_session_id")[0]
+
+    def siphash(self, data: bytes, *, count: bool = False) -> tuple[int, CallProfile | None]:
+        """rw_siphash24(harness_test_key, data) run on the emulated core: (64-bit tag, profile or None).
+
+        data is staged in harness_rx (at most its size); use between ticks only.
+        """
+        from unicorn.arm_const import UC_ARM_REG_R1
+
+        cap = self.symbols["harness_rx"].size
+        if len(data) > cap:
+            raise ValueError(f"data: expected at most {cap} bytes, got {len(data)}")
+        rx = self.symbols["harness_rx"].address
+        self.uc.mem_write(rx, bytes(data))
+        low, profile = self.call("rw_siphash24", self.symbols["harness_test_key"].address, rx, len(data), count=count)
+        return low | (self.uc.reg_read(UC_ARM_REG_R1) << 32), profile
+
+    def tick(self, now_us: int, *, count: bool = False,
+             inclusive_roots: tuple[str, ...] = ()) -> tuple[list[tuple[int, bytes]], CallProfile | None]:
         """One control tick at now_us; returns the datagrams sent in it and the profile (count=True).
 
-        With count=True only rw_core_tick itself (and what it calls) is profiled, not the harness's clock.
+        With count=True only rw_core_tick itself (and what it calls) is profiled, not the harness's clock;
+        inclusive_roots as in call().
         """
         before = self.tx_count()
         if count:
             self.call("harness_set_clock", now_us)
             _, profile = self.call("rw_core_tick", self.symbols["harness_core"].address,
-                                   self.symbols["harness_hal"].address, now_us, count=True)
+                                   self.symbols["harness_hal"].address, now_us, count=True,
+                                   inclusive_roots=inclusive_roots)
         else:
             _, profile = self.call("harness_tick", now_us)
         sent = [self.last_tx()] if self.tx_count() != before else []
         return sent, profile
+
+
+class SignedHost:
+    """The host side of the signed link to the emulated core: frames signed with TEST_KEY for the core's
+    session, sequence numbers and counters growing by one per frame (the first frame gets seq 1, counter 1).
+
+    session_id: the core's session (emu.session_id() once it has ticked; the harness's first boot is 1).
+    """
+
+    def __init__(self, *, session_id: int = 1, key: bytes = TEST_KEY) -> None:
+        self.session_id = session_id
+        self.key = key
+        self.seq = 0
+        self.counter = 0
+
+    def frame(self, message, *, seq: int | None = None) -> bytes:  # noqa: ANN001
+        """message signed afresh (next counter); seq: the next sequence number unless given (a retransmission
+        keeps its seq)."""
+        from robowrangler.protocol import generated as proto
+
+        if seq is None:
+            self.seq = (self.seq + 1) & 0xFFFF
+            seq = self.seq
+        self.counter += 1
+        return proto.encode_frame(message, seq, key=self.key, session_id=self.session_id, counter=self.counter)
+
+    def unsigned(self, message) -> bytes:  # noqa: ANN001
+        """message framed without a signature (dropped over WiFi by the core)."""
+        from robowrangler.protocol import generated as proto
+
+        self.seq = (self.seq + 1) & 0xFFFF
+        return proto.encode_frame(message, self.seq)

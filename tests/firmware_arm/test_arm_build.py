@@ -2,7 +2,10 @@
 
 Checks that it links bare-metal, pulls in no heap, no printf/dtoa and no double-precision soft-float, fits
 its flash/RAM budget, and behaves like the host build when its Thumb code runs in an emulator (unicorn):
-arming hold, ARM, spin-up to AIRBORNE, ESC pulse never under the minimum.
+arming hold, ARM, spin-up to AIRBORNE, ESC pulse never under the minimum; and that the Thumb build enforces
+the signed link (its fake flash holds the test key): frames signed for the session are answered with signed
+replies, unsigned, forged and replayed ones are dropped unanswered and counted, and its SipHash-2-4 gives
+the reference tags.
 
 Skipped only when arm-none-eabi-gcc is missing (CI installs gcc-arm-none-eabi libnewlib-arm-none-eabi).
 """
@@ -77,28 +80,36 @@ def test_core_fits_its_flash_and_ram_budget(arm_elf: Path) -> None:
 
 
 def _frames(emu: ah.HarnessEmulator, now_us: int) -> list[proto.Message]:
+    """The messages the core sent in one tick; each must be signed with the test key for its session."""
     sent, _ = emu.tick(now_us)
-    return [proto.decode_message(raw)[1] for _, raw in sent]
+    out = []
+    for _, raw in sent:
+        frame, msg = proto.decode_message(raw)
+        assert frame.signed and frame.session_id == emu.session_id(), f"unsigned or foreign frame out: {frame}"
+        assert proto.tag_valid(frame, ah.TEST_KEY), f"bad tag on {msg}"
+        out.append(msg)
+    return out
 
 
 def test_arm_build_arms_spins_up_and_flies_in_the_emulator(arm_elf: Path) -> None:
     emu = ah.HarnessEmulator(arm_elf)
     emu.reset()
-    now_us, seq = 0, 0
+    now_us = 0
     out: list[proto.Message] = []
+    host = ah.SignedHost()
 
     def tick(message: proto.Message | None = None) -> list[proto.Message]:
-        nonlocal now_us, seq
+        nonlocal now_us
         now_us += 1000
         if message is not None:
-            seq += 1
-            emu.put_datagram(proto.encode_frame(message, seq))
+            emu.put_datagram(host.frame(message))
         got = _frames(emu, now_us)
         out.extend(got)
         return got
 
     # Arming hold: ARM is refused with NOT_READY at first, the ESC sits at its minimum pulse.
     tick()
+    assert emu.session_id() == host.session_id == 1, "a fresh flash record boots session 1"
     refused = tick(proto.Arm())
     assert isinstance(refused[0], proto.Nack) and refused[0].reason == proto.NackReason.NOT_READY
     hold_ms = round(proto.PARAMS_BY_NAME["arm_hold_s"].default * 1000)
@@ -143,3 +154,96 @@ def test_tick_profile_counts_instructions(arm_elf: Path) -> None:
     # The harness reserves 4 KB of stack (samd21g18a.ld); a tick must stay well inside it.
     assert 64 < profile.stack_bytes < 2048, f"rw_core_tick used {profile.stack_bytes} B of stack"
     assert any(name.startswith("__aeabi_f") or name.endswith("sf2") for name in profile.per_function)
+
+
+class _Link:
+    """Ticks the emulated core 1 ms at a time and keeps every signed frame it sends."""
+
+    def __init__(self, emu: ah.HarnessEmulator) -> None:
+        self.emu = emu
+        self.now_us = 0
+        self.frames: list[tuple[proto.Frame, proto.Message]] = []
+
+    def tick(self, datagram: bytes | None = None) -> list[tuple[proto.Frame, proto.Message]]:
+        self.now_us += 1000
+        if datagram is not None:
+            self.emu.put_datagram(datagram)
+        sent, _ = self.emu.tick(self.now_us)
+        got = [proto.decode_message(raw) for _, raw in sent]
+        self.frames.extend(got)
+        return got
+
+    def telemetry_after(self) -> proto.Telemetry:
+        """The next TELEMETRY frame the core sends."""
+        for _ in range(100):
+            for _, msg in self.tick():
+                if isinstance(msg, proto.Telemetry):
+                    return msg
+        raise AssertionError("no telemetry within 100 ticks")
+
+
+def test_arm_build_drops_unsigned_forged_and_replayed_frames(arm_elf: Path) -> None:
+    emu = ah.HarnessEmulator(arm_elf)
+    emu.reset()
+    link = _Link(emu)
+    link.tick()
+    host = ah.SignedHost(session_id=emu.session_id())
+
+    # A signed frame is answered; the reply is signed for the session with the device's own growing counter.
+    got = link.tick(host.frame(proto.ParamGet(param_id=0)))
+    assert got and isinstance(got[0][1], proto.Ack), got
+    first_counter = got[0][0].counter
+    accepted = host.frame(proto.ParamGet(param_id=1))
+    got = link.tick(accepted)
+    assert got and isinstance(got[0][1], proto.Ack) and got[0][0].counter > first_counter
+
+    # Unsigned, forged (tag flipped), a wrong session, and the identical bytes again: no answer at all.
+    unsigned = host.unsigned(proto.ParamGet(param_id=2))
+    forged = bytearray(host.frame(proto.ParamGet(param_id=3)))
+    forged[-1] ^= 0x01
+    other_session = proto.encode_frame(proto.ParamGet(param_id=4), 900, key=ah.TEST_KEY,
+                                       session_id=emu.session_id() + 1, counter=host.counter + 100)
+    for datagram in (unsigned, bytes(forged), other_session, accepted):
+        replies = [msg for frame, msg in link.tick(datagram) if isinstance(msg, (proto.Ack, proto.Nack))]
+        assert not replies, f"the core answered a frame it must drop: {replies}"
+    telemetry = link.telemetry_after()
+    assert telemetry.rx_auth_failed == 2, telemetry
+    assert telemetry.rx_replayed == 2, telemetry
+
+    # A retransmission (same seq and payload, signed afresh) is answered from the duplicate cache.
+    got = link.tick(host.frame(proto.ParamGet(param_id=1), seq=proto.decode_frame(accepted).seq))
+    assert got and isinstance(got[0][1], proto.Ack)
+    assert link.telemetry_after().rx_duplicates == 1
+    for frame, _ in link.frames:
+        assert frame.signed and frame.session_id == 1 and proto.tag_valid(frame, ah.TEST_KEY)
+
+
+def test_arm_build_keeps_its_boot_counter_in_the_config_store(arm_elf: Path) -> None:
+    emu = ah.HarnessEmulator(arm_elf)
+    emu.reset()
+    assert emu.read_u32("harness_flash_saves") == 0
+    emu.tick(1000)
+    assert emu.read_u32("harness_flash_saves") == 1, "the new boot counter is written back at once"
+    assert emu.session_id() == 1
+    # a reboot of the same device (flash kept, core re-initialised) is session 2
+    emu.call("rw_core_init", emu.symbols["harness_core"].address)
+    emu.tick(2000)
+    assert emu.session_id() == 2
+
+
+# SipHash-2-4 reference tags (Aumasson and Bernstein, "SipHash: a fast short-input PRF", appendix A and the
+# reference implementation's vectors): key 00..0f, message 00..len-1.
+SIPHASH_PAPER_VECTORS = {0: 0x726FDB47DD0E0E31, 15: 0xA129CA6149BE45E5}
+
+
+def test_arm_siphash_gives_the_reference_tags(arm_elf: Path) -> None:
+    import siphash24
+
+    emu = ah.HarnessEmulator(arm_elf)
+    emu.reset()
+    for n, tag in SIPHASH_PAPER_VECTORS.items():
+        assert emu.siphash(bytes(range(n)))[0] == tag, f"length {n}"
+    for n in (1, 7, 8, 9, 16, 25, 63, 64, 93):
+        data = bytes((7 * i + 3) & 0xFF for i in range(n))
+        expected = int.from_bytes(siphash24.siphash24(data, key=ah.TEST_KEY).digest(), "little")
+        assert emu.siphash(data)[0] == expected, f"length {n}"
