@@ -14,9 +14,18 @@ single rw_core_tick calls:
                telemetry packed (the heaviest path found)
   heartbeat    HEARTBEAT received and accepted (no reply), telemetry packed and sent in the same tick: the
                one path on which a received datagram and an outgoing telemetry frame share a tick
+  replayed     the identical bytes of an accepted command again (a replay): its tag is checked (one SipHash),
+               its counter is not above the last accepted, dropped unanswered; a speed tick, like quiet
+  forged       a signed command with one tag bit flipped: tag check fails, dropped; a speed tick, like quiet
   cycle_max    the heaviest of SCHEDULE_TICKS consecutive ticks with nothing received (the speed loop, the
                spindle step every 10th tick and the telemetry pack at their own phases): the worst case of the
                periodic work; the table then names the ticks of the cycle by what ran in them
+
+The link is signed (protocol v2): the harness's fake flash holds the test key, every host frame is signed
+for the session with a growing counter, and every frame the core sends over WiFi is signed (ACK/NACK,
+TELEMETRY, events). The columns "MAC instr/cycles" are what the tick spent inside rw_frame_tag_valid and
+rw_frame_sign (the SipHash-2-4 tags, checksum rewrite and signature block), callees included. A second
+table runs rw_siphash24 alone on the signed part of typical frames (SET_ROPE_SPEED, ACK, TELEMETRY).
 
 The target for the periodic work is cycle_max under 10 % of a 1 kHz tick (4,800 modelled cycles).
 Prints instructions, modelled cycles (see tests/firmware_arm/arm_harness_emulator.py for the Cortex-M0+ cycle
@@ -59,6 +68,10 @@ def group_of(func: str) -> str:
         return "integer division"
     if func == "rw_crc16_ccitt":
         return "CRC-16 (table)"
+    if func in ("rw_siphash24", "sip_round", "compress", "load_le64", "rotl"):
+        return "SipHash-2-4 (MAC)"
+    if func in ("__aeabi_llsl", "__aeabi_llsr", "__aeabi_lasr", "__ashldi3", "__lshrdi3", "__ashrdi3"):
+        return "64-bit shifts (libgcc)"
     if func in ("memcpy", "memset", "memmove"):
         return "memcpy/memset"
     if func.startswith(("rw_msg_", "rw_frame_")):
@@ -68,24 +81,32 @@ def group_of(func: str) -> str:
     return "core logic"
 
 
+MAC_ROOTS = ("rw_frame_tag_valid", "rw_frame_sign")
+
+
 class Scenario:
-    """Drives the emulated core with a 1 ms tick clock and host frames."""
+    """Drives the emulated core with a 1 ms tick clock and host frames signed for its session."""
 
     def __init__(self, emu: ah.HarnessEmulator) -> None:
         self.emu = emu
         self.now_us = 0
-        self.seq = 0
+        self.host = ah.SignedHost()
 
     def frame(self, message) -> bytes:  # noqa: ANN001
-        self.seq += 1
-        return proto.encode_frame(message, self.seq)
+        """message signed with the test key for session 1 (the harness's first boot), next seq and counter."""
+        return self.host.frame(message)
 
     def tick(self, datagram: bytes | None = None, *, count: bool = False):  # noqa: ANN201
         self.now_us += 1000
         if datagram is not None:
             self.emu.put_datagram(datagram)
-        sent, profile = self.emu.tick(self.now_us, count=count)
-        return [proto.decode_message(raw)[1] for _, raw in sent], profile
+        sent, profile = self.emu.tick(self.now_us, count=count, inclusive_roots=MAC_ROOTS if count else ())
+        out = []
+        for _, raw in sent:
+            frame, msg = proto.decode_message(raw)
+            assert frame.signed and proto.tag_valid(frame, ah.TEST_KEY), f"the core sent an unsigned or bad frame: {msg}"
+            out.append(msg)
+        return out, profile
 
     def run_quiet(self, ticks: int) -> list:
         out = []
@@ -97,7 +118,9 @@ class Scenario:
 
     def to_airborne(self) -> None:
         self.emu.reset()
-        self.run_quiet(600)  # arming hold (arm_hold_s) with heartbeats
+        self.run_quiet(1)
+        assert self.emu.session_id() == self.host.session_id, "the harness's first boot must be session 1"
+        self.run_quiet(599)  # arming hold (arm_hold_s) with heartbeats
         sent, _ = self.tick(self.frame(proto.Arm()))
         assert sent and isinstance(sent[0], proto.Ack), f"ARM not acknowledged: {sent}"
         sent, _ = self.tick(self.frame(proto.Home()))
@@ -129,6 +152,15 @@ class Scenario:
                 parts.append("telemetry")
             out.append(("+".join(parts) or "none", profile))
         return out
+
+    def until_telemetry_message(self) -> "proto.Telemetry":
+        """Tick until a tick sends TELEMETRY; returns the message."""
+        for _ in range(200):
+            sent, _ = self.tick(None)
+            for m in sent:
+                if isinstance(m, proto.Telemetry):
+                    return m
+        raise RuntimeError("no telemetry within 200 ticks")
 
     def until_telemetry(self):  # noqa: ANN201
         """Tick (profiled) until a tick sends TELEMETRY; returns that tick's profile."""
@@ -165,6 +197,23 @@ def main() -> None:
     sc.run_quiet(period_ms - 1)
     sent, results["heartbeat"] = sc.tick(sc.frame(proto.Heartbeat(host_time_ms=sc.now_us // 1000)), count=True)
     assert sent and isinstance(sent[0], proto.Telemetry), f"heartbeat tick sent {sent}"
+    # attacks, each on a speed tick right after a telemetry tick (the same kind of tick as quiet)
+    accepted = sc.frame(proto.SetRopeSpeed(rope_speed_mmps=TARGET_MMPS))
+    sent, _ = sc.tick(accepted)
+    assert sent and isinstance(sent[0], proto.Ack), f"SET_ROPE_SPEED not acknowledged: {sent}"
+    sc.until_telemetry()
+    sent, results["replayed"] = sc.tick(accepted, count=True)
+    assert not sent, f"the replayed frame was answered: {sent}"
+    forged = bytearray(sc.frame(proto.SetRopeSpeed(rope_speed_mmps=TARGET_MMPS)))
+    forged[-1] ^= 0x01
+    sc.until_telemetry()
+    sent, results["forged"] = sc.tick(bytes(forged), count=True)
+    assert not sent, f"the forged frame was answered: {sent}"
+    for name in ("replayed", "forged"):
+        assert results[name].per_function.get("rw_pi_controller_step"), f"{name} was not a speed tick"
+    sc.run_quiet(3)
+    last_telemetry = sc.until_telemetry_message()
+    assert last_telemetry.rx_replayed == 1 and last_telemetry.rx_auth_failed == 1, last_telemetry
     cycle = sc.schedule_cycle(SCHEDULE_TICKS)
     assert emu.state() == proto.State.AIRBORNE
     worst_label, results["cycle_max"] = max(cycle, key=lambda item: item[1].cycles)
@@ -178,12 +227,37 @@ def main() -> None:
     print("cycle model: ALU 1, load/store 2, LDM/STM/PUSH/POP 1+N, branch taken 2 (BL 3), zero flash wait states;")
     print("             SAMD21 flash at 48 MHz has 1 wait state: real cycles up to ~1.5x the modelled figure.")
     print(f"{'tick':<11}{'instructions':>13}{'cycles':>9}{'us @48MHz':>11}{'load @1kHz':>12}{'load x1.5':>11}"
-          f"{'stack B':>9}")
-    for name in ("quiet", "telemetry", "heartbeat", "command", "param_set", "cycle_max"):
+          f"{'stack B':>9}{'MAC instr':>11}{'MAC cycles':>12}")
+    for name in ("quiet", "telemetry", "heartbeat", "command", "param_set", "replayed", "forged", "cycle_max"):
         p = results[name]
         us = p.cycles / CPU_HZ * 1e6
+        mac_instr = sum(p.inclusive[r] for r in MAC_ROOTS)
+        mac_cycles = sum(p.inclusive_cycles[r] for r in MAC_ROOTS)
         print(f"{name:<11}{p.instructions:>13}{p.cycles:>9}{us:>11.1f}{p.cycles / cycles_per_tick:>11.1%}"
-              f"{1.5 * p.cycles / cycles_per_tick:>11.1%}{p.stack_bytes:>9}")
+              f"{1.5 * p.cycles / cycles_per_tick:>11.1%}{p.stack_bytes:>9}{mac_instr:>11}{mac_cycles:>12}")
+    print("  MAC = inside rw_frame_tag_valid (verify) + rw_frame_sign (sign the reply / telemetry), callees included;")
+    for name in ("command", "replayed", "forged", "telemetry"):
+        p = results[name]
+        parts = ", ".join(f"{r} {p.inclusive[r]} instr / {p.inclusive_cycles[r]} cycles" for r in MAC_ROOTS if p.inclusive[r])
+        print(f"  {name}: {parts or 'none'}")
+    q = results["quiet"].cycles
+    for name in ("replayed", "forged"):
+        extra = results[name].cycles - q
+        print(f"  {name} - quiet = {extra} cycles ({extra / CPU_HZ * 1e6:.1f} us): what dropping one such frame costs")
+
+    print("\nrw_siphash24 alone (key in flash, message in RAM), on the bytes a tag covers:")
+    print(f"{'message':<34}{'bytes':>6}{'instructions':>13}{'cycles':>9}{'us @48MHz':>11}{'cycles/B':>10}")
+    typical = (
+        ("SET_ROPE_SPEED (host command)", proto.SetRopeSpeed(rope_speed_mmps=TARGET_MMPS)),
+        ("ACK (device reply)", proto.Ack(cmd_msg_id=proto.SetRopeSpeed.MSG_ID, cmd_seq=1, state=proto.State.AIRBORNE)),
+        ("TELEMETRY (device, 50 Hz)", last_telemetry),
+    )
+    for label, message in typical:
+        signed = proto.decode_frame(proto.encode_frame(message, 1, key=ah.TEST_KEY, session_id=1, counter=1)).signed_bytes
+        tag, p = emu.siphash(signed, count=True)
+        assert tag.to_bytes(8, "little") == proto.siphash24(ah.TEST_KEY, signed), "ARM SipHash differs from Python"
+        print(f"{label:<34}{len(signed):>6}{p.instructions:>13}{p.cycles:>9}{p.cycles / CPU_HZ * 1e6:>11.1f}"
+              f"{p.cycles / len(signed):>10.1f}")
 
     print(f"\n{SCHEDULE_TICKS} consecutive ticks, nothing received; cycle_max was a '{worst_label}' tick.")
     print(f"{'what ran in the tick':<28}{'ticks':>6}{'max cycles':>12}{'load @1kHz':>12}")
