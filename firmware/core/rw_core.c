@@ -389,6 +389,18 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
         return;
     }
     float target = rope_landing(st) ? 0.0f : core->state.target_mps;
+    /* While airborne the setpoint comes down onto the guard exponentially (time constant
+     * RW_CORE_GUARD_APPROACH_S), not at the full ramp rate, so that the speed loop lands on it without
+     * undershooting into the band under ToV x margin. */
+    float rate_down = rw_params_get(&core->params, RW_PARAM_RAMP_DOWN_MPS2);
+    if (st == RW_STATE_AIRBORNE) {
+        float room = rw_ramp_output(&core->state.ramp) - rw_tov_guard_min_airborne_mps(&core->state.guard);
+        float approach = room * (1.0f / RW_CORE_GUARD_APPROACH_S) + RW_CORE_GUARD_APPROACH_MIN_MPS2;
+        if (approach < rate_down) {
+            rate_down = approach;
+        }
+    }
+    core->state.ramp.cfg.rate_down_per_s = rate_down;
     float setpoint = rw_ramp_step(&core->state.ramp, target, dt_s);
     core->state.setpoint_mps = setpoint;
     if (rope_landing(st) && rw_f32_le(setpoint, 0.0f)) {
@@ -397,6 +409,13 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
         return;
     }
     float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.ff_battery_v);
+    /* ToV guard on the output too: while airborne the throttle never goes under what holds the guard speed
+     * without load, so a step down to the guard cannot brake the rope through it (the PI's anti-windup
+     * knows the floor). */
+    core->state.pi.cfg.out_min = st == RW_STATE_AIRBORNE
+        ? rw_throttle_map_feed_forward(&core->state.throttle, rw_tov_guard_min_airborne_mps(&core->state.guard),
+                                       core->state.ff_battery_v)
+        : 0.0f;
     float u = rw_pi_controller_step(&core->state.pi, setpoint, core->state.measured_mps, ff, dt_s);
     uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u);
     core->state.pulse_us = pulse < esc_min ? esc_min : pulse;

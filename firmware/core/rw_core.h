@@ -56,6 +56,10 @@
 
 /* Under this measured speed the rope counts as stopped (spin-down done, DISARM allowed). */
 #define RW_CORE_STOPPED_MPS 0.15f
+/* Airborne, the setpoint approaches the guard speed exponentially with this time constant (s), at least
+ * RW_CORE_GUARD_APPROACH_MIN_MPS2: a step down to the guard then lands on it without undershooting. */
+#define RW_CORE_GUARD_APPROACH_S 0.4f
+#define RW_CORE_GUARD_APPROACH_MIN_MPS2 0.5f
 /* Throttle above idle, for the encoder-silence check: the ESC pulse is more than this over esc_min_us. */
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
 /* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
