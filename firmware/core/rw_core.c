@@ -408,6 +408,18 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
         core->state.pulse_us = esc_min;
         return;
     }
+    /* A blind loop must not act: with the rope meant to run at >= 1 m/s, no encoder edge for four edge
+     * periods at the setpoint (3 ms at least) means the reading is stale, not that the rope stopped: hold the
+     * throttle and the integrator until edges come back (or encoder_timeout_s raises ENCODER_SILENT). */
+    if (rw_f32_ge(setpoint, RW_CORE_ENCODER_HOLD_MIN_MPS) && core->state.speed.state.primed) {
+        const rw_mt_speed_estimator_config *enc = &core->state.speed.cfg;
+        float edge_period_us = 6.2831853f * 1.0e6f * enc->wheel_radius_m / (setpoint * (float)enc->counts_per_rev);
+        float stale_us = 4.0f * edge_period_us < 3000.0f ? 3000.0f : 4.0f * edge_period_us;
+        uint32_t silence_us = core->state.last_now_us - core->state.speed.state.last_edge_us;
+        if (silence_us < 0x80000000u && (float)silence_us > stale_us) {
+            return; /* pulse and PI state unchanged */
+        }
+    }
     float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.ff_battery_v);
     /* ToV guard on the output too: while airborne the throttle never goes under what holds the guard speed
      * without load, so a step down to the guard cannot brake the rope through it (the PI's anti-windup

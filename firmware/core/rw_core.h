@@ -60,6 +60,8 @@
  * RW_CORE_GUARD_APPROACH_MIN_MPS2: a step down to the guard then lands on it without undershooting. */
 #define RW_CORE_GUARD_APPROACH_S 0.4f
 #define RW_CORE_GUARD_APPROACH_MIN_MPS2 0.5f
+/* Over this setpoint an encoder silence of four edge periods holds the throttle (a stale reading). */
+#define RW_CORE_ENCODER_HOLD_MIN_MPS 1.0f
 /* Throttle above idle, for the encoder-silence check: the ESC pulse is more than this over esc_min_us. */
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
 /* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
