@@ -1,11 +1,16 @@
 /*
  * Unity tests of the firmware core top level (rw_core): state transitions and their STATE_CHANGED
  * events, the arming hold, ESTOP, NACK reasons (frame and command level), retransmissions, outbox
- * priority, one datagram in and out per tick, heartbeat loss, encoder silence, tick-clock wrap.
+ * priority, one datagram in and out per tick, heartbeat loss, encoder silence, tick-clock wrap, and the
+ * signed link (unsigned, forged, replayed, foreign-session frames dropped and counted; replies signed).
  *
  * A fake HAL in C: the encoder is a wheel at a set rope speed (edge times in integer nanoseconds,
- * 64 edges/rev, 15 mm wheel), the battery reads a set voltage, the link delivers queued datagrams
- * and records every reply and sent frame. One tick = 1 ms. Run with `pio test -e native`.
+ * 64 edges/rev, 15 mm wheel), the battery reads a set voltage, the link (WiFi) delivers queued datagrams
+ * and records every reply and sent frame, and the config store is a fresh flash record provisioned with
+ * the test key (bytes 0..15, never a real one), so the first boot is session 1. The host side signs its
+ * frames with rw_frame_sign (generated codec) for that session with a growing counter; malformed frames
+ * are queued as they are (the core NACKs them before any authentication). One tick = 1 ms.
+ * Run with `pio test -e native`.
  */
 #include <math.h>
 #include <stdint.h>
@@ -53,6 +58,10 @@ static struct {
 
 static rw_core core;
 static uint16_t host_seq;
+static uint64_t host_counter; /* counter of the last frame the host signed */
+static rw_config flash;       /* the fake config store's record */
+static unsigned flash_saves;
+static const uint8_t test_key[RW_KEY_LEN] = { 0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u };
 
 static rw_encoder_sample encoder_read(void *ctx)
 {
@@ -123,6 +132,24 @@ static uint32_t tick_overruns(void *ctx)
     return 0u;
 }
 
+static bool config_load(void *ctx, void *buf, size_t len)
+{
+    (void)ctx;
+    TEST_ASSERT_EQUAL_UINT(sizeof flash, len);
+    memcpy(buf, &flash, len);
+    return true;
+}
+
+static bool config_save(void *ctx, const void *buf, size_t len)
+{
+    (void)ctx;
+    TEST_ASSERT_EQUAL_UINT(sizeof flash, len);
+    memcpy(&flash, buf, len);
+    ++flash_saves;
+    return true;
+}
+
+static const rw_hal_config_store hal_config = { NULL, config_load, config_save };
 static const rw_hal_esc_output hal_esc = { NULL, esc_write_pulse_us };
 static const rw_hal_encoder hal_encoder = { NULL, encoder_read };
 static const rw_hal_battery hal_battery = { NULL, battery_read_mv };
@@ -156,10 +183,11 @@ static const rw_hal_spindle hal_spindle_fake = { NULL, spindle_read, spindle_wri
 /* Designated: interfaces a HAL does not set stay NULL = not fitted. */
 static const rw_hal hal_no_spindle = {
     .esc = &hal_esc, .encoder = &hal_encoder, .battery = &hal_battery, .link = &hal_link, .scheduler = &hal_scheduler,
+    .config = &hal_config,
 };
 static const rw_hal hal_with_spindle = {
     .esc = &hal_esc, .encoder = &hal_encoder, .battery = &hal_battery, .link = &hal_link, .scheduler = &hal_scheduler,
-    .spindle = &hal_spindle_fake,
+    .spindle = &hal_spindle_fake, .config = &hal_config,
 };
 static const rw_hal *hal = &hal_no_spindle;
 
@@ -210,6 +238,7 @@ static void run_ms(uint32_t ms)
     }
 }
 
+/* Queues a datagram exactly as given (malformed ones included). */
 static void queue_bytes(const uint8_t *data, size_t len)
 {
     TEST_ASSERT_TRUE(fake.in_count < MAX_IN && len <= sizeof fake.inbox[0]);
@@ -217,6 +246,31 @@ static void queue_bytes(const uint8_t *data, size_t len)
     memcpy(fake.inbox[i], data, len);
     fake.inbox_len[i] = len;
     ++fake.in_count;
+}
+
+/* The session the core's next received frame belongs to: its boot counter (the stored one + 1 before
+ * the first tick loads and bumps it). */
+static uint32_t host_session_id(void)
+{
+    return core.state.started ? rw_core_session_id(&core) : flash.boot_counter + 1u;
+}
+
+/* Copies an unsigned frame into out and signs it there for the session with the next counter; returns the
+ * signed length. A retransmission is the same frame signed again (new counter). */
+static size_t sign_frame(uint8_t out[RW_MAX_FRAME_LEN], const uint8_t *frame, size_t len)
+{
+    TEST_ASSERT_TRUE(len <= RW_MAX_FRAME_LEN);
+    memcpy(out, frame, len);
+    size_t n = rw_frame_sign(out, len, RW_MAX_FRAME_LEN, host_session_id(), ++host_counter, test_key);
+    TEST_ASSERT_TRUE_MESSAGE(n == len + RW_SIGNATURE_LEN, "a well-formed unsigned frame to sign");
+    return n;
+}
+
+/* Queues an unsigned frame signed (as the host sends every frame on WiFi). */
+static void queue_signed(const uint8_t *frame, size_t len)
+{
+    uint8_t signed_frame[RW_MAX_FRAME_LEN];
+    queue_bytes(signed_frame, sign_frame(signed_frame, frame, len));
 }
 
 /* Frame builders (the generated encoders); each returns the frame length. */
@@ -266,7 +320,7 @@ static void heartbeat(void)
 {
     uint8_t buf[RW_MAX_FRAME_LEN];
     rw_msg_heartbeat m = { now_ms() };
-    queue_bytes(buf, rw_msg_heartbeat_encode(&m, ++host_seq, buf, sizeof buf));
+    queue_signed(buf, rw_msg_heartbeat_encode(&m, ++host_seq, buf, sizeof buf));
 }
 
 /* The verdict the core replied in the last tick. */
@@ -287,6 +341,9 @@ static verdict last_reply(void)
     TEST_ASSERT_TRUE_MESSAGE(o->reply && o->tick == fake.ticks - 1u, "a reply in the last tick");
     rw_frame f;
     TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_frame_decode(o->bytes, o->len, &f));
+    TEST_ASSERT_TRUE_MESSAGE((f.flags & RW_FRAME_FLAG_SIGNED) != 0u, "replies on WiFi are signed");
+    TEST_ASSERT_TRUE_MESSAGE(rw_frame_tag_valid(&f, test_key), "reply tag valid for the key");
+    TEST_ASSERT_EQUAL_UINT32(rw_core_session_id(&core), f.session_id);
     if (f.msg_id == RW_MSG_ID_ACK) {
         rw_msg_ack a;
         rw_msg_ack_unpack(&a, f.payload);
@@ -307,8 +364,16 @@ static verdict last_reply(void)
     return v;
 }
 
-/* Queues a frame, runs one tick, returns the verdict. */
+/* Queues an unsigned frame signed for the session, runs one tick, returns the verdict. */
 static verdict command(const uint8_t *buf, size_t len)
+{
+    queue_signed(buf, len);
+    tick();
+    return last_reply();
+}
+
+/* Queues the bytes as they are (a malformed frame), runs one tick, returns the verdict. */
+static verdict command_raw(const uint8_t *buf, size_t len)
 {
     queue_bytes(buf, len);
     tick();
@@ -381,6 +446,10 @@ void setUp(void)
     hal = &hal_no_spindle;
     fake.battery_mv = 14800u;
     host_seq = 0u;
+    host_counter = 0u;
+    rw_config_defaults(&flash);
+    rw_config_set_key(&flash, test_key);
+    flash_saves = 0u;
     rw_core_init(&core);
 }
 
@@ -494,7 +563,7 @@ static void test_frame_level_nack_reasons_are_counted_and_harmless(void)
         uint16_t rx_bad = core.state.counters.rx_bad;
         uint16_t nacks = core.state.counters.nacks;
         unsigned peers = fake.accept_peer_calls;
-        verdict v = command(data, len);
+        verdict v = command_raw(data, len);
         TEST_ASSERT_FALSE_MESSAGE(v.ack, "a malformed datagram is never executed");
         TEST_ASSERT_EQUAL_UINT8_MESSAGE(cases[c].reason, v.reason, "NACK reason");
         TEST_ASSERT_EQUAL_UINT16(rx_bad + 1u, core.state.counters.rx_bad);
@@ -583,8 +652,8 @@ static void test_one_datagram_in_and_out_per_tick_and_outbox_priority(void)
     tick();
     run_ms(39); /* telemetry (50 Hz) is due at 40 ms */
     unsigned from = fake.n_out;
-    queue_bytes(a, frame_param_set(a, 1u, RW_PARAM_SPEED_KP, 0.05f));
-    queue_bytes(b, frame_param_get(b, 2u, RW_PARAM_TOV_MPS));
+    queue_signed(a, frame_param_set(a, 1u, RW_PARAM_SPEED_KP, 0.05f));
+    queue_signed(b, frame_param_get(b, 2u, RW_PARAM_TOV_MPS));
     tick();
     TEST_ASSERT_EQUAL_UINT(1u, fake.in_count);
     run_ms(6);
@@ -663,9 +732,9 @@ static void record_scenario(uint32_t offset_us, uint16_t *pulses, unsigned n)
     pulses[k++] = fake.pulse_us;
     while (k < n) {
         if (k == 520u) {
-            queue_bytes(buf, frame_arm(buf, ++host_seq));
+            queue_signed(buf, frame_arm(buf, ++host_seq));
         } else if (k == 530u) {
-            queue_bytes(buf, frame_speed(buf, ++host_seq, 4000));
+            queue_signed(buf, frame_speed(buf, ++host_seq, 4000));
         } else if (k % 100u == 0u) {
             heartbeat();
         }
@@ -694,6 +763,8 @@ static void test_long_tick_gap_does_not_jump_the_esc_pulse(void)
     uint8_t buf[RW_MAX_FRAME_LEN];
     TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_core_set_param(&core, RW_PARAM_HEARTBEAT_TIMEOUT_S, 10.0f));
     TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_core_set_param(&core, RW_PARAM_RAMP_UP_MPS2, 2.0f));
+    /* the first tick loads the stored parameters over the core's: store these (as provisioning would) */
+    rw_config_set_params(&flash, core.params.value);
     to_airborne(4000);
     for (uint32_t i = 0u; i < 2000u && core.state.setpoint_mps < 4.0f; ++i) {
         set_rope_speed_mps((double)core.state.setpoint_mps);
@@ -740,6 +811,108 @@ static void test_spindle_refusals(void)
     TEST_ASSERT_EQUAL_UINT16(0u, spindle_fake.last_raw);
 }
 
+/* ---- the signed link ------------------------------------------------------------------------------ */
+
+/* Ticks once with the datagram queued; true if the core replied (ACK/NACK) in that tick. */
+static bool answered(const uint8_t *datagram, size_t len)
+{
+    unsigned from = fake.n_out;
+    queue_bytes(datagram, len);
+    tick();
+    for (unsigned i = from; i < fake.n_out; ++i) {
+        if (fake.out[i].reply) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static void test_boot_counter_is_the_session_and_is_stored_at_once(void)
+{
+    tick();
+    TEST_ASSERT_EQUAL_UINT32(1u, rw_core_session_id(&core));
+    TEST_ASSERT_EQUAL_UINT(1u, flash_saves);
+    TEST_ASSERT_TRUE(rw_config_valid(&flash));
+    TEST_ASSERT_EQUAL_UINT32(1u, flash.boot_counter);
+    TEST_ASSERT_EQUAL_UINT8(1u, flash.key_set);
+    /* the next boot of the same device is session 2: frames of session 1 no longer count */
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    uint8_t old[RW_MAX_FRAME_LEN];
+    size_t n_old = sign_frame(old, buf, frame_param_get(buf, ++host_seq, RW_PARAM_TOV_MPS));
+    rw_core_init(&core);
+    tick();
+    TEST_ASSERT_EQUAL_UINT32(2u, rw_core_session_id(&core));
+    TEST_ASSERT_EQUAL_UINT32(2u, flash.boot_counter);
+    TEST_ASSERT_FALSE(answered(old, n_old));
+    TEST_ASSERT_EQUAL_UINT16(1u, core.state.counters.rx_replayed);
+    TEST_ASSERT_TRUE(command(buf, frame_param_get(buf, ++host_seq, RW_PARAM_TOV_MPS)).ack);
+}
+
+static void test_unsigned_forged_and_replayed_frames_are_dropped_and_counted(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    uint8_t accepted[RW_MAX_FRAME_LEN];
+    tick();
+    run_ms(600); /* past the arming hold */
+    size_t n_acc = sign_frame(accepted, buf, frame_param_get(buf, ++host_seq, RW_PARAM_TOV_MPS));
+    TEST_ASSERT_TRUE(answered(accepted, n_acc));
+    unsigned peers = fake.accept_peer_calls;
+
+    /* unsigned ARM: dropped (the core stays DISARMED) */
+    size_t n = frame_arm(buf, ++host_seq);
+    TEST_ASSERT_FALSE(answered(buf, n));
+    TEST_ASSERT_EQUAL_UINT16(1u, core.state.counters.rx_auth_failed);
+    /* forged: signed ARM with one tag bit flipped */
+    uint8_t forged[RW_MAX_FRAME_LEN];
+    size_t n_forged = sign_frame(forged, buf, frame_arm(buf, ++host_seq));
+    forged[n_forged - 1u] ^= 0x80u;
+    TEST_ASSERT_FALSE(answered(forged, n_forged));
+    TEST_ASSERT_EQUAL_UINT16(2u, core.state.counters.rx_auth_failed);
+    /* signed with another key */
+    uint8_t other_key[RW_KEY_LEN];
+    memcpy(other_key, test_key, sizeof other_key);
+    other_key[0] ^= 1u;
+    uint8_t foreign[RW_MAX_FRAME_LEN];
+    size_t n_foreign = frame_arm(foreign, ++host_seq);
+    n_foreign = rw_frame_sign(foreign, n_foreign, sizeof foreign, host_session_id(), ++host_counter, other_key);
+    TEST_ASSERT_FALSE(answered(foreign, n_foreign));
+    TEST_ASSERT_EQUAL_UINT16(3u, core.state.counters.rx_auth_failed);
+    /* the identical bytes of the accepted frame again, and a counter not above the last accepted */
+    TEST_ASSERT_FALSE(answered(accepted, n_acc));
+    uint8_t stale[RW_MAX_FRAME_LEN];
+    size_t n_stale = frame_arm(stale, ++host_seq);
+    n_stale = rw_frame_sign(stale, n_stale, sizeof stale, host_session_id(), 1u, test_key);
+    TEST_ASSERT_FALSE(answered(stale, n_stale));
+    TEST_ASSERT_EQUAL_UINT16(2u, core.state.counters.rx_replayed);
+    TEST_ASSERT_EQUAL_UINT16(3u, core.state.counters.rx_auth_failed);
+
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_DISARMED, rw_core_state(&core));
+    TEST_ASSERT_EQUAL_UINT_MESSAGE(peers, fake.accept_peer_calls, "a dropped frame never becomes the peer");
+    TEST_ASSERT_EQUAL_UINT16(0u, core.state.counters.nacks);
+    /* the genuine host is still heard */
+    verdict v = command(buf, frame_arm(buf, ++host_seq));
+    TEST_ASSERT_TRUE(v.ack);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_ARMED, v.state);
+}
+
+static void test_without_a_key_nothing_but_hello_is_accepted_over_wifi(void)
+{
+    rw_config_defaults(&flash); /* an unprovisioned device */
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    uint8_t signed_frame[RW_MAX_FRAME_LEN];
+    tick();
+    size_t n_signed = sign_frame(signed_frame, buf, frame_param_get(buf, ++host_seq, RW_PARAM_TOV_MPS));
+    TEST_ASSERT_FALSE(answered(signed_frame, n_signed));
+    TEST_ASSERT_EQUAL_UINT16(1u, core.state.counters.rx_auth_failed);
+    rw_msg_hello hello;
+    memset(&hello, 0, sizeof hello);
+    size_t n = rw_msg_hello_encode(&hello, ++host_seq, buf, sizeof buf);
+    TEST_ASSERT_TRUE_MESSAGE(answered(buf, n), "HELLO is answered unsigned (SESSION_INFO)");
+    rw_frame f;
+    TEST_ASSERT_EQUAL_UINT8(RW_MSG_ID_SESSION_INFO, sent_msg_id(fake.n_out - 1u, &f));
+    TEST_ASSERT_EQUAL_UINT8(0u, f.flags & RW_FRAME_FLAG_SIGNED);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -757,5 +930,8 @@ int main(void)
     RUN_TEST(test_tick_clock_wrap_changes_nothing);
     RUN_TEST(test_long_tick_gap_does_not_jump_the_esc_pulse);
     RUN_TEST(test_spindle_refusals);
+    RUN_TEST(test_boot_counter_is_the_session_and_is_stored_at_once);
+    RUN_TEST(test_unsigned_forged_and_replayed_frames_are_dropped_and_counted);
+    RUN_TEST(test_without_a_key_nothing_but_hello_is_accepted_over_wifi);
     return UNITY_END();
 }
