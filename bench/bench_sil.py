@@ -62,9 +62,15 @@ def ack_latency(samples: int, speedup: float) -> list[float]:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         sock.settimeout(1.0)
         sock.connect(("127.0.0.1", sil.cmd_port))
+        sock.send(gen.encode_frame(gen.Hello(1), 0))  # the session to sign for
+        while True:
+            _, info = gen.decode_message(sock.recv(256))
+            if isinstance(info, gen.SessionInfo):
+                break
         out: list[float] = []
         for seq in range(samples):
-            frame = gen.encode_frame(gen.ParamGet(0), seq)
+            # signed as every command on the link (SipHash-2-4): the figure includes the MAC on both sides
+            frame = gen.encode_frame(gen.ParamGet(0), seq, key=sil.key, session_id=info.session_id, counter=seq + 1)
             t0 = time.perf_counter()
             sock.send(frame)
             while True:
