@@ -48,7 +48,7 @@ def test_provision_over_usb_then_command_over_udp(blank_sil: SilSession, tmp_pat
     udp = ["--url", blank_sil.cmd_url, "--key-file", str(key_file), "--timeout", "1"]
     status, _, err = run(*udp, "arm")
     assert status == ExitStatus.AUTH and "provision" in err  # no key on the device yet: it takes nothing
-    status, out, err = run("--url", f"serial://{blank_sil.serial_path}", "provision", "set",
+    status, out, err = run("provision", "--port", blank_sil.serial_path, "set",
                            "--link-key-file", str(key_file), "--wifi-ssid", "lab")
     assert status == ExitStatus.OK, err
     assert out[-1]["key_set"] and out[-1]["wifi_ssid"] == "lab"

@@ -45,8 +45,14 @@ def generate_key_file(path: str) -> bytes:
 
 
 @click.group()
-def provision() -> None:
-    """Link key and WiFi credentials, over USB serial only (--url serial://...)."""
+@click.option("--port", default=None, metavar="PORT",
+              help="The device's USB serial port (/dev/ttyACM0, COM3): short for --url serial://PORT.")
+@click.option("--baud", type=int, default=115200, show_default=True, help="Serial speed, with --port.")
+@pass_context
+def provision(ctx: CliContext, port: str | None, baud: int) -> None:
+    """Link key and WiFi credentials, over USB serial only (--port PORT, or --url serial://...)."""
+    if port is not None:
+        ctx.url = f"serial://{port}?baud={baud}"
 
 
 @provision.command()
