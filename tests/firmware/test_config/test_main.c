@@ -1,0 +1,121 @@
+/*
+ * Unity tests of rw_config (the configuration record kept in flash): defaults are valid, carry the
+ * parameter defaults, no key and boot counter 0; the CRC-32 is the IEEE one (check value of "123456789");
+ * a flipped bit anywhere in the record, another magic, version or size invalidates it; set_key and
+ * set_params store and reseal; a change without seal is caught. Run with `pio test -e native`.
+ */
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <unity.h>
+
+#include "rw_config.h"
+#include "rw_params.h"
+
+static rw_config cfg;
+
+void setUp(void)
+{
+    memset(&cfg, 0xCC, sizeof cfg);
+    rw_config_defaults(&cfg);
+}
+
+void tearDown(void) {}
+
+static void test_defaults_are_valid_with_no_key(void)
+{
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+    TEST_ASSERT_EQUAL_HEX32(RW_CONFIG_MAGIC, cfg.magic);
+    TEST_ASSERT_EQUAL_UINT16(RW_CONFIG_VERSION, cfg.version);
+    TEST_ASSERT_EQUAL_UINT16(sizeof cfg, cfg.size);
+    TEST_ASSERT_EQUAL_UINT32(0u, cfg.boot_counter);
+    TEST_ASSERT_EQUAL_UINT8(0u, cfg.key_set);
+    TEST_ASSERT_EQUAL_UINT8(0u, cfg.password_set);
+    TEST_ASSERT_EQUAL_CHAR(0, cfg.wifi_ssid[0]);
+    for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
+        TEST_ASSERT_EQUAL_FLOAT(rw_param_table[i].default_value, cfg.params[i]);
+    }
+    /* defaults are the same bytes whatever the memory held before (padding included) */
+    rw_config again;
+    memset(&again, 0x5A, sizeof again);
+    rw_config_defaults(&again);
+    TEST_ASSERT_EQUAL_MEMORY(&cfg, &again, sizeof cfg);
+}
+
+static void test_crc32_is_the_ieee_crc(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0xCBF43926u, rw_crc32("123456789", 9u));
+    TEST_ASSERT_EQUAL_HEX32(0x00000000u, rw_crc32("", 0u));
+    TEST_ASSERT_EQUAL_HEX32(rw_crc32(&cfg, (uint32_t)offsetof(rw_config, crc32)), cfg.crc32);
+}
+
+static void test_any_flipped_bit_invalidates_the_record(void)
+{
+    uint8_t *bytes = (uint8_t *)&cfg;
+    for (size_t bit = 0u; bit < sizeof cfg * 8u; ++bit) {
+        bytes[bit / 8u] ^= (uint8_t)(1u << (bit % 8u));
+        TEST_ASSERT_FALSE_MESSAGE(rw_config_valid(&cfg), "a flipped bit went unnoticed");
+        bytes[bit / 8u] ^= (uint8_t)(1u << (bit % 8u));
+    }
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+}
+
+static void test_other_magic_version_or_size_is_refused_even_when_sealed(void)
+{
+    cfg.version = RW_CONFIG_VERSION + 1u;
+    rw_config_seal(&cfg);
+    TEST_ASSERT_FALSE(rw_config_valid(&cfg));
+    rw_config_defaults(&cfg);
+    cfg.size = (uint16_t)(sizeof cfg - 4u);
+    rw_config_seal(&cfg);
+    TEST_ASSERT_FALSE(rw_config_valid(&cfg));
+    rw_config_defaults(&cfg);
+    cfg.magic ^= 1u;
+    rw_config_seal(&cfg);
+    TEST_ASSERT_FALSE(rw_config_valid(&cfg));
+}
+
+static void test_set_key_stores_and_reseals(void)
+{
+    const uint8_t key[RW_KEY_LEN] = { 0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u };
+    uint32_t crc_before = cfg.crc32;
+    rw_config_set_key(&cfg, key);
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+    TEST_ASSERT_EQUAL_UINT8(1u, cfg.key_set);
+    TEST_ASSERT_EQUAL_UINT8_ARRAY(key, cfg.key, RW_KEY_LEN);
+    TEST_ASSERT_NOT_EQUAL(crc_before, cfg.crc32);
+    /* a change without a seal is caught */
+    cfg.key[3] ^= 0x10u;
+    TEST_ASSERT_FALSE(rw_config_valid(&cfg));
+    rw_config_seal(&cfg);
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+}
+
+static void test_set_params_stores_and_reseals(void)
+{
+    float values[RW_PARAM_COUNT];
+    for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
+        values[i] = rw_param_table[i].default_value;
+    }
+    values[RW_PARAM_SPEED_KP] = 0.07f;
+    uint32_t crc_before = cfg.crc32;
+    rw_config_set_params(&cfg, values);
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+    TEST_ASSERT_EQUAL_FLOAT(0.07f, cfg.params[RW_PARAM_SPEED_KP]);
+    TEST_ASSERT_EQUAL_MEMORY(values, cfg.params, sizeof values);
+    TEST_ASSERT_NOT_EQUAL(crc_before, cfg.crc32);
+    cfg.boot_counter += 1u; /* a new session without a seal */
+    TEST_ASSERT_FALSE(rw_config_valid(&cfg));
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_defaults_are_valid_with_no_key);
+    RUN_TEST(test_crc32_is_the_ieee_crc);
+    RUN_TEST(test_any_flipped_bit_invalidates_the_record);
+    RUN_TEST(test_other_magic_version_or_size_is_refused_even_when_sealed);
+    RUN_TEST(test_set_key_stores_and_reseals);
+    RUN_TEST(test_set_params_stores_and_reseals);
+    return UNITY_END();
+}
