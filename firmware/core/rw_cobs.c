@@ -1,5 +1,7 @@
 #include "rw_cobs.h"
 
+#include <stdbool.h>
+
 size_t rw_cobs_encode(const uint8_t *in, size_t n, uint8_t *out, size_t cap)
 {
     if (cap < RW_COBS_MAX_ENCODED(n)) {
@@ -8,16 +10,22 @@ size_t rw_cobs_encode(const uint8_t *in, size_t n, uint8_t *out, size_t cap)
     size_t code_at = 0u; /* where the current block's code byte goes */
     size_t o = 1u;
     uint8_t code = 1u;   /* 1 + bytes in the current block */
+    bool full_block_closed = false; /* the last block ended at 254 data bytes, not at a zero */
     for (size_t i = 0u; i < n; ++i) {
         if (in[i] != 0u) {
             out[o++] = in[i];
             ++code;
         }
+        full_block_closed = false;
         if (in[i] == 0u || code == 0xFFu) {
+            full_block_closed = in[i] != 0u;
             out[code_at] = code;
             code_at = o++;
             code = 1u;
         }
+    }
+    if (full_block_closed) {
+        return o - 1u; /* input ended with a full block: no empty block follows it */
     }
     out[code_at] = code;
     return o;

@@ -83,8 +83,6 @@ def test_encoding_matches_the_cobs_package_byte_for_byte(codec: ctypes.CDLL) -> 
         assert c_encode(codec, data) == cobs.encode(data), data.hex()
 
 
-@pytest.mark.xfail(strict=True, reason="rw_cobs_encode adds a redundant 0x01 code byte after a final full "
-                                       "254-byte block (still decodable by both sides): firmware/core, not fixed")
 def test_final_full_block_is_encoded_canonically(codec: ctypes.CDLL) -> None:
     data = bytes(range(1, 255))
     assert c_encode(codec, data) == cobs.encode(data)
