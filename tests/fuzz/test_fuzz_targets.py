@@ -1,0 +1,51 @@
+"""The C decoder, the COBS decoder and the whole firmware core under libFuzzer (AddressSanitizer + UBSan).
+
+Each target is built with clang (firmware/fuzz/CMakeLists.txt, into build/fuzz) and fuzzed from its seed
+corpus (firmware/fuzz/corpus/<target>/) for a few seconds: the run must end by its time limit (exit 0)
+with no crash, hang (-timeout), out-of-memory or oversized allocation (-rss_limit_mb/-malloc_limit_mb),
+sanitizer report or invariant trap (the targets' headers list their invariants), and must have run
+the target for real (executions, and coverage no lower than the seed corpus reaches by itself).
+Total fuzzing time here: 28 s; bench/bench_fuzz.py runs the long version.
+"""
+
+from __future__ import annotations
+
+import filecmp
+import subprocess
+import sys
+from pathlib import Path
+
+import libfuzzer_runner as lf
+import pytest
+
+# seconds of fuzzing per target in CI; the core target is the slowest per input (thousands of ticks)
+CI_BUDGET_S = {"frame_decode": 8, "core": 15, "cobs_decode": 5}
+# edges the seed corpus alone reaches (measured: frame_decode 245, core 802, cobs_decode 29), with slack:
+# a harness change that stops reaching the decoder or the command handling falls under these
+MIN_SEED_COV = {"frame_decode": 200, "core": 650, "cobs_decode": 25}
+# inputs run at the least (measured on 2 busy cores: frame_decode and cobs_decode ~40,000/s, core ~250/s)
+MIN_EXECUTIONS = {"frame_decode": 10_000, "core": 300, "cobs_decode": 10_000}
+
+
+@pytest.mark.parametrize("target", lf.TARGETS)
+def test_bounded_fuzz_run_finds_nothing(target: str, fuzz_build_dir: Path, tmp_path: Path) -> None:
+    result = lf.run(target, build_dir=fuzz_build_dir, work_dir=tmp_path, max_total_time_s=CI_BUDGET_S[target])
+    tail = "\n".join(result.log.splitlines()[-60:])
+    assert result.artifacts == (), f"fuzz_{target} left reproducers {[p.name for p in result.artifacts]}:\n{tail}"
+    assert result.returncode == 0, f"fuzz_{target} exited {result.returncode}:\n{tail}"
+    assert result.executions >= MIN_EXECUTIONS[target], tail
+    assert result.seed_cov >= MIN_SEED_COV[target], f"seed corpus reaches only {result.seed_cov} edges:\n{tail}"
+    assert result.cov >= result.seed_cov
+
+
+@pytest.mark.parametrize("target", lf.TARGETS)
+def test_seed_corpus_matches_the_golden_vectors(target: str, tmp_path: Path) -> None:
+    """The committed seeds are what make_corpus.py makes from protocol/vectors/vectors.json today."""
+    subprocess.run([sys.executable, str(lf.FUZZ_SOURCE_DIR / "make_corpus.py"), "--out", str(tmp_path)],
+                   check=True, capture_output=True, text=True)
+    fresh, committed = tmp_path / target, lf.CORPUS_DIR / target
+    names = sorted(p.name for p in fresh.iterdir())
+    assert len(names) >= 20
+    assert names == sorted(p.name for p in committed.iterdir()), "run firmware/fuzz/make_corpus.py"
+    _, mismatch, errors = filecmp.cmpfiles(fresh, committed, names, shallow=False)
+    assert mismatch == [] and errors == [], "run firmware/fuzz/make_corpus.py"
