@@ -150,7 +150,9 @@ extern "C" {
 
 void rw_core_init(rw_core *core);
 
-/* One control tick at time now_us (the tick clock, wraps); the first call only latches the clock. */
+/* One control tick at time now_us (the tick clock, wraps). The first call latches the clock and loads the
+ * configuration record through hal->config: a valid stored record's parameters replace those set before
+ * (rw_core_set_param), its key becomes the link key, and its boot counter goes up by one (the session). */
 void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us);
 
 /* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. */
