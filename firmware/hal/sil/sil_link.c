@@ -8,25 +8,15 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "sil_udp.h"
+
 bool sil_link_open(sil_link *link, uint16_t port)
 {
     memset(link, 0, sizeof *link);
-    link->fd = socket(AF_INET, SOCK_DGRAM, 0);
+    link->fd = sil_udp_bind_loopback(port, &link->port);
     if (link->fd < 0) {
         return false;
     }
-    struct sockaddr_in addr;
-    memset(&addr, 0, sizeof addr);
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(port);
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (bind(link->fd, (struct sockaddr *)&addr, sizeof addr) != 0) {
-        close(link->fd);
-        return false;
-    }
-    socklen_t alen = sizeof addr;
-    getsockname(link->fd, (struct sockaddr *)&addr, &alen);
-    link->port = ntohs(addr.sin_port);
     int flags = fcntl(link->fd, F_GETFL, 0);
     fcntl(link->fd, F_SETFL, flags | O_NONBLOCK);
     return true;

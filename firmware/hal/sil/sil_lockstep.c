@@ -7,25 +7,15 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "sil_udp.h"
+
 bool sil_lockstep_open(sil_lockstep *ls, uint16_t port)
 {
     memset(ls, 0, sizeof *ls);
-    ls->fd = socket(AF_INET, SOCK_DGRAM, 0);
+    ls->fd = sil_udp_bind_loopback(port, &ls->port);
     if (ls->fd < 0) {
         return false;
     }
-    struct sockaddr_in addr;
-    memset(&addr, 0, sizeof addr);
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons(port);
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (bind(ls->fd, (struct sockaddr *)&addr, sizeof addr) != 0) {
-        close(ls->fd);
-        return false;
-    }
-    socklen_t alen = sizeof addr;
-    getsockname(ls->fd, (struct sockaddr *)&addr, &alen);
-    ls->port = ntohs(addr.sin_port);
     ls->esc_pulse_us = 0u; /* no pulse until the core's first tick */
     return true;
 }
