@@ -13,18 +13,25 @@ from robowrangler_sim.sil import SilSession
 from robowrangler_sim.sil.impairment import ImpairedLockstep, ImpairmentConfig, ImpairmentProxy
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 
+# link_gate, link_ledger and soak_runner are imported by plain name from the tests of this folder and from
+# bench/bench_soak.py (also under pytest's importlib mode, where test folders are not on sys.path).
+_HERE = str(Path(__file__).resolve().parent)
+if _HERE not in sys.path:
+    sys.path.insert(0, _HERE)
+from link_gate import seeded_key  # noqa: E402
+
 
 @pytest.fixture
 def lossy_host(native_build_dir: Path) -> Iterator[Callable[..., ScriptedHost]]:
     """Factory: a ScriptedHost talking through an ImpairmentProxy (lockstep, deterministic) to an unpaced SIL.
 
     lossy_host(config, seed=0, warmup_s=0.6) -> host; host.sil.proxy is the proxy (logging on), host.sil.sil
-    the SilSession. The impairment starts after the warm-up (past the ESC arming hold), with a clean link
-    before it.
+    the SilSession, host.key (= host.sil.key) its link key, derived from the seed (same seed, same bytes).
+    The impairment starts after the warm-up (past the ESC arming hold), with a clean link before it.
     """
     with ExitStack() as stack:
         def make(config: ImpairmentConfig, *, seed: int = 0, warmup_s: float = 0.6) -> ScriptedHost:
-            sil = stack.enter_context(SilSession(speedup=None, seed=seed))
+            sil = stack.enter_context(SilSession(speedup=None, seed=seed, key=seeded_key(seed)))
             proxy = stack.enter_context(ImpairmentProxy(device_port=sil.cmd_port, seed=seed, keep_log=True))
             host = ScriptedHost(ImpairedLockstep(sil, proxy))
             stack.callback(host.close)
@@ -37,14 +44,9 @@ def lossy_host(native_build_dir: Path) -> Iterator[Callable[..., ScriptedHost]]:
 @pytest.fixture
 def plain_host(native_build_dir: Path) -> Iterator[ScriptedHost]:
     """A scripted host on an unpaced SIL without a proxy, past the ESC arming hold (0.6 s simulated)."""
-    with SilSession(speedup=None) as sil:
+    with SilSession(speedup=None, key=seeded_key(0)) as sil:
         host = ScriptedHost(sil)
         host.run_for(0.6)
         yield host
         host.close()
 
-# link_ledger and soak_runner are imported by plain name from the tests of this folder and from
-# bench/bench_soak.py (also under pytest's importlib mode, where test folders are not on sys.path).
-_HERE = str(Path(__file__).resolve().parent)
-if _HERE not in sys.path:
-    sys.path.insert(0, _HERE)

@@ -1,15 +1,21 @@
 """What crossed an ImpairmentProxy, decoded: the device-side truth the network tests check against.
 
 The proxy logs every datagram it received ('in', before impairment) and delivered ('out'). So the ledger
-knows every command frame the firmware really got (with repeats: retransmissions and network
-duplicates) and every frame the firmware sent (the device's own sequence numbers, gap-free unless the
-device itself lost one), whatever the impaired link then did to them.
+knows every frame the firmware really got and, through the device's gate (link_gate: the protocol's rule
+for the signed link), what the firmware must have done with it: act on it (authentic, with a fresh
+counter), or drop it unanswered (unsigned or a wrong tag: rx_auth_failed; another session or a stale
+counter, which is what a network duplicate or an overtaken frame is: rx_replayed). Among the accepted
+command frames, repeats (same msg_id, seq and checksum) are host retransmissions, signed afresh: the
+firmware must answer them from its duplicate cache (rx_duplicates) and not act again. The ledger also
+knows every frame the firmware sent (the device's own sequence numbers, gap-free unless the device
+itself lost one), whatever the impaired link then did to them.
 """
 
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass, field
+
+from link_gate import DeviceGate, Fate
 
 from robowrangler.protocol import generated as gen
 from robowrangler_sim.sil.impairment import LoggedDatagram
@@ -17,18 +23,27 @@ from robowrangler_sim.sil.impairment import LoggedDatagram
 COMMAND_IDS = frozenset(msg_id for msg_id, m in gen.MESSAGES.items() if m.KIND == gen.MsgKind.COMMAND)
 
 
-@dataclass
 class LinkLedger:
-    """Counts and decoded frames from proxy logs; feed() it take_log() output as it comes."""
+    """Counts and decoded frames from proxy logs; feed() it take_log() output as it comes.
 
-    command_deliveries: Counter = field(default_factory=Counter)  # (msg_id, seq, checksum) -> times delivered
-    executed_commands: list[tuple[int, gen.Message]] = field(default_factory=list)  # first deliveries, in order
-    corrupted_to_device: int = 0
-    corrupted_to_host: int = 0
-    undecodable_clean_to_device: int = 0
-    device_frames: list[tuple[int, int, gen.Message]] = field(default_factory=list)  # (time_us, seq, msg) sent
-    device_seqs_sent: set[int] = field(default_factory=set)  # unwrapped sequence numbers of device frames
-    _last_device_seq: int | None = None
+    key: the device's link key (16 bytes): the ledger checks tags with it, as the device and the host do.
+    """
+
+    def __init__(self, *, key: bytes) -> None:
+        self.gate = DeviceGate(key=key)
+        self.command_deliveries: Counter = Counter()  # (msg_id, seq, checksum) -> times accepted by the device
+        self.executed_commands: list[tuple[int, gen.Message]] = []  # first acceptances, in order
+        self.auth_failed_deliveries = 0  # frames the device must drop for a missing or wrong tag
+        self.replayed_deliveries = 0  # frames the device must drop as replays (session or counter)
+        self.replayed_commands: list[gen.Message] = []  # command frames among them
+        self.corrupted_to_device = 0  # corrupted copies the decoder refuses (NACKed)
+        self.corrupted_unauthentic_to_device = 0  # corrupted copies the CRC passes and the tag refuses
+        self.undecodable_clean_to_device = 0  # the host sent garbage on purpose
+        self.corrupted_to_host = 0
+        self.corrupted_unauthentic_to_host = 0  # of which decodable (a flip in the signature block)
+        self.device_frames: list[tuple[int, int, gen.Message]] = []  # (time_us, seq, msg) sent
+        self.device_seqs_sent: set[int] = set()  # unwrapped sequence numbers of device frames
+        self._last_device_seq: int | None = None
 
     def feed(self, entries: list[LoggedDatagram]) -> None:
         for e in entries:
@@ -37,32 +52,53 @@ class LinkLedger:
             elif e.direction == "to_host" and e.kind == "in":
                 self._from_device(e)
             elif e.direction == "to_host" and e.kind == "out" and e.corrupted:
-                self.corrupted_to_host += 1
+                self._corrupted_to_host(e)
 
     def _to_device(self, e: LoggedDatagram) -> None:
-        try:
-            frame, msg = gen.decode_message(e.data)
-        except gen.FrameError:
+        d = self.gate.deliver(e.data)
+        if d.fate in (Fate.EMPTY, Fate.MALFORMED):
             if e.corrupted:
                 self.corrupted_to_device += 1
             else:
-                self.undecodable_clean_to_device += 1  # the host sent garbage on purpose
+                self.undecodable_clean_to_device += 1
             return
-        assert not e.corrupted, f"a corrupted frame decoded as {msg}: the checksum missed a bit flip"
-        if frame.msg_id not in COMMAND_IDS:
+        if e.corrupted:
+            assert d.fate is Fate.AUTH_FAILED, \
+                f"a corrupted frame got through the gate as {d.fate.name} {d.message}: CRC and tag both missed a bit flip"
+            self.corrupted_unauthentic_to_device += 1
+        if d.fate is Fate.AUTH_FAILED:
+            self.auth_failed_deliveries += 1
             return
-        key = (frame.msg_id, frame.seq, int.from_bytes(e.data[-2:], "little"))
+        if d.fate is Fate.REPLAYED:
+            self.replayed_deliveries += 1
+            if d.frame.msg_id in COMMAND_IDS:
+                self.replayed_commands.append(d.message)
+            return
+        if d.fate is not Fate.ACCEPTED or d.frame.msg_id not in COMMAND_IDS:
+            return
+        key = (d.frame.msg_id, d.frame.seq, d.frame.checksum)
         if self.command_deliveries[key] == 0:
-            self.executed_commands.append((e.time_us, msg))
+            self.executed_commands.append((e.time_us, d.message))
         self.command_deliveries[key] += 1
 
     def _from_device(self, e: LoggedDatagram) -> None:
         frame, msg = gen.decode_message(e.data)  # the firmware never sends a bad frame
+        assert gen.tag_valid(frame, self.gate.key), f"the firmware sent {msg} unsigned or wrongly signed over WiFi"
+        self.gate.learn_session(frame)
         seq = frame.seq if self._last_device_seq is None else \
             self._last_device_seq + ((frame.seq - self._last_device_seq + 0x8000) & 0xFFFF) - 0x8000
         self._last_device_seq = seq
         self.device_seqs_sent.add(seq)
         self.device_frames.append((e.time_us, seq, msg))
+
+    def _corrupted_to_host(self, e: LoggedDatagram) -> None:
+        self.corrupted_to_host += 1
+        try:
+            frame = gen.decode_frame(e.data)
+        except gen.FrameError:
+            return
+        assert not gen.tag_valid(frame, self.gate.key), "a corrupted device frame still verifies: CRC and tag missed it"
+        self.corrupted_unauthentic_to_host += 1
 
     @property
     def device_seqs_never_sent(self) -> int:
@@ -76,11 +112,12 @@ class LinkLedger:
 
     @property
     def duplicate_deliveries(self) -> int:
-        """Command frames the firmware got again (same msg_id, seq and checksum): must not execute."""
+        """Accepted command frames the firmware got again (host retransmissions, re-signed): must not execute."""
         return sum(n - 1 for n in self.command_deliveries.values())
 
     @property
     def command_frames_delivered(self) -> int:
+        """Command frames the firmware accepted (each answered: first verdict or its cached copy)."""
         return sum(self.command_deliveries.values())
 
     def device_messages(self, kind: type) -> list[gen.Message]:
