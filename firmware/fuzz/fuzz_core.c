@@ -8,7 +8,8 @@
  *            record's content (parameters, key, boot counter) reaches the core's checks
  *   chunks   [tag][len][len bytes] ... ; tag & 3: 0 = a datagram on USB serial (trusted), 1 = a datagram on
  *            WiFi (must be signed), 2 = a sensor event (battery mV u16, encoder flags, spindle flags,
- *            spindle load u16, limit switch, tick period us u16), 3 = nothing; then tag >> 2 ticks
+ *            spindle load u16, limit switch, tick period us u16), 3 = with len >= 1: a replay on WiFi (an
+ *            exact copy of the last signed datagram WiFi delivered), else nothing; then tag >> 2 ticks
  *            (v < 32: v ticks; else (v - 31) x 32 ticks). A datagram waits in its link's queue (4 deep)
  *            until a tick reads it (the core reads at most one per link and tick).
  * The plant: the rope speed follows the ESC pulse (first order, 50 ms), the encoder counts it (unless the
@@ -21,7 +22,10 @@
  *     device-to-host message (reply, telemetry, event), is signed with the device's key on WiFi once a key
  *     is set and unsigned on serial, and never contains the link key;
  *   - over WiFi a frame that decodes but is not HELLO and not signed with the key gets no answer and does
- *     not become the peer;
+ *     not become the peer; neither does an exact copy of a signed frame delivered before (a replay);
+ *     known finding (firmware/fuzz/crashes/README.md): a PROVISION_COMMIT of a key resets the replay
+ *     counter within the session, so a replay of a frame signed with that same key earlier in the session
+ *     is accepted again; replays after a key commit are checked only with RW_FUZZ_STRICT_REPLAY=1;
  *   - at most one answer per link and tick; a queued frame only goes out in a tick without an answer;
  *   - every parameter is always within its range; the state is a known one;
  *   - the configuration the core writes is always a valid record; a stored record that is not valid
@@ -65,10 +69,12 @@ typedef struct fake_link {
     rw_link_id id;
     uint8_t queue[QUEUE_DEPTH][DATAGRAM_MAX];
     size_t queue_len[QUEUE_DEPTH];
+    bool queue_replay[QUEUE_DEPTH]; /* an exact copy of an earlier datagram: delivered as it is */
     unsigned head, count;
     bool has_peer;
     /* this tick */
     bool delivered;
+    bool delivered_replay;
     uint8_t delivered_bytes[RW_MAX_FRAME_LEN + 1u];
     size_t delivered_len;   /* as the core decodes it: clamped to its buffer */
     unsigned replies, sends, accepts;
@@ -99,8 +105,21 @@ static struct {
     bool record_was_valid;
     uint32_t record_boot_counter;
     uint64_t sign_counter;
+    uint8_t last_signed[RW_MAX_FRAME_LEN]; /* the last signed datagram WiFi delivered, for replays */
+    size_t last_signed_len;
+    bool key_committed;                    /* a PROVISION_COMMIT installed a key (the replay counter reset) */
     unsigned ticks;
 } h;
+
+static bool strict_replay(void)
+{
+    static int strict = -1;
+    if (strict < 0) {
+        const char *v = getenv("RW_FUZZ_STRICT_REPLAY");
+        strict = v != NULL && v[0] == '1';
+    }
+    return strict != 0;
+}
 
 /* ---- output checks --------------------------------------------------------------------------------- */
 
@@ -186,8 +205,15 @@ static size_t link_recv(void *ctx, uint8_t *buf, size_t cap)
         }
         uint8_t tmp[DATAGRAM_MAX + RW_SIGNATURE_LEN];
         memcpy(tmp, l->queue[slot], n);
-        if (l->id == RW_LINK_WIFI) {
+        l->delivered_replay = l->queue_replay[slot];
+        if (l->id == RW_LINK_WIFI && !l->delivered_replay) {
             maybe_sign_wifi(tmp, &n, sizeof tmp);
+            rw_frame f;
+            if (n <= sizeof h.last_signed && rw_frame_decode(tmp, n, &f) == RW_DECODE_OK &&
+                (f.flags & RW_FRAME_FLAG_SIGNED) != 0u) {
+                memcpy(h.last_signed, tmp, n);
+                h.last_signed_len = n;
+            }
         }
         size_t copied = n < cap ? n : cap;
         memcpy(buf, tmp, copied);
@@ -317,7 +343,7 @@ static rw_hal_link WIFI_LINK = { &h.wifi, link_recv, link_reply, link_accept, li
 
 /* ---- the run ------------------------------------------------------------------------------------------ */
 
-static void push(fake_link *l, const uint8_t *bytes, size_t n)
+static void push(fake_link *l, const uint8_t *bytes, size_t n, bool replay)
 {
     if (l->count >= QUEUE_DEPTH) {
         return; /* the link's buffer is full: dropped, as a real UDP socket would */
@@ -325,6 +351,7 @@ static void push(fake_link *l, const uint8_t *bytes, size_t n)
     unsigned slot = (l->head + l->count) % QUEUE_DEPTH;
     memcpy(l->queue[slot], bytes, n);
     l->queue_len[slot] = n;
+    l->queue_replay[slot] = replay;
     ++l->count;
 }
 
@@ -345,7 +372,7 @@ static void check_wifi_auth(const fake_link *l)
     const rw_config *c = &h.core.state.config;
     bool authentic = c->key_set != 0u && (f.flags & RW_FRAME_FLAG_SIGNED) != 0u && rw_frame_tag_valid(&f, c->key) &&
                      f.session_id == rw_core_session_id(&h.core);
-    if (!authentic) {
+    if (!authentic || (l->delivered_replay && (!h.key_committed || strict_replay()))) {
         RW_FUZZ_REQUIRE(l->replies == 0u && l->accepts == 0u);
     }
 }
@@ -384,8 +411,13 @@ static void tick(const rw_hal *hal)
     h.spindle_pos += (h.spindle_raw_speed & 1024u) != 0u ? -raw : raw;
 
     bool first = !h.core.state.started;
+    uint32_t commits = h.core.state.config.commits;
+    bool key_staged = h.core.state.key_staged;
     rw_core_tick(&h.core, hal, h.now_us);
     ++h.ticks;
+    if (key_staged && h.core.state.config.commits != commits) {
+        h.key_committed = true;
+    }
 
     if (first) {
         if (!h.record_was_valid) {
@@ -495,15 +527,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         at += len;
         switch (tag & 3u) {
         case 0u:
-            push(&h.serial, bytes, len);
+            push(&h.serial, bytes, len, false);
             break;
         case 1u:
-            push(&h.wifi, bytes, len);
+            push(&h.wifi, bytes, len, false);
             break;
         case 2u:
             sensor_event(bytes, len);
             break;
         default:
+            if (len > 0u && h.last_signed_len > 0u) {
+                push(&h.wifi, h.last_signed, h.last_signed_len, true);
+            }
             break;
         }
         unsigned v = tag >> 2;

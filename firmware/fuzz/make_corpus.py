@@ -7,7 +7,8 @@ cobs_decode:  [output capacity byte] + the COBS encoding of each vector, plus th
 core:         input programs for fuzz_core.c (its header documents the layout: an options byte, an
               optional stored record, then [tag][len][bytes] chunks): every vector on each link, a flight
               (arm, spin up, heartbeats, relax, grasp, spin down), provisioning over serial then a signed
-              command over WiFi, a stored record from the input, spindle and battery sensor events.
+              command over WiFi, replays of signed frames, a stored record from the input, spindle and
+              battery sensor events.
 The output is deterministic (same vectors, same files); the script replaces the corpus directories.
 """
 
@@ -142,6 +143,11 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
         + chunk(WIFI, frame(gen.Hello(host_nonce=1), 6))
         + chunk(WIFI, frame(gen.Arm(), 7))
         + chunk(WIFI, frame(gen.ProvisionGet(), 8), ticks=3))
+    programs["replays_on_wifi"] = (bytes([OPT_SIGN_WIFI | OPT_PREROLL])
+                                   + chunk(WIFI, frame(gen.Arm(), 1)) + chunk(NOTHING, b"\x01", ticks=2)
+                                   + chunk(WIFI, frame(gen.Heartbeat(host_time_ms=5), 2), ticks=1000)
+                                   + chunk(NOTHING, b"\x01", ticks=2)
+                                   + chunk(WIFI, frame(gen.Disarm(), 3), ticks=2) + chunk(NOTHING, b"\x01", ticks=2))
     programs["provision_store_fails"] = (bytes([OPT_SAVE_FAILS])
                                          + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
                                          + chunk(SERIAL, frame(gen.ProvisionCommit(), 2), ticks=3))
