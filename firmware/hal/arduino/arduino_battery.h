@@ -11,7 +11,8 @@ extern "C" {
 
 /* Battery voltage that gives the ADC's full scale (3.3 V at the pin) for the assumed divider
  * 47 kOhm (battery side) over 10 kOhm (ground side): 3.3 V x 57 / 10 = 18.81 V, millivolts. A 4S pack
- * (16.8 V full) then reads 2.95 V at the pin. Calibrate by storing the measured value in the config. */
+ * (16.8 V full) then reads 2.95 V at the pin. A board setting, not in the configuration record: calibrate
+ * by changing this constant (docs/board.md). */
 static const uint16_t RW_BATTERY_DEFAULT_FULL_SCALE_MV = 18810u;
 
 struct rw_arduino_battery {

@@ -16,9 +16,11 @@ static const uint8_t RW_PIN_BATTERY = A1;        /* A1 = PB02, ADC AIN[10] */
 static const uint8_t RW_ADC_BATTERY_AIN = 10u;   /* the ADC input PB02 is wired to */
 /* Status LED (the board's yellow LED). */
 static const uint8_t RW_PIN_STATUS_LED = LED_BUILTIN; /* D6 = PA20 */
-/* DYNAMIXEL Shield for MKR (AX-12A spindle, a later step): half-duplex TTL on Serial1 (D13 RX = PB23,
- * D14 TX = PB22, SERCOM5) with the direction pin on A6 (PA07). Reserved here, not driven yet. */
+/* DYNAMIXEL Shield for MKR (AX-12A spindle, see arduino_spindle.cpp): half-duplex TTL on Serial1 (D13 RX =
+ * PB23, D14 TX = PB22, SERCOM5) with the direction pin on A6 (PA07), driven by Dynamixel2Arduino. */
 static const uint8_t RW_PIN_DXL_DIR = A6;
+/* Optional home limit switch of the spindle: normally open to GND, internal pull-up; closed = LOW. */
+static const uint8_t RW_PIN_SPINDLE_HOME = 5u;   /* D5 = PB11, plain GPIO */
 
 /* Control tick (TC3, see arduino_scheduler.cpp). */
 static const uint32_t RW_TICK_PERIOD_US = 1000u;

@@ -1,87 +1,77 @@
-/* FlashStorage keeps one T in a 256-byte-aligned array in flash (erase by row, write by page).
- * Note: the array is part of the program image, so every firmware upload erases the stored configuration
- * (FlashStorage's documented limitation); the board then boots unprovisioned until provisioned again. */
+/* FlashStorage's FlashClass over an aligned array of our own (the library's Flash() macro does the same),
+ * so that the read-back check can address the area; every access goes through FlashClass (another
+ * translation unit), never through the array, whose initializer the compiler would otherwise fold. */
 #include "arduino_config_store.h"
 
 #include <FlashStorage.h>
-#include <stddef.h>
 #include <string.h>
 
-#include "arduino_battery.h"
-
-extern "C" {
-#include "rw_protocol.h"
-}
+static_assert(sizeof(rw_config) % 4u == 0u, "FlashClass writes whole 32-bit words");
 
 namespace {
 
-FlashStorage(rw_config_flash, rw_board_config);
+/* Zero in the image: a record never written reads as blank. Whole rows (256 bytes on the SAMD21G18). */
+__attribute__((__aligned__(256))) const uint8_t config_area[RW_CONFIG_AREA_BYTES] = {};
 
-uint16_t config_crc(const rw_board_config *cfg)
+FlashClass config_flash(config_area, RW_CONFIG_AREA_BYTES);
+
+const uint32_t VERIFY_CHUNK_BYTES = 32u;
+
+bool blank(const uint8_t *bytes, size_t len)
 {
-    return rw_crc16_ccitt(0xFFFFu, reinterpret_cast<const uint8_t *>(cfg), offsetof(rw_board_config, crc));
+    bool zeros = true;
+    bool ones = true;
+    for (size_t i = 0u; i < len; ++i) {
+        zeros = zeros && bytes[i] == 0x00u;
+        ones = ones && bytes[i] == 0xFFu;
+    }
+    return zeros || ones;
+}
+
+bool store_load(void *ctx, void *buf, size_t len)
+{
+    rw_arduino_config_store *store = static_cast<rw_arduino_config_store *>(ctx);
+    if (len == 0u || len > RW_CONFIG_AREA_BYTES) {
+        return false;
+    }
+    config_flash.read(config_area, buf, static_cast<uint32_t>(len));
+    if (blank(static_cast<const uint8_t *>(buf), len)) {
+        return false;
+    }
+    ++store->loads;
+    return true;
+}
+
+bool store_save(void *ctx, const void *buf, size_t len)
+{
+    rw_arduino_config_store *store = static_cast<rw_arduino_config_store *>(ctx);
+    if (len == 0u || len > RW_CONFIG_AREA_BYTES || len % 4u != 0u) {
+        ++store->save_failures;
+        return false;
+    }
+    config_flash.erase(config_area, static_cast<uint32_t>(len));
+    config_flash.write(config_area, buf, static_cast<uint32_t>(len));
+    const uint8_t *want = static_cast<const uint8_t *>(buf);
+    uint8_t got[VERIFY_CHUNK_BYTES];
+    for (size_t off = 0u; off < len; off += VERIFY_CHUNK_BYTES) {
+        const size_t n = len - off < VERIFY_CHUNK_BYTES ? len - off : VERIFY_CHUNK_BYTES;
+        config_flash.read(config_area + off, got, static_cast<uint32_t>(n));
+        if (memcmp(got, want + off, n) != 0) {
+            ++store->save_failures;
+            return false;
+        }
+    }
+    ++store->saves;
+    return true;
 }
 
 } // namespace
 
-void rw_arduino_config_defaults(rw_board_config *cfg)
+rw_hal_config_store rw_arduino_config_store_hal(rw_arduino_config_store *store)
 {
-    memset(cfg, 0, sizeof *cfg); /* also the padding, so the CRC covers defined bytes */
-    cfg->magic = RW_CONFIG_MAGIC;
-    cfg->version = RW_CONFIG_VERSION;
-    cfg->size_bytes = static_cast<uint16_t>(sizeof(rw_board_config));
-    cfg->udp_port = RW_CONFIG_DEFAULT_UDP_PORT;
-    cfg->battery_full_scale_mv = RW_BATTERY_DEFAULT_FULL_SCALE_MV;
-    cfg->param_count = static_cast<uint8_t>(RW_PARAM_COUNT);
-    for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
-        cfg->params[i] = rw_param_table[i].default_value;
-    }
-    cfg->crc = config_crc(cfg);
-}
-
-rw_config_status rw_arduino_config_load(rw_board_config *cfg)
-{
-    rw_config_flash.read(cfg);
-    rw_config_status status = RW_CONFIG_OK;
-    if (cfg->magic != RW_CONFIG_MAGIC) {
-        status = RW_CONFIG_BLANK;
-    } else if (cfg->version != RW_CONFIG_VERSION || cfg->size_bytes != sizeof(rw_board_config) ||
-               cfg->param_count != RW_PARAM_COUNT) {
-        status = RW_CONFIG_BAD_VERSION;
-    } else if (cfg->crc != config_crc(cfg)) {
-        status = RW_CONFIG_BAD_CRC;
-    }
-    if (status != RW_CONFIG_OK) {
-        rw_arduino_config_defaults(cfg);
-        return status;
-    }
-    cfg->wifi_ssid[RW_CONFIG_SSID_MAX] = '\0';
-    cfg->wifi_password[RW_CONFIG_PASSWORD_MAX] = '\0';
-    return RW_CONFIG_OK;
-}
-
-void rw_arduino_config_save(rw_board_config *cfg)
-{
-    cfg->magic = RW_CONFIG_MAGIC;
-    cfg->version = RW_CONFIG_VERSION;
-    cfg->size_bytes = static_cast<uint16_t>(sizeof(rw_board_config));
-    cfg->param_count = static_cast<uint8_t>(RW_PARAM_COUNT);
-    cfg->crc = config_crc(cfg);
-    rw_config_flash.write(*cfg);
-}
-
-uint8_t rw_arduino_config_apply_params(const rw_board_config *cfg, rw_core *core)
-{
-    uint8_t refused = 0u;
-    for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
-        if (rw_core_set_param(core, static_cast<uint8_t>(i), cfg->params[i]) != RW_DECODE_OK) {
-            ++refused;
-        }
-    }
-    return refused;
-}
-
-bool rw_arduino_config_has_wifi(const rw_board_config *cfg)
-{
-    return cfg->wifi_ssid[0] != '\0';
+    rw_hal_config_store hal;
+    hal.ctx = store;
+    hal.load = store_load;
+    hal.save = store_save;
+    return hal;
 }

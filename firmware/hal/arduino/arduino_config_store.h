@@ -1,62 +1,34 @@
-/* Board configuration in flash: WiFi credentials, UDP port, battery calibration, link key and the device
- * parameters as one versioned struct with a CRC, stored with FlashStorage (cmaglie/FlashStorage).
+/* Configuration store on the board: the core's rw_config record (key, WiFi credentials, parameters, boot
+ * counter; core/rw_config.h) kept in flash with FlashStorage (cmaglie/FlashStorage). Implements
+ * rw_hal_config_store (hal/rw_hal_config_store.h): it moves bytes, the core owns and checks the layout.
  *
- * Provisioning (writing SSID, password and key over USB Serial) is a later step: this file only defines the
- * struct and loads/saves it. Parameters changed with PARAM_SET are not saved yet either (docs/board.md). */
+ * The record lives in a 256-byte-aligned array in the program image (FlashStorage's model), one or more
+ * whole flash rows of its own. Consequences (docs/board.md): every firmware upload erases it (the board
+ * boots unprovisioned, boot counter from 1); each save erases and rewrites the rows (a few ms with the CPU
+ * stalled on flash), and a row endures about 25,000 erase cycles - the core saves at every boot (boot
+ * counter) and at each PROVISION_COMMIT. */
 #ifndef RW_ARDUINO_CONFIG_STORE_H
 #define RW_ARDUINO_CONFIG_STORE_H
 
 #include <stdint.h>
 
 extern "C" {
-#include "rw_core.h"
+#include "rw_config.h"
+#include "rw_hal_config_store.h"
 }
 
-static const uint32_t RW_CONFIG_MAGIC = 0x46435752u; /* "RWCF" little-endian */
-/* Bump on every layout or meaning change; an old struct is then refused and the defaults are used. */
-static const uint16_t RW_CONFIG_VERSION = 1u;
-static const uint16_t RW_CONFIG_DEFAULT_UDP_PORT = 14550u;
-static const uint8_t RW_CONFIG_SSID_MAX = 32u;     /* IEEE 802.11 SSID, bytes */
-static const uint8_t RW_CONFIG_PASSWORD_MAX = 63u; /* WPA2 passphrase, characters */
-static const uint8_t RW_CONFIG_LINK_KEY_LEN = 32u; /* key of the authenticated protocol (not used yet) */
+/* Flash reserved for the record: sizeof(rw_config) rounded up to whole 256-byte rows. */
+static const uint32_t RW_CONFIG_AREA_BYTES = (sizeof(rw_config) + 255u) / 256u * 256u;
 
-struct rw_board_config {
-    uint32_t magic;                 /* RW_CONFIG_MAGIC */
-    uint16_t version;               /* RW_CONFIG_VERSION */
-    uint16_t size_bytes;            /* sizeof(rw_board_config): catches a layout change without a version bump */
-    uint16_t udp_port;              /* UDP port the board listens on */
-    uint16_t battery_full_scale_mv; /* battery mV at ADC full scale (divider x 3.3 V), see arduino_battery.h */
-    char wifi_ssid[RW_CONFIG_SSID_MAX + 1u];         /* NUL-terminated; empty = not provisioned */
-    char wifi_password[RW_CONFIG_PASSWORD_MAX + 1u]; /* NUL-terminated; empty = open network */
-    uint8_t link_key[RW_CONFIG_LINK_KEY_LEN];
-    uint8_t param_count;            /* RW_PARAM_COUNT of the firmware that saved it */
-    uint8_t reserved[3];            /* zero */
-    float params[RW_PARAM_COUNT];   /* device parameters by rw_param_id, SI units as in the protocol spec */
-    uint16_t crc;                   /* CRC-16/CCITT-FALSE over every byte before this field */
+struct rw_arduino_config_store {
+    uint32_t loads;         /* load calls that found a written record */
+    uint32_t saves;         /* records written and verified */
+    uint32_t save_failures; /* refused length, or the read-back differed from the record */
 };
 
-enum rw_config_status {
-    RW_CONFIG_OK = 0,
-    RW_CONFIG_BLANK = 1,       /* no struct stored (magic missing: never saved, or erased by an upload) */
-    RW_CONFIG_BAD_VERSION = 2, /* stored by another layout version or size */
-    RW_CONFIG_BAD_CRC = 3,     /* stored but corrupted */
-};
-
-/* Defaults: not provisioned (empty SSID), port 14550, the assumed divider, zero key, spec parameter defaults. */
-void rw_arduino_config_defaults(rw_board_config *cfg);
-
-/* Read the stored struct; on anything but RW_CONFIG_OK, cfg holds the defaults. */
-rw_config_status rw_arduino_config_load(rw_board_config *cfg);
-
-/* Write cfg (magic, version, size and CRC filled in here). Erases and writes one flash row set: a few ms,
- * and the flash endures about 25,000 writes: save on request only, never periodically. */
-void rw_arduino_config_save(rw_board_config *cfg);
-
-/* Give the stored parameters to the core through rw_core_set_param (same range checks as PARAM_SET);
- * returns how many the core refused (those keep their defaults). Call right after rw_core_init. */
-uint8_t rw_arduino_config_apply_params(const rw_board_config *cfg, rw_core *core);
-
-/* True when an SSID is stored. */
-bool rw_arduino_config_has_wifi(const rw_board_config *cfg);
+/* load: len bytes of the area; false when len exceeds the area or the area is blank (all 0x00 as the
+ * upload leaves it, or all 0xFF as an erase leaves it). save: erase the rows, write, read back and
+ * compare; false on a length that is over the area or not a multiple of 4, or on a mismatch. */
+rw_hal_config_store rw_arduino_config_store_hal(rw_arduino_config_store *store);
 
 #endif /* RW_ARDUINO_CONFIG_STORE_H */

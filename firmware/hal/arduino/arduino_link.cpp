@@ -15,6 +15,7 @@
 #include "arduino_link.h"
 
 #include <Arduino.h>
+#include <string.h>
 #include <WiFiNINA.h>
 #include <WiFiUdp.h>
 
@@ -120,12 +121,31 @@ void link_send(void *ctx, const uint8_t *frame, size_t len)
     }
 }
 
+/* Copy the record's credentials (always NUL-terminated); true if they differ from those in use. */
+bool take_credentials(rw_arduino_link *link, const rw_config *config)
+{
+    char ssid[RW_CONFIG_SSID_LEN];
+    char password[RW_CONFIG_PASSWORD_LEN];
+    memcpy(ssid, config->wifi_ssid, sizeof ssid);
+    memcpy(password, config->wifi_password, sizeof password);
+    ssid[sizeof ssid - 1u] = '\0';
+    password[sizeof password - 1u] = '\0';
+    if (config->password_set == 0u) {
+        password[0] = '\0';
+    }
+    const bool changed = strcmp(ssid, link->ssid) != 0 || strcmp(password, link->password) != 0;
+    memcpy(link->ssid, ssid, sizeof ssid);
+    memcpy(link->password, password, sizeof password);
+    return changed;
+}
+
 } // namespace
 
-rw_link_state rw_arduino_link_begin(rw_arduino_link *link, const char *ssid, const char *password, uint16_t port)
+rw_link_state rw_arduino_link_begin(rw_arduino_link *link, const rw_config *config, uint16_t port)
 {
-    link->ssid = ssid;
-    link->password = password;
+    link->ssid[0] = '\0';
+    link->password[0] = '\0';
+    (void)take_credentials(link, config);
     link->port = port;
     link->have_sender = false;
     link->have_peer = false;
@@ -133,13 +153,13 @@ rw_link_state rw_arduino_link_begin(rw_arduino_link *link, const char *ssid, con
     link->sender_port = link->peer_port = 0u;
     link->connects = link->losses = link->send_failures = link->rx_truncated = 0u;
     link->last_poll_ms = link->last_attempt_ms = millis();
-    if (ssid == nullptr || ssid[0] == '\0') {
-        link->state = RW_LINK_NOT_PROVISIONED;
-        return RW_LINK_NOT_PROVISIONED;
-    }
-    if (WiFi.status() == WL_NO_MODULE) { /* the first call also resets and starts the module */
+    if (WiFi.status() == WL_NO_MODULE) { /* the first call also resets and starts the module (~0.75 s) */
         link->state = RW_LINK_NO_MODULE;
         return RW_LINK_NO_MODULE;
+    }
+    if (link->ssid[0] == '\0') {
+        link->state = RW_LINK_NOT_PROVISIONED;
+        return RW_LINK_NOT_PROVISIONED;
     }
     WiFi.setFeedWatchdogFunc(rw_arduino_watchdog_feed_callback);
     WiFi.setTimeout(RW_LINK_BOOT_CONNECT_TIMEOUT_MS);
@@ -187,4 +207,24 @@ rw_hal_link rw_arduino_link_hal(rw_arduino_link *link)
     hal.accept_peer = link_accept_peer;
     hal.send = link_send;
     return hal;
+}
+
+void rw_arduino_link_reconfigure(rw_arduino_link *link, const rw_config *config)
+{
+    if (!take_credentials(link, config) || link->state == RW_LINK_NO_MODULE) {
+        return;
+    }
+    if (link->state == RW_LINK_UP) {
+        on_lost(link);
+        --link->losses; /* not a loss: a new network */
+    }
+    (void)WiFi.disconnect();
+    if (link->ssid[0] == '\0') {
+        link->state = RW_LINK_NOT_PROVISIONED;
+        return;
+    }
+    link->state = RW_LINK_CONNECTING;
+    WiFi.setTimeout(0u);
+    start_connect(link);
+    link->last_attempt_ms = link->last_poll_ms = millis();
 }

@@ -8,8 +8,12 @@
 #include <stdint.h>
 
 extern "C" {
+#include "rw_config.h"
 #include "rw_hal_link.h"
 }
+
+/* UDP port the board listens on (a board setting, not in the configuration record). */
+static const uint16_t RW_LINK_UDP_PORT = 14550u;
 
 /* Connection attempt at boot: WiFi.begin blocks at most this long (the watchdog is fed meanwhile). */
 static const uint32_t RW_LINK_BOOT_CONNECT_TIMEOUT_MS = 15000u;
@@ -26,8 +30,10 @@ enum rw_link_state {
 };
 
 struct rw_arduino_link {
-    const char *ssid;
-    const char *password;
+    /* Credentials in use: copied from the core's configuration record (rw_config) at begin and after each
+     * PROVISION_COMMIT (rw_arduino_link_reconfigure), never from staged, uncommitted provisioning. */
+    char ssid[RW_CONFIG_SSID_LEN];
+    char password[RW_CONFIG_PASSWORD_LEN];
     uint16_t port;
     uint8_t state;              /* rw_link_state */
     bool have_sender;           /* a datagram was received since the link came up */
@@ -44,10 +50,17 @@ struct rw_arduino_link {
     uint32_t rx_truncated;      /* datagrams longer than the core's buffer */
 };
 
-/* Bring the link up: NINA present, noLowPowerMode, WiFi.setTimeout, watchdog fed while WiFi.begin blocks,
- * then the UDP socket on port. ssid and password must outlive the link (they point into the config).
- * Returns the state reached (RW_LINK_UP on success; CONNECTING means it keeps trying in service()). */
-rw_link_state rw_arduino_link_begin(rw_arduino_link *link, const char *ssid, const char *password, uint16_t port);
+/* Bring the link up with the credentials of config (the core's record, loaded by its first tick): NINA
+ * reset and checked (always, also unprovisioned, so a later connection never waits for the module's
+ * reset), then if an SSID is stored: WiFi.begin blocking at most RW_LINK_BOOT_CONNECT_TIMEOUT_MS with the
+ * watchdog fed, noLowPowerMode, the UDP socket on port. Returns the state reached (RW_LINK_UP on success;
+ * CONNECTING means it keeps trying in service()). */
+rw_link_state rw_arduino_link_begin(rw_arduino_link *link, const rw_config *config, uint16_t port);
+
+/* After a PROVISION_COMMIT: take the record's credentials; if they changed, drop the connection and start
+ * a new one at once without waiting (WiFi.setTimeout(0)), or stay down when the SSID is now empty. Only
+ * called while the ESCs are at idle (provisioning is refused unless DISARMED). */
+void rw_arduino_link_reconfigure(rw_arduino_link *link, const rw_config *config);
 
 /* Once per loop: polls the connection every RW_LINK_STATUS_POLL_MS and, after a loss, starts a new
  * connection (non-blocking) every RW_LINK_RECONNECT_INTERVAL_MS - only when may_block is true, i.e. when
