@@ -182,6 +182,7 @@ class Soak:
         self._blackout: tuple[int, int] | None = None
         self._host_verdicts: set[tuple[int, int]] = set()
         self._captured: bytes | None = None  # the last command frame sent: replayed byte for byte later
+        self._answered: list[tuple[int, int]] = []  # (msg_id, seq) of the commands the host got a verdict for
 
     # ------------------------------------------------------------------------------------------ run
     def run(self, *, progress: Callable[[SoakFigures], None] | None = None, progress_every_s: float = 60.0) -> SoakFigures:
@@ -259,6 +260,7 @@ class Soak:
         if pending is not None:
             if self._host_verdict(pending):
                 f.commands_answered += 1
+                self._answered.append((pending.msg_id, pending.seq))
                 self._pending = None
                 self._schedule_next(now)
             elif now - pending.sent_us >= round(cfg.ack_timeout_s * 1e6):
@@ -286,6 +288,7 @@ class Soak:
         self.host.send_raw(frame)
         self._captured = frame
         self._pending = _Pending(payload, seq, now)
+        self._host_verdicts.clear()  # answers the host got before sending it are not for it
         f.commands_sent += 1
         f.transmissions += 1
 
@@ -363,7 +366,9 @@ class Soak:
     def _choose_invalid(self) -> tuple[str, object]:
         rng = self.rng
         k = int(rng.integers(0, 16))
-        good = gen.encode_frame(gen.SetRopeSpeed(5000), int(rng.integers(0, 0x10000)), key=self.host.key,
+        # numbered half the seq space away from the host's commands: its NACK can never pass for theirs
+        seq = (self.host.seq + 0x8000 + int(rng.integers(0, 0x4000))) & 0xFFFF
+        good = gen.encode_frame(gen.SetRopeSpeed(5000), seq, key=self.host.key,
                                 session_id=self.host.session_id, counter=self.host.counter + 1)
         forged = (gen.Estop(), gen.Arm(), gen.SetRopeSpeed(8000), gen.Disarm())[int(rng.integers(0, 4))]
         return [
@@ -623,6 +628,10 @@ class Soak:
                 f.airborne_ticks_under_guard += 1  # counted (test_soak's step-down tests judge the guard)
 
     def _check_final(self) -> None:
+        executed = {key[:2] for key in self._first_verdict}
+        for msg_id, seq in self._answered:
+            if (msg_id, seq) not in executed:
+                self._violation(f"the host took a verdict for command {msg_id}/{seq}, which never reached the firmware")
         if self._param_changed != self._accepted_param_sets:
             self._violation(f"PARAM_CHANGED events {dict(self._param_changed)} != accepted PARAM_SETs "
                             f"{dict(self._accepted_param_sets)}")

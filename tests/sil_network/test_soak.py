@@ -61,7 +61,8 @@ def test_soak_config_is_checked() -> None:
 def test_the_checker_flags_what_it_must(native_build_dir: Path) -> None:
     """Device frames the checker must object to: a LOOP_COLLAPSED with nothing loading the rope, a late
     HEARTBEAT_LOST, an rx_duplicates that does not match the repeats answered, an ACK for garbage, a verdict
-    for a replayed frame (it acted on it), rx_replayed and rx_auth_failed that miss a drop, an unsigned frame."""
+    for a replayed frame (it acted on it), rx_replayed and rx_auth_failed that miss a drop, an unsigned frame,
+    a command the host took as answered that never reached the firmware."""
     with SilSession(speedup=None, key=seeded_key(0)) as sil:
         soak = Soak(sil, SoakConfig(duration_s=1.0))
         soak.host.run_for(0.1)
@@ -92,15 +93,17 @@ def test_the_checker_flags_what_it_must(native_build_dir: Path) -> None:
         later = replace(zeros, time_ms=t_us // 1000 + 5, rx_duplicates=3)
         soak._on_device_frame(t_us + 5000, device_frame(later, seq + 5))
         soak._on_device_frame(t_us + 5000, gen.encode_frame(later, seq + 6))  # unsigned
+        soak._answered.append((gen.MsgId.SET_ROPE_SPEED, 4242))  # the host took a verdict the device never gave
+        soak._check_final()
         texts = soak.figures.first_violations
         soak.host.close()
         soak.proxy.close()
-    assert soak.figures.violations == 8, texts
+    assert soak.figures.violations == 9, texts
     assert "LOOP_COLLAPSED" in texts[0] and "HEARTBEAT_LOST after 900 ms" in texts[1]
     assert "rx_duplicates 3, expected 0" in texts[2] and "wrong-direction frame was ACKed" in texts[3]
     assert "verdict" in texts[4] and "for no delivered frame" in texts[4]
     assert "rx_auth_failed 0, expected 1" in texts[5] and "rx_replayed 0, expected 1" in texts[6]
-    assert "TELEMETRY unsigned or wrongly signed" in texts[7]
+    assert "TELEMETRY unsigned or wrongly signed" in texts[7] and "never reached the firmware" in texts[8]
 
 
 def test_soak_with_long_delayed_duplicates_executes_nothing_twice(native_build_dir: Path) -> None:
