@@ -51,7 +51,8 @@ def main() -> int:
           f"({f.commands_accepted} ACK, {f.commands_refused} NACK)")
     print(f"commands answered        {f.commands_answered} at the host, {f.commands_timed_out} given up "
           "(blackouts / bursts)")
-    print(f"transmissions            {f.transmissions}, of which retransmissions {f.retransmissions}")
+    print(f"transmissions            {f.transmissions}, of which retransmissions {f.retransmissions} "
+          f"({f.transit_nacks} at once after a NACK for a frame damaged on the way)")
     print(f"duplicates answered      {f.duplicates_answered} (re-signed retransmissions answered from the cache, "
           "TELEMETRY.rx_duplicates)")
     print(f"dropped unanswered       {f.auth_failed_dropped} for their tag (rx_auth_failed), {f.replays_dropped} as "

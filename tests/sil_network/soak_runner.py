@@ -3,7 +3,7 @@
 Lockstep and deterministic: a ScriptedHost talks to the SIL firmware through an ImpairmentProxy stepped by
 simulated time (ImpairedLockstep); the link key derives from the seed. The host signs every frame and
 retries a command like the Client does (same seq and payload, signed afresh with a new counter, every
-ack_timeout_s, at most `retries` times). Besides malformed datagrams it also sends frames the device must
+ack_timeout_s or at once after a NACK saying the frame was damaged on the way, at most `retries` times). Besides malformed datagrams it also sends frames the device must
 drop unanswered: commands unsigned or signed with another key, earlier frames again byte for byte, frames
 signed for another session. Every tick the proxy's log gives the device-side truth (every frame the
 firmware got, every frame it sent) and the invariants are checked:
@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robowrangler.client import TRANSIT_NACK_REASONS
 from robowrangler.protocol import generated as gen
 from robowrangler_sim.sil import SilError, SilSession
 from robowrangler_sim.sil.impairment import ImpairedLockstep, ImpairmentConfig, ImpairmentProxy, LinkImpairment
@@ -107,7 +108,8 @@ class SoakFigures:
     transmissions: int = 0
     retransmissions: int = 0
     commands_answered: int = 0
-    commands_timed_out: int = 0
+    commands_timed_out: int = 0  # given up after the retries (time-outs, or NACKs for a frame damaged on the way)
+    transit_nacks: int = 0  # NACKs saying the command's frame was damaged on the way: sent again at once
     commands_executed: int = 0  # distinct command frames the firmware got (each acted on once)
     commands_accepted: int = 0
     commands_refused: int = 0
@@ -180,7 +182,7 @@ class Soak:
         self._pending: _Pending | None = None
         self._next_command_us = sil.plant.time_us + 200_000
         self._blackout: tuple[int, int] | None = None
-        self._host_verdicts: set[tuple[int, int]] = set()
+        self._host_verdicts: dict[tuple[int, int], bool] = {}  # (msg_id, seq) -> only transit NACKs so far
         self._captured: bytes | None = None  # the last command frame sent: replayed byte for byte later
         self._answered: list[tuple[int, int]] = []  # (msg_id, seq) of the commands the host got a verdict for
 
@@ -258,12 +260,14 @@ class Soak:
         cfg, f = self.config, self.figures
         pending = self._pending
         if pending is not None:
-            if self._host_verdict(pending):
+            answered = self._host_verdict(pending)
+            if answered:
                 f.commands_answered += 1
                 self._answered.append((pending.msg_id, pending.seq))
                 self._pending = None
                 self._schedule_next(now)
-            elif now - pending.sent_us >= round(cfg.ack_timeout_s * 1e6):
+            elif answered is False or now - pending.sent_us >= round(cfg.ack_timeout_s * 1e6):
+                f.transit_nacks += answered is False
                 if pending.attempts > cfg.retries:
                     f.commands_timed_out += 1
                     self._pending = None
@@ -323,13 +327,15 @@ class Soak:
         lo, hi = self.config.command_gap_s
         self._next_command_us = now + round(self.rng.uniform(lo, hi) * 1e6)
 
-    def _host_verdict(self, pending: _Pending) -> bool:
-        """True once the host got an ACK or NACK for the pending command."""
-        key = (pending.msg_id, pending.seq)
-        if key in self._host_verdicts:
+    def _host_verdict(self, pending: _Pending) -> bool | None:
+        """True once the host got an ACK or NACK for the pending command; False if it got only NACKs saying
+        the frame was damaged on the way (the Client sends it again at once); None if nothing yet."""
+        transit = self._host_verdicts.pop((pending.msg_id, pending.seq), None)
+        if transit is None:
+            return None
+        if not transit:
             self._host_verdicts.clear()  # older answers (to retransmissions) are of no further use
-            return True
-        return False
+        return not transit
 
     def _choose(self) -> tuple[str, object]:
         rng = self.rng
@@ -409,7 +415,9 @@ class Soak:
             if gen.tag_valid(frame, self.gate.key):  # a corrupted copy may decode (a flip in the signature block)
                 self._host_seqs.add(self._unwrap(frame.seq))
         for reply in r.acks + r.nacks:
-            self._host_verdicts.add((reply.cmd_msg_id, reply.cmd_seq))
+            transit = isinstance(reply, gen.Nack) and reply.reason in TRANSIT_NACK_REASONS
+            key = (reply.cmd_msg_id, reply.cmd_seq)
+            self._host_verdicts[key] = self._host_verdicts.get(key, True) and transit
         self._host_counted.update(replayed=r.replayed, auth_failed=r.auth_failed, decode_errors=r.decode_errors)
         self.host.received = Received()
         self._check_host_drops()
