@@ -85,6 +85,9 @@ bool spindle_read(void *ctx, rw_spindle_reading *out)
     if (sp->silent && millis() - sp->silent_since_ms < RW_SPINDLE_RETRY_MS) {
         return false;
     }
+    while (Serial1.available() > 0) { /* a late answer to an earlier, timed-out request: never take it */
+        (void)Serial1.read();
+    }
     uint8_t regs[6]; /* present position, present speed, present load: registers 36-41 */
     if (dxl.read(RW_SPINDLE_DXL_ID, RW_AX12_REG_PRESENT_POSITION, sizeof regs, regs, sizeof regs,
                  RW_SPINDLE_TIMEOUT_MS) != static_cast<int32_t>(sizeof regs)) {
