@@ -6,7 +6,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#define RW_DUPLICATE_CACHE_SIZE 16u
+#define RW_DUPLICATE_CACHE_SIZE 32u
 #define RW_DUPLICATE_WINDOW_MS 5000u
 
 typedef struct rw_duplicate_entry {

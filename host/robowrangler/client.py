@@ -82,6 +82,7 @@ class ClientStats:
     events_lost: int = 0
     unexpected_messages: int = 0
     auth_failures: int = 0
+    replayed: int = 0  # signed device frames dropped as stale (an older session or a counter already seen)
     session_changes: int = 0
 
 
@@ -156,6 +157,8 @@ class Client:
         self._key = None if key is None else bytes(key)
         self._session_id: int | None = None
         self._counter = 0
+        self._device_session = -1  # (session, counter) of the newest device frame accepted
+        self._device_counter = -1
         self._hello_nonce: int | None = None
         self._session_info: gen.Message | None = None
         self._session_event = threading.Event()
@@ -623,10 +626,12 @@ class Client:
                         f"{message.NAME} (seq {seq}): no ACK/NACK from {self.url} after {attempts} attempts "
                         f"in {waited_s:.2f} s; the link or the device is down", url=self.url, waited_s=waited_s)
                 self._require_connected()
-                if self._key is not None:  # same seq and payload (same checksum), a fresh counter
-                    with self._send_lock:
+                if self._key is not None:  # same seq and payload (same checksum), a fresh counter, and sent
+                    with self._send_lock:  # under the lock: no frame with a higher counter may overtake it
                         frame = self._encode(message, seq)
-                self._send_raw(frame)
+                        self._send_raw(frame)
+                else:
+                    self._send_raw(frame)
                 attempts += 1
                 with self._lock:
                     self._stats.retransmissions += 1
@@ -758,8 +763,15 @@ class Client:
                 self._session_info = msg  # an answer to our HELLO signed with another key (or forged)
                 self._session_event.set()
             return False
-        if self._session_id is not None and frame.session_id != self._session_id and frame.msg_id != MsgId.SESSION_INFO:
-            with self._send_lock:
+        with self._lock:  # freshness: never an older session, never a device counter already seen
+            stale = ((self._session_id is not None and frame.session_id < self._session_id)
+                     or (frame.session_id == self._device_session and frame.counter <= self._device_counter))
+            if stale:
+                self._stats.replayed += 1
+                return False
+            self._device_session, self._device_counter = frame.session_id, frame.counter
+        if self._session_id is not None and frame.session_id > self._session_id and frame.msg_id != MsgId.SESSION_INFO:
+            with self._send_lock:  # the device rebooted: sign for its new session
                 self._session_id = frame.session_id
             with self._lock:
                 self._stats.session_changes += 1

@@ -174,6 +174,13 @@ class ScriptedDevice:
         if self._host is not None:
             for f in frames:
                 self._sock.sendto(f, self._host)
+                if f[3] == MsgId.TELEMETRY:
+                    self._last_telemetry_frame = f
+
+    def last_sent_telemetry(self) -> bytes | None:
+        """The bytes of the last TELEMETRY sent (to replay it at the host)."""
+        with self.lock:
+            return getattr(self, "_last_telemetry_frame", None)
 
     def _on_datagram(self, data: bytes, addr) -> None:
         try:
