@@ -50,7 +50,9 @@ def build(build_dir: Path = DEFAULT_BUILD_DIR) -> Path:
             raise RuntimeError(f"fuzz configure failed:\n{configure.stdout}\n{configure.stderr}")
     result = subprocess.run(["cmake", "--build", str(build_dir), "-j2"], capture_output=True, text=True)
     if result.returncode != 0:
-        raise RuntimeError(f"fuzz build failed:\n{result.stdout}\n{result.stderr}")
+        hint = ("\n(the libFuzzer/sanitizer runtime is missing: Debian package libclang-rt-<clang major>-dev)"
+                if "libclang_rt" in result.stdout + result.stderr else "")
+        raise RuntimeError(f"fuzz build failed:{hint}\n{result.stdout}\n{result.stderr}")
     for target in TARGETS:
         if not (build_dir / f"fuzz_{target}").exists():
             raise RuntimeError(f"fuzz build: {build_dir / f'fuzz_{target}'} missing after the build:\n{result.stdout}")
