@@ -398,7 +398,7 @@ static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame
             return refuse(RW_NACK_REASON_STORE_FAILED, 1);
         }
         if (core->state.key_staged) {
-            core->state.host_counter = 0u; /* a new key starts its own counter */
+            /* the session's counter floor stays: re-committing a key never lets its earlier frames count again */
             core->state.key_staged = false;
             memset(core->state.staged_key, 0, RW_KEY_LEN);
         }

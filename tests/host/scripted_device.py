@@ -213,7 +213,8 @@ class ScriptedDevice:
         for seq, raw, replies in self._cache:
             if seq == frame.seq and raw == frame.checksum:  # same seq and checksum: a retransmission
                 self.duplicates += 1
-                self._deliver(frame.msg_id, replies)
+                # the same verdict, framed afresh (new seq, and counter when signing) as the firmware does it
+                self._deliver(frame.msg_id, [self._send(gen.decode_message(r)[1]) for r in replies])
                 return
         replies = self._execute(frame, msg)
         answers = [r for r in replies if r[3] != MsgId.EVENT]  # a retransmission is answered, events are not repeated
