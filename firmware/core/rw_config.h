@@ -35,6 +35,10 @@ typedef struct rw_config {
     uint32_t crc32;         /* over every byte before it */
 } rw_config;
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 void rw_config_defaults(rw_config *c);
 /* True when magic, version, size and CRC match (the record can be trusted). */
 bool rw_config_valid(const rw_config *c);
@@ -46,5 +50,9 @@ void rw_config_set_params(rw_config *c, const float values[RW_PARAM_COUNT]);
 void rw_config_set_key(rw_config *c, const uint8_t key[RW_KEY_LEN]);
 /* CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF). */
 uint32_t rw_crc32(const void *data, uint32_t len);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* RW_CONFIG_H */
