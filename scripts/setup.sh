@@ -7,7 +7,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # gcc-arm-none-eabi + newlib: the core cross-compiled for the board's Cortex-M0+ (size, instruction counts, tests)
-APT_PACKAGES=(build-essential cmake libosmesa6 gcc-arm-none-eabi libnewlib-arm-none-eabi)
+# clang + libclang-rt-14-dev: the libFuzzer targets with AddressSanitizer/UBSan (tests/fuzz)
+APT_PACKAGES=(build-essential cmake libosmesa6 gcc-arm-none-eabi libnewlib-arm-none-eabi clang libclang-rt-14-dev)
 UV_VERSION=0.13.8
 
 say() { printf '[setup] %s\n' "$*" >&2; }
