@@ -259,6 +259,7 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
         if (!core->state.heartbeat_lost && st != RW_STATE_DISARMED) {
             core->state.heartbeat_lost = true;
             rw_core_emit_event(core, RW_EVENT_KIND_HEARTBEAT_LOST, st, st, (int32_t)silence_ms);
+            rw_spindle_stop(&core->state.spindle); /* no guide move (loop size, homing) goes on without a host */
         }
         if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
             core->state.target_mps = 0.0f;

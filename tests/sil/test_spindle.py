@@ -188,3 +188,14 @@ def test_battery_under_cutoff_lands_the_rope(native_build_dir: Path) -> None:
     finally:
         host.close()
         sil.stop()
+
+
+def test_heartbeat_loss_stops_a_guide_move(homed: ScriptedHost) -> None:
+    assert isinstance(homed.command(gen.SetLoop(150000)), gen.Ack)
+    homed.run_for(1.0)
+    homed.heartbeats_enabled = False
+    homed.run_for(1.0)
+    position_mm = homed.sil.spindle.guide_position_mm
+    homed.run_for(1.0)
+    assert homed.sil.spindle.guide_position_mm == pytest.approx(position_mm, abs=0.3)  # stopped, not at 150
+    assert position_mm < 40.0 and homed.sil.spindle.moving_speed_raw == 0

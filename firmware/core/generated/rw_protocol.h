@@ -46,7 +46,7 @@ typedef enum {
     RW_NACK_REASON_BAD_CHECKSUM = 6, /* Checksum mismatch (corrupted, or built from another schema). */
     RW_NACK_REASON_UNKNOWN_MESSAGE = 7, /* Message id not in the receiver's schema. */
     RW_NACK_REASON_UNSUPPORTED_FLAGS = 8, /* Flags the receiver's version does not implement. */
-    RW_NACK_REASON_OUT_OF_RANGE = 9, /* A field is outside its documented range; NACK.detail carries the limit that was crossed (wire units). */
+    RW_NACK_REASON_OUT_OF_RANGE = 9, /* A field is outside its documented range; NACK.detail carries the limit that was crossed (wire units), or for PARAM_SET the parameter id (the limits are in the parameter table). */
     RW_NACK_REASON_BAD_STATE = 10, /* Command not valid in the current state (NACK.state tells which). */
     RW_NACK_REASON_NOT_READY = 11, /* ESC arming hold after boot not finished; retry after it. */
     RW_NACK_REASON_UNKNOWN_PARAM = 12, /* Parameter id not in the table. */

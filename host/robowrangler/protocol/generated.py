@@ -73,7 +73,7 @@ class NackReason(IntEnum):
     UNSUPPORTED_FLAGS = 8
     """Flags the receiver's version does not implement."""
     OUT_OF_RANGE = 9
-    """A field is outside its documented range; NACK.detail carries the limit that was crossed (wire units)."""
+    """A field is outside its documented range; NACK.detail carries the limit that was crossed (wire units), or for PARAM_SET the parameter id (the limits are in the parameter table)."""
     BAD_STATE = 10
     """Command not valid in the current state (NACK.state tells which)."""
     NOT_READY = 11
