@@ -22,10 +22,8 @@
  *     device-to-host message (reply, telemetry, event), is signed with the device's key on WiFi once a key
  *     is set and unsigned on serial, and never contains the link key;
  *   - over WiFi a frame that decodes but is not HELLO and not signed with the key gets no answer and does
- *     not become the peer; neither does an exact copy of a signed frame delivered before (a replay);
- *     known finding (firmware/fuzz/crashes/README.md): a PROVISION_COMMIT of a key resets the replay
- *     counter within the session, so a replay of a frame signed with that same key earlier in the session
- *     is accepted again; replays after a key commit are checked only with RW_FUZZ_STRICT_REPLAY=1;
+ *     not become the peer; neither does an exact copy of a signed frame delivered before (a replay), also
+ *     after a PROVISION_COMMIT of the same key (firmware/fuzz/crashes/README.md: found here, fixed);
  *   - at most one answer per link and tick; a queued frame only goes out in a tick without an answer;
  *   - every parameter is always within its range; the state is a known one;
  *   - the configuration the core writes is always a valid record; a stored record that is not valid
@@ -107,19 +105,9 @@ static struct {
     uint64_t sign_counter;
     uint8_t last_signed[RW_MAX_FRAME_LEN]; /* the last signed datagram WiFi delivered, for replays */
     size_t last_signed_len;
-    bool key_committed;                    /* a PROVISION_COMMIT installed a key (the replay counter reset) */
     unsigned ticks;
 } h;
 
-static bool strict_replay(void)
-{
-    static int strict = -1;
-    if (strict < 0) {
-        const char *v = getenv("RW_FUZZ_STRICT_REPLAY");
-        strict = v != NULL && v[0] == '1';
-    }
-    return strict != 0;
-}
 
 /* ---- output checks --------------------------------------------------------------------------------- */
 
@@ -372,7 +360,7 @@ static void check_wifi_auth(const fake_link *l)
     const rw_config *c = &h.core.state.config;
     bool authentic = c->key_set != 0u && (f.flags & RW_FRAME_FLAG_SIGNED) != 0u && rw_frame_tag_valid(&f, c->key) &&
                      f.session_id == rw_core_session_id(&h.core);
-    if (!authentic || (l->delivered_replay && (!h.key_committed || strict_replay()))) {
+    if (!authentic || l->delivered_replay) {
         RW_FUZZ_REQUIRE(l->replies == 0u && l->accepts == 0u);
     }
 }
@@ -411,13 +399,8 @@ static void tick(const rw_hal *hal)
     h.spindle_pos += (h.spindle_raw_speed & 1024u) != 0u ? -raw : raw;
 
     bool first = !h.core.state.started;
-    uint32_t commits = h.core.state.config.commits;
-    bool key_staged = h.core.state.key_staged;
     rw_core_tick(&h.core, hal, h.now_us);
     ++h.ticks;
-    if (key_staged && h.core.state.config.commits != commits) {
-        h.key_committed = true;
-    }
 
     if (first) {
         if (!h.record_was_valid) {

@@ -11,7 +11,6 @@ Total fuzzing time here: 28 s; bench/bench_fuzz.py runs the long version.
 from __future__ import annotations
 
 import filecmp
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -52,21 +51,10 @@ def test_seed_corpus_matches_the_golden_vectors(target: str, tmp_path: Path) -> 
     assert mismatch == [] and errors == [], "run firmware/fuzz/make_corpus.py"
 
 
-def _replay_finding(fuzz_build_dir: Path, *, strict: bool) -> subprocess.CompletedProcess:
-    env = dict(os.environ, RW_FUZZ_STRICT_REPLAY="1" if strict else "0")
-    return subprocess.run([str(fuzz_build_dir / "fuzz_core"), str(lf.FUZZ_SOURCE_DIR / "crashes" / "replay_after_key_commit")],
-                          capture_output=True, text=True, env=env, timeout=60)
 
-
-def test_known_finding_is_gated_in_the_ci_run(fuzz_build_dir: Path) -> None:
-    """Without the strict flag the harness passes the finding's input (so the CI run stays about new bugs)."""
-    result = _replay_finding(fuzz_build_dir, strict=False)
-    assert result.returncode == 0, result.stderr[-3000:]
-
-
-@pytest.mark.xfail(strict=True, reason="finding (firmware/fuzz/crashes/README.md): PROVISION_COMMIT of a key resets "
-                                       "the replay counter within the session; a replayed signed ARM re-arms")
-def test_known_finding_replay_after_key_commit(fuzz_build_dir: Path) -> None:
-    """A signed WiFi frame replayed after a key commit must be dropped (fails until the core is fixed)."""
-    result = _replay_finding(fuzz_build_dir, strict=True)
+def test_replay_after_a_key_commit_stays_dropped(fuzz_build_dir: Path) -> None:
+    """Regression of the fuzzing finding in firmware/fuzz/crashes/README.md: a signed ARM replayed over WiFi
+    after the same key was committed again (6 s later, past the duplicate window) is dropped unanswered."""
+    crash = lf.FUZZ_SOURCE_DIR / "crashes" / "replay_after_key_commit"
+    result = subprocess.run([str(fuzz_build_dir / "fuzz_core"), str(crash)], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr[-3000:]
