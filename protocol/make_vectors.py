@@ -28,7 +28,7 @@ FIELD_VALUES = {
                   "esc_pulse_us": 1342, "battery_mv": 12150, "heartbeat_age_ms": 100, "rx_ok": 1,
                   "rx_bad": 2, "rx_duplicates": 3, "nacks": 4, "events": 5, "tick_overruns": 0,
                   "guide_position_um": -12345, "guide_target_um": 180000, "spindle_load_permille": -350,
-                  "spindle_flags": 0x0B, "spindle_rejected": 65535, "rx_auth_failed": 6, "rx_replayed": 7},
+                  "spindle_flags": 0x0B, "spindle_rejected": 65535, "rx_auth_failed": 6, "rx_replayed": 7, "tx_dropped": 8},
     "EVENT": {"time_ms": 1500, "event_seq": 7, "event": 1, "state_from": 2, "state_to": 3, "arg": 1},
     "PARAM_VALUE": {"param_id": 0, "value": 2.5999999046325684, "param_count": 33},
     "ARM": {}, "DISARM": {}, "SPINDOWN": {}, "ESTOP": {},

@@ -522,6 +522,7 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
         .spindle_rejected = core->state.spindle.state.turns.state.rejected,
         .rx_auth_failed = c->rx_auth_failed,
         .rx_replayed = c->rx_replayed,
+        .tx_dropped = rw_outbox_dropped(&core->state.outbox),
     };
     /* encoded straight into its outbox slot (no copy); a full outbox drops it (counted), as a push would */
     rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_TELEMETRY);

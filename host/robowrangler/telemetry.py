@@ -53,6 +53,7 @@ class TelemetrySample:
     spindle_rejected: int
     rx_auth_failed: int
     rx_replayed: int
+    tx_dropped: int
     received_s: float
 
     @classmethod
@@ -81,6 +82,7 @@ class TelemetrySample:
             spindle_rejected=msg.spindle_rejected,
             rx_auth_failed=msg.rx_auth_failed,
             rx_replayed=msg.rx_replayed,
+            tx_dropped=msg.tx_dropped,
             received_s=received_s,
         )
 

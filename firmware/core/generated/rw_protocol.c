@@ -60,7 +60,7 @@ static const rw_msg_info msg_infos[] = {
     { 0u, RW_MSG_KIND_HEARTBEAT, 4u, 0xAEABu, "HEARTBEAT" },
     { 1u, RW_MSG_KIND_REPLY, 4u, 0x2620u, "ACK" },
     { 2u, RW_MSG_KIND_REPLY, 9u, 0x9533u, "NACK" },
-    { 3u, RW_MSG_KIND_TELEMETRY, 50u, 0x343Au, "TELEMETRY" },
+    { 3u, RW_MSG_KIND_TELEMETRY, 52u, 0x0420u, "TELEMETRY" },
     { 4u, RW_MSG_KIND_EVENT, 13u, 0x69CAu, "EVENT" },
     { 5u, RW_MSG_KIND_REPLY, 6u, 0xDBDCu, "PARAM_VALUE" },
     { 6u, RW_MSG_KIND_REPLY, 11u, 0xC5E6u, "SESSION_INFO" },
@@ -302,6 +302,7 @@ void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload)
     put_u16(payload + 44, (uint16_t)msg->spindle_rejected);
     put_u16(payload + 46, (uint16_t)msg->rx_auth_failed);
     put_u16(payload + 48, (uint16_t)msg->rx_replayed);
+    put_u16(payload + 50, (uint16_t)msg->tx_dropped);
 }
 
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
@@ -329,6 +330,7 @@ void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
     msg->spindle_rejected = (uint16_t)get_u16(payload + 44);
     msg->rx_auth_failed = (uint16_t)get_u16(payload + 46);
     msg->rx_replayed = (uint16_t)get_u16(payload + 48);
+    msg->tx_dropped = (uint16_t)get_u16(payload + 50);
 }
 
 size_t rw_msg_telemetry_encode(const rw_msg_telemetry *msg, uint16_t seq, uint8_t *out, size_t out_cap)

@@ -11,7 +11,7 @@ extern "C" {
 
 #define RW_PROTOCOL_VERSION 2u
 #define RW_PROTOCOL_MAGIC 0xB7u
-#define RW_PROTOCOL_SCHEMA_HASH 0x1B44u
+#define RW_PROTOCOL_SCHEMA_HASH 0x6A6Du
 #define RW_FRAME_HEADER_LEN 7u
 #define RW_FRAME_CHECKSUM_LEN 2u
 #define RW_MAX_PAYLOAD_LEN 64u
@@ -193,8 +193,8 @@ void rw_msg_nack_unpack(rw_msg_nack *msg, const uint8_t *payload);
 size_t rw_msg_nack_encode(const rw_msg_nack *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
 /* TELEMETRY (id 3, telemetry): Device state at telemetry_rate_hz, unicast to the host that last sent a valid frame. */
-#define RW_MSG_TELEMETRY_LEN 50u
-#define RW_MSG_TELEMETRY_CRC_EXTRA 0x343Au
+#define RW_MSG_TELEMETRY_LEN 52u
+#define RW_MSG_TELEMETRY_CRC_EXTRA 0x0420u
 typedef struct {
     uint32_t time_ms; /* [ms] Device time since boot. */
     uint8_t state; /* (rw_state) State machine state. */
@@ -219,6 +219,7 @@ typedef struct {
     uint16_t spindle_rejected; /* Spindle position readings rejected as impossible jumps (wraps). */
     uint16_t rx_auth_failed; /* Frames dropped for a missing or wrong signature (wraps). */
     uint16_t rx_replayed; /* Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps). */
+    uint16_t tx_dropped; /* Frames the device numbered but dropped from its send queue (full: telemetry goes first) - holes in its seq that no network caused (wraps). */
 } rw_msg_telemetry;
 void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload);
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload);

@@ -17,7 +17,7 @@ import siphash24 as _siphash
 
 PROTOCOL_VERSION = 2
 MAGIC = 0xB7
-SCHEMA_HASH = 0x1B44
+SCHEMA_HASH = 0x6A6D
 HEADER_LEN = 7
 CHECKSUM_LEN = 2
 MAX_PAYLOAD_LEN = 64
@@ -393,15 +393,16 @@ class Telemetry(Message):
         spindle_rejected: uint16 Spindle position readings rejected as impossible jumps (wraps).
         rx_auth_failed: uint16 Frames dropped for a missing or wrong signature (wraps).
         rx_replayed: uint16 Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps).
+        tx_dropped: uint16 Frames the device numbered but dropped from its send queue (full: telemetry goes first) - holes in its seq that no network caused (wraps).
     """
 
     MSG_ID: ClassVar[int] = 3
     NAME: ClassVar[str] = "TELEMETRY"
     KIND: ClassVar[MsgKind] = MsgKind.TELEMETRY
-    CRC_EXTRA: ClassVar[int] = 0x343A
-    PAYLOAD_LEN: ClassVar[int] = 50
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IBHHHHHHHHHHHHHHiihBHHH")
-    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (-2147483648, 2147483647), (-2147483648, 2147483647), (-32768, 32767), (0, 255), (0, 65535), (0, 65535), (0, 65535))
+    CRC_EXTRA: ClassVar[int] = 0x0420
+    PAYLOAD_LEN: ClassVar[int] = 52
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IBHHHHHHHHHHHHHHiihBHHHH")
+    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (-2147483648, 2147483647), (-2147483648, 2147483647), (-32768, 32767), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time_ms', 'uint32', 'ms', '', 'Device time since boot.'),
         FieldSpec('state', 'uint8', '', 'state', 'State machine state.'),
@@ -426,6 +427,7 @@ class Telemetry(Message):
         FieldSpec('spindle_rejected', 'uint16', '', '', 'Spindle position readings rejected as impossible jumps (wraps).'),
         FieldSpec('rx_auth_failed', 'uint16', '', '', 'Frames dropped for a missing or wrong signature (wraps).'),
         FieldSpec('rx_replayed', 'uint16', '', '', 'Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps).'),
+        FieldSpec('tx_dropped', 'uint16', '', '', 'Frames the device numbered but dropped from its send queue (full: telemetry goes first) - holes in its seq that no network caused (wraps).'),
     )
 
     time_ms: int
@@ -451,6 +453,7 @@ class Telemetry(Message):
     spindle_rejected: int
     rx_auth_failed: int
     rx_replayed: int
+    tx_dropped: int
 
 
 @dataclass(frozen=True)
