@@ -88,7 +88,11 @@ class LinkLedger:
         seq = frame.seq if self._last_device_seq is None else \
             self._last_device_seq + ((frame.seq - self._last_device_seq + 0x8000) & 0xFFFF) - 0x8000
         self._last_device_seq = seq
-        self.device_seqs_sent.add(seq)
+        # One seq counter serves both of the device's links: until the WiFi host's first authentic frame makes
+        # it the peer, telemetry still goes to the USB serial that provisioned the SIL. SESSION_INFO (the
+        # answer to an unauthenticated HELLO) is therefore not a point from which to count holes.
+        if not isinstance(msg, gen.SessionInfo):
+            self.device_seqs_sent.add(seq)
         self.device_frames.append((e.time_us, seq, msg))
 
     def _corrupted_to_host(self, e: LoggedDatagram) -> None:

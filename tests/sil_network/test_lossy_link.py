@@ -80,7 +80,7 @@ def test_every_command_completes_exactly_once_through_30_percent_loss(native_bui
     verdicts = [v for v in ledger.device_messages(gen.Ack) + ledger.device_messages(gen.Nack)
                 if v.cmd_msg_id in COMMAND_IDS]  # (not the answers to a session handshake, if the client makes one)
     assert len(verdicts) == ledger.command_frames_delivered
-    assert ledger.device_seqs_never_sent <= t.tx_dropped  # every hole the device made, it counted
+    assert ledger.device_seqs_never_sent <= t.tx_dropped  # every hole the device made, it counted (none, usually)
 
 
 def resend_until_answered(host: ScriptedHost, message: gen.Message, seq: int, *, attempts: int = 30) -> None:
