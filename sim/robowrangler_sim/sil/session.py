@@ -162,14 +162,25 @@ class SilSession:
 
     def _tick_frozen(self) -> None:
         """A control tick at the current plant time, without advancing the plant (dt = 0 for the firmware)."""
-        plant, spindle = self.plant, self.spindle
-        self._link.exchange(time_us=plant.time_us, encoder_counts=plant.encoder_counts,
-                            encoder_last_edge_us=plant.encoder_last_edge_us,
-                            battery_mv=round(plant.battery_adc_v * 1000.0), host_frames_sent=0,
-                            spindle_position_raw=spindle.position_raw, spindle_speed_raw=spindle.speed_raw,
-                            spindle_load_raw=spindle.load_raw, spindle_answered=spindle.answering,
-                            limit_switch=spindle.limit_switch)
+        self._exchange(self._read_sensors(), host_frames_sent=0)
         time.sleep(0.0005)  # the pseudo-terminal hands bytes over asynchronously
+
+    def _read_sensors(self) -> SensorValues:
+        """What the plants show the firmware's HAL now."""
+        plant, spindle = self.plant, self.spindle
+        return SensorValues(plant.time_us, plant.encoder_counts, plant.encoder_last_edge_us,
+                            round(plant.battery_adc_v * 1000.0), spindle.position_raw, spindle.speed_raw,
+                            spindle.load_raw, spindle.answering, spindle.limit_switch)
+
+    def _exchange(self, sensors: SensorValues, *, host_frames_sent: int):
+        """One lockstep tick of the firmware with these sensor values; its SIL_ACTUATORS."""
+        return self._link.exchange(
+            time_us=sensors.time_us, encoder_counts=sensors.encoder_counts,
+            encoder_last_edge_us=sensors.encoder_last_edge_us, battery_mv=sensors.battery_mv,
+            host_frames_sent=host_frames_sent, spindle_position_raw=sensors.spindle_position_raw,
+            spindle_speed_raw=sensors.spindle_speed_raw, spindle_load_raw=sensors.spindle_load_raw,
+            spindle_answered=sensors.spindle_answered, limit_switch=sensors.limit_switch,
+        )
 
     def stop(self) -> None:
         self._stop.set()
@@ -216,23 +227,14 @@ class SilSession:
                 _, _, action = heapq.heappop(self._actions)
                 action()
         spindle = self.spindle
-        sensors: SensorValues | None = SensorValues(plant.time_us, plant.encoder_counts, plant.encoder_last_edge_us,
-                                                    round(plant.battery_adc_v * 1000.0), spindle.position_raw,
-                                                    spindle.speed_raw, spindle.load_raw, spindle.answering,
-                                                    spindle.limit_switch)
+        sensors: SensorValues | None = self._read_sensors()
         for sensor_filter in self.sensor_filters:
             sensors = sensor_filter(sensors)
             if sensors is None:
                 break
         if sensors is not None:
             try:
-                out = self._link.exchange(
-                    time_us=sensors.time_us, encoder_counts=sensors.encoder_counts,
-                    encoder_last_edge_us=sensors.encoder_last_edge_us, battery_mv=sensors.battery_mv,
-                    host_frames_sent=host_frames_sent, spindle_position_raw=sensors.spindle_position_raw,
-                    spindle_speed_raw=sensors.spindle_speed_raw, spindle_load_raw=sensors.spindle_load_raw,
-                    spindle_answered=sensors.spindle_answered, limit_switch=sensors.limit_switch,
-                )
+                out = self._exchange(sensors, host_frames_sent=host_frames_sent)
             except SilError:
                 code = self._firmware.poll()
                 if code is not None:
