@@ -50,8 +50,7 @@ def settle_times() -> tuple[float | None, float | None]:
         host.run_for(2.0)
         times, speeds = host.telemetry_series("rope_speed_mmps")
         host.close()
-    w4 = [(t, v) for t, v in zip(times, speeds) if t * 1000 < t6]
-    s4 = settle_time_s([t for t, _ in w4], [v for _, v in w4], target=4000, start_s=t4 / 1000)
+    s4 = settle_time_s(times, speeds, target=4000, start_s=t4 / 1000, end_s=(t6 - 1) / 1000)
     s6 = settle_time_s(times, speeds, target=6000, start_s=t6 / 1000)
     return s4, s6
 

@@ -82,12 +82,8 @@ def run_demo(out_png: str | Path, *, speedup: float = 1.0, seed: int = 0, hold_s
     times = [s.time_s for s in samples]
     speeds = [s.rope_speed_mps for s in samples]
 
-    def settle(target: float, start_s: float, end_s: float) -> float | None:
-        window = [(t, v) for t, v in zip(times, speeds) if t <= end_s]
-        return settle_time_s([t for t, _ in window], [v for _, v in window], target=target, start_s=start_s)
-
-    settle4 = settle(4.0, t_spin4, t_spin6)
-    settle6 = settle(6.0, t_spin6, t_down)
+    settle4 = settle_time_s(times, speeds, target=4.0, start_s=t_spin4, end_s=t_spin6)
+    settle6 = settle_time_s(times, speeds, target=6.0, start_s=t_spin6, end_s=t_down)
     airborne = [s.rope_speed_mps for s in samples if s.state == State.AIRBORNE]
     progress(f"plotting {len(samples)} telemetry samples to {out_png}")
     plot_demo(out_png, samples, events=[(e.time_s, f"{_name(e.state_from)}->{_name(e.state_to)}") for e in events

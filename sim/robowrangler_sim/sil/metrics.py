@@ -6,10 +6,11 @@ from collections.abc import Sequence
 
 
 def settle_time_s(times_s: Sequence[float], values: Sequence[float], *, target: float, start_s: float,
-                  tolerance: float = 0.02) -> float | None:
-    """Time from start_s until values enter target +- tolerance*target and stay there to the end.
+                  end_s: float | None = None, tolerance: float = 0.02) -> float | None:
+    """Time from start_s until values enter target +- tolerance*target and stay there until end_s (default: the
+    last sample).
 
-    Returns None if the last sample is outside the band (never settled).
+    Returns None if the last sample up to end_s is outside the band (never settled).
     """
     if len(times_s) != len(values):
         raise ValueError(f"times_s and values: expected equal lengths, got {len(times_s)} and {len(values)}")
@@ -18,6 +19,8 @@ def settle_time_s(times_s: Sequence[float], values: Sequence[float], *, target: 
     for t, v in zip(times_s, values):
         if t < start_s:
             continue
+        if end_s is not None and t > end_s:
+            break
         inside = abs(v - target) <= band
         if inside and settled_at is None:
             settled_at = t
