@@ -12,6 +12,12 @@ them with the generated codec, and writes:
     TELEMETRY -> /device/telemetry, EVENT -> /device/event, a jump in the device's frame seq -> /link/gap,
     command frames (not heartbeats) -> /host/command once the ACK/NACK arrives (or NO_REPLY).
 Frames that do not decode are counted (decode_errors), never raised into the client's threads.
+
+A gap is written once it is known to be a loss: the device sends an ACK in the tick that received the
+command but queues the events that command raised (numbered first), so a STATE_CHANGED arrives right after
+the ACK with a lower seq. Such a hole is held until REORDER_WINDOW newer frames have arrived (or the
+recording ends); late frames fill it, and only what is still missing is written (log_time: when it was
+detected). The gap detector's own counters still count every hole as it opens (live progress).
 A LinkRecorder outlives transports: reconnecting with a new transport keeps its gap state.
 """
 
@@ -19,10 +25,10 @@ from __future__ import annotations
 
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 from robowrangler.protocol import generated as gen
-from robowrangler.recorder.gaps import SeqGapDetector
+from robowrangler.recorder.gaps import REORDER_WINDOW, SEQ_MODULUS, SeqGap, SeqGapDetector
 from robowrangler.recorder.records import command_record, event_record, telemetry_record
 from robowrangler.recorder.writer import RecordingWriter
 from robowrangler.transport import Transport
@@ -40,11 +46,20 @@ class _Pending:
     transmissions: int = 1
 
 
+@dataclass
+class _HeldGap:
+    gap: SeqGap
+    log_ns: int
+    missing: set[int] = field(default_factory=set)
+
+
 class LinkRecorder:
     """Turns frames seen on a link into recording records (thread-safe).
 
     Attributes: telemetry_count, event_count, command_count, decode_errors, gap_detector (SeqGapDetector),
-    last_telemetry_host_s (time.monotonic() of the latest TELEMETRY, None before), latest_state (name).
+    last_telemetry_host_s (time.monotonic() of the latest TELEMETRY, None before), latest_state (name),
+    gaps_written / frames_missing (the /link/gap records written and the frames they count: holes that late
+    frames filled are not among them), reordered_filled (frames that arrived late into a held hole).
     """
 
     def __init__(self, writer: RecordingWriter, *, no_reply_after_s: float = NO_REPLY_AFTER_S,
@@ -60,7 +75,11 @@ class LinkRecorder:
         self.decode_errors = 0
         self.last_telemetry_host_s: float | None = None
         self.latest_state: str | None = None
+        self.gaps_written = 0
+        self.frames_missing = 0
+        self.reordered_filled = 0
         self._pending: dict[tuple[int, int], _Pending] = {}
+        self._held: list[_HeldGap] = []
         self._lock = threading.Lock()
 
     # ---------------------------------------------------------------------------------------------
@@ -79,8 +98,15 @@ class LinkRecorder:
             # counter, so gaps are looked for over all of them
             time_s = msg.time_ms / 1000 if isinstance(msg, (gen.Telemetry, gen.Event)) else None
             gap = self.gap_detector.feed(header.seq, host_s=host_s, time_s=time_s)
+            self._fill_held(header.seq)
             if gap is not None:
-                self.writer.write("/link/gap", gap.to_record(), log_time_ns=log_ns)
+                if gap.missing is not None and gap.missing <= REORDER_WINDOW:
+                    seqs = {(gap.from_seq + i) % SEQ_MODULUS for i in range(gap.missing)}
+                    self._held.append(_HeldGap(gap, log_ns, seqs))
+                else:  # a restart or a long loss: late frames cannot fill it
+                    self._release_held(everything=True)
+                    self._write_gap(gap, log_ns)
+            self._release_held(everything=False)
             if isinstance(msg, gen.Telemetry):
                 record = telemetry_record(msg, seq=header.seq)
                 self.writer.write("/device/telemetry", record, log_time_ns=log_ns)
@@ -128,13 +154,48 @@ class LinkRecorder:
             for pending in list(self._pending.values()):
                 self._write_command(pending, None, self.writer.now_ns(), host_s)
             self._pending.clear()
+            self._release_held(everything=True)
             last = self.last_telemetry_host_s
             if last is not None and host_s - last > self.silence_s:
                 gap = self.gap_detector.open_gap(host_s=host_s)
                 if gap is not None:
-                    self.writer.write("/link/gap", gap.to_record())
+                    self._write_gap(gap, self.writer.now_ns())
 
     # ---------------------------------------------------------------------------------------------
+    def _write_gap(self, gap: SeqGap, log_ns: int) -> None:
+        self.writer.write("/link/gap", gap.to_record(), log_time_ns=log_ns)
+        self.gaps_written += 1
+        self.frames_missing += gap.missing or 0
+
+    def _fill_held(self, seq: int) -> None:
+        for held in self._held:
+            if seq in held.missing:
+                held.missing.discard(seq)
+                self.reordered_filled += 1
+                return
+
+    def _release_held(self, *, everything: bool) -> None:
+        """Write held gaps that late frames can no longer fill (all of them with everything=True), in order;
+        a hole partly filled is written as the runs still missing."""
+        last = self.gap_detector.last_seq
+        while self._held:
+            held = self._held[0]
+            gap = held.gap
+            if not everything and last is not None and (last - gap.to_seq) % SEQ_MODULUS < REORDER_WINDOW:
+                return
+            self._held.pop(0)
+            run_start = None
+            for i in range(gap.missing + 1):
+                seq = (gap.from_seq + i) % SEQ_MODULUS
+                if i < gap.missing and seq in held.missing:
+                    if run_start is None:
+                        run_start = i
+                elif run_start is not None:
+                    self._write_gap(replace(gap, from_seq=(gap.from_seq + run_start) % SEQ_MODULUS,
+                                            to_seq=(gap.from_seq + i - 1) % SEQ_MODULUS, missing=i - run_start),
+                                    held.log_ns)
+                    run_start = None
+
     def _write_command(self, pending: _Pending, reply: gen.Message | None, log_ns: int, host_s: float) -> None:
         latency_s = max(0.0, host_s - pending.first_sent_s) if reply is not None else None
         record = command_record(pending.message, seq=pending.seq, transmissions=pending.transmissions,

@@ -11,6 +11,13 @@ the reader reads everything up to the last complete chunk. Chunks are not compre
 dependency); close() writes the summary section (statistics, indexes) and the footer.
 
 Thread-safe: one lock guards the MCAP writer (the client's receive and send threads both write).
+
+Simulated recordings (a SIL run stepped as fast as the machine goes) pass their own clock:
+
+    with RecordingWriter("sim.mcap", source="sil", time_base="simulation", clock_ns=lambda: sim_ns) as rec:
+
+then log times default to that clock and chunks are finished every flush_period_s of it (checked at each
+write, no background thread), so the same run gives the same bytes whatever the machine's speed.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ import json
 import threading
 import time
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 from mcap.writer import CompressionType, Writer
@@ -57,12 +65,14 @@ class RecordingWriter:
         flush_period_s: finish a chunk at least this often while messages arrive [s].
         flush_messages: finish a chunk after this many messages.
         validate: check every record against its channel schema before writing (RecordingSchemaError).
+        clock_ns: the recording's clock in integer ns (e.g. simulated time for time_base "simulation"): it
+            stamps log times (now_ns()) and times the chunk flushes; None: the host clock (unix ns).
     """
 
     def __init__(self, path: str | Path, *, source: str, seed: int | None = None, time_base: str = "unix",
                  device_url: str = "", description: str = "",
                  flush_period_s: float = DEFAULT_FLUSH_PERIOD_S, flush_messages: int = DEFAULT_FLUSH_MESSAGES,
-                 validate: bool = True) -> None:
+                 validate: bool = True, clock_ns: Callable[[], int] | None = None) -> None:
         self.path = Path(path)
         if source not in sg.SOURCES:
             raise RecordingError(self.path, f"source: expected one of {list(sg.SOURCES)}, got {source!r}")
@@ -74,6 +84,9 @@ class RecordingWriter:
             raise RecordingError(self.path, f"flush_period_s: expected a number > 0, got {flush_period_s!r}")
         if isinstance(flush_messages, bool) or not isinstance(flush_messages, int) or flush_messages < 1:
             raise RecordingError(self.path, f"flush_messages: expected an integer >= 1, got {flush_messages!r}")
+        if clock_ns is not None and not callable(clock_ns):
+            raise RecordingError(self.path, f"clock_ns: expected a callable returning ns or None, got {clock_ns!r}")
+        self._clock_ns = clock_ns
         self.flush_period_s = float(flush_period_s)
         self.flush_messages = flush_messages
         self.validate = validate
@@ -101,11 +114,13 @@ class RecordingWriter:
         self._channels: dict[str, int] = {}
         self.counts: dict[str, int] = {}
         self._unflushed = 0
-        self._last_flush_s = time.monotonic()
         self._closed = False
         self._stop = threading.Event()
-        self._flusher = threading.Thread(target=self._flush_loop, name="recording-flush", daemon=True)
-        self._flusher.start()
+        self._flusher: threading.Thread | None = None
+        self._last_flush_s = self._flush_clock_s()
+        if clock_ns is None:  # the host clock runs on while nothing is written: a thread finishes chunks
+            self._flusher = threading.Thread(target=self._flush_loop, name="recording-flush", daemon=True)
+            self._flusher.start()
 
     # ------------------------------------------------------------------------------------------------
     def add_metadata(self, name: str, values: dict[str, str]) -> None:
@@ -124,8 +139,14 @@ class RecordingWriter:
             self._file.flush()
 
     def now_ns(self) -> int:
-        """Host time for log_time: ns since the epoch, advancing with the monotonic clock (never jumps)."""
+        """Time for log_time: the clock_ns given, else host time: ns since the epoch, advancing with the
+        monotonic clock (never jumps)."""
+        if self._clock_ns is not None:
+            return int(self._clock_ns())
         return self._epoch_ns + (time.monotonic_ns() - self._mono0_ns)
+
+    def _flush_clock_s(self) -> float:
+        return self._clock_ns() * 1e-9 if self._clock_ns is not None else time.monotonic()
 
     def write(self, topic: str, record: dict[str, Any], *, log_time_ns: int | None = None,
               publish_time_ns: int | None = None) -> None:
@@ -160,7 +181,8 @@ class RecordingWriter:
                                    sequence=self.counts.get(topic, 0))
             self.counts[topic] = self.counts.get(topic, 0) + 1
             self._unflushed += 1
-            if self._unflushed >= self.flush_messages:
+            if self._unflushed >= self.flush_messages or (
+                    self._clock_ns is not None and self._flush_clock_s() - self._last_flush_s >= self.flush_period_s):
                 self._flush_locked()
 
     def flush(self) -> None:
@@ -173,7 +195,7 @@ class RecordingWriter:
         if self._unflushed:
             self._mcap.flush()  # finishes the chunk (with its message indexes) and flushes the stream
         self._unflushed = 0
-        self._last_flush_s = time.monotonic()
+        self._last_flush_s = self._flush_clock_s()
 
     def _flush_loop(self) -> None:
         while not self._stop.wait(self.flush_period_s / 4):
@@ -194,7 +216,7 @@ class RecordingWriter:
                 self._mcap.finish()
             finally:
                 self._file.close()
-        if self._flusher is not threading.current_thread():
+        if self._flusher is not None and self._flusher is not threading.current_thread():
             self._flusher.join(timeout=2.0)
 
     def __enter__(self) -> RecordingWriter:
