@@ -64,6 +64,8 @@ SensorFilter = Callable[[SensorValues], "SensorValues | None"]
 """Per tick, before the exchange: returns the values the firmware sees, or None = the firmware misses this tick."""
 ActuatorFilter = Callable[[int], int]
 """Per tick, after the exchange: maps the ESC pulse the firmware drives (us) to the pulse the plant's ESC gets."""
+TickHook = Callable[["SilSession"], None]
+"""Per tick, after the drive and spindle plants stepped: couples another plant (e.g. the rope chain) in lockstep."""
 
 
 class SilSession:
@@ -88,6 +90,10 @@ class SilSession:
     SIL_SENSORS is sent, the firmware misses the tick and the plant runs on with the last ESC pulse (a
     stalled control loop). An actuator filter maps the ESC pulse the firmware drives to the pulse the
     plant's ESC receives (applied on missed ticks too). Change the lists between steps or in at().
+
+    Plant coupling (``tick_hooks``): callables hook(session) run every tick right after the drive and spindle
+    plants stepped, in order; a hook may read both plants and set their inputs for the next tick (see
+    robowrangler_sim.scenarios.chain_bridge, which steps the rope chain this way).
     """
 
     def __init__(self, *, drive_params: DriveParams | None = None, spindle_params: SpindleParams | None = None,
@@ -110,6 +116,7 @@ class SilSession:
         self.last_esc_pulse_us = 0
         self.sensor_filters: list[SensorFilter] = []
         self.actuator_filters: list[ActuatorFilter] = []
+        self.tick_hooks: list[TickHook] = []
         self.key = secrets.token_bytes(KEY_LEN) if key is None else bytes(key)
         self._provision_on_start = provision
         self._tmpdir = None if state_file is not None else tempfile.TemporaryDirectory(prefix="rw_sil_")
@@ -249,6 +256,8 @@ class SilSession:
         spindle.moving_speed_raw = self.last_spindle_speed_raw
         spindle.step(self.tick_us * 1e-6)
         plant.rope_exposed_length_m = min(max(0.05, spindle.loop_length_m), plant.params.rope_loop_length_m)
+        for hook in self.tick_hooks:
+            hook(self)
         self.ticks += 1
         if self.trace_every and self.ticks % self.trace_every == 0:
             self.trace.append(PlantSample(plant.time_us * 1e-6, plant.rope_speed_mps, self.last_esc_pulse_us,

@@ -1,0 +1,403 @@
+"""Run a wrangling scenario with the firmware in the loop: SIL firmware + drive + spindle + rope chain.
+
+    from robowrangler_sim.scenarios import run_scenario
+    outcome = run_scenario("mug", seed=0, progress=print)
+    outcome.secured, outcome.grasp_end, outcome.firmware_path
+
+Grasp scenarios (a free object on the floor), all in simulated time:
+  0. scene: the module is rolled by roll_deg (90: the loop plane is horizontal) with its exit
+     exit_height_m above the floor, and the loop has been laid around the object (the object at
+     object_x_frac of the loop's reach, centred between the branches: the plant-level grasp's
+     geometry, grasp.grasp_scene). Why not bring the flying loop over the object with the robot's leg:
+     the paper's out-of-plane joints have zero stiffness, so a horizontal loop has nothing holding it
+     off the floor; it drapes on the floor from the exit and sweeps whatever it is moved over (tried:
+     an approach from 15 cm above the mug dragged the loop across the floor and left the mug outside).
+     A closed loop at floor level cannot surround an object without passing over it.
+  1. boot: the SIL device is provisioned, the ESC arming hold passes (0.6 s), the rope stands, so the
+     loop has no lift and lies on the floor around the object; the scenario's firmware parameters are
+     set (PARAM_SET); HOME (the spindle finds its end stop by stall; the loop follows the guide).
+  2. spin up: ARM, SET_ROPE_SPEED airborne_speed; the rope passes ToV x margin (AIRBORNE) and the drives
+     lift the loop back into its shape around the object (lift.py).
+  3. GRASP (the real command): the firmware relaxes (rope speed to 0: the loop loses lift and falls on the
+     floor around the object), then retracts the guide until the spindle's load says secured
+     (LOAD_SECURED -> HOLD) or the stroke ends (STROKE_END -> ARMED; the self-locking screw keeps the
+     guide where it stopped).
+  4. hold: hold_s, nothing moves.
+  5. pull: the module moves back pull_m (and up lift_m) over pull_s. The simulation judges, over the
+     second half of the pull, whether the loop keeps hold of the object and the object follows the
+     module (secured.SecuredMonitor, the plant-level judgement) or it slipped out.
+The door scenario positions with the robot's leg: the vertical loop (whose plane gravity does not
+leave) flies beside a fixed lever handle and the module slides sideways so that the loop threads over
+the lever's free end; then GRASP and a 5 cm pull;
+"held" means the rope still touches and pulls the handle through the second half of the pull.
+
+A ChainDivergenceError (MuJoCo blew up on the light links, known on the door handle) ends the run: it is
+reported in the outcome (``diverged``), never hidden; the CLI exits non-zero on it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robowrangler.protocol import generated as gen
+from robowrangler_sim.chain.default_table import default_or_synthetic_table
+from robowrangler_sim.chain.errors import ChainDivergenceError
+from robowrangler_sim.chain.grasp import grasp_scene
+from robowrangler_sim.chain.objects import ObjectPlacement, get_object
+from robowrangler_sim.chain.params import ChainParams
+from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxyz
+from robowrangler_sim.chain.secured import SecuredMonitor
+from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory
+from robowrangler_sim.scenarios.catalogue import ScenarioError, ScenarioSpec, get_scenario
+from robowrangler_sim.scenarios.chain_bridge import ChainBridge, use_chain_loaded_spindle
+from robowrangler_sim.sil.scripted_host import ScriptedHost
+from robowrangler_sim.sil.session import SilSession
+
+P = gen.PARAMS_BY_NAME
+
+BOOT_S = 0.6                # ESC arming hold of the SIL device
+RISE_S = 1.5                # after AIRBORNE: the chain rises into its shape (drives: tau = kd/kp = 0.5 s)
+FORWARD_S = 1.5             # door: the sideways move that threads the loop over the lever
+SETTLE_S = 0.5              # after positioning
+HOMING_TIMEOUT_S = 30.0
+GRASP_TIMEOUT_S = 30.0
+
+
+@dataclass
+class ScenarioOutcome:
+    """What the simulation says about one scenario run (SI units).
+
+    Attributes:
+        name, object_name, kind, seed, n_links: what ran.
+        verdict: "secured" / "slipped" (grasp), "held" / "lost" (door), "diverged", or "firmware: ..." when the
+            firmware did not get through the script (a NACK, a fault, a state not reached).
+        secured: True if secured/held, False if slipped/lost, None if the run did not reach the judgement.
+        firmware_path: [(state_from, state_to, cause)] names of the STATE_CHANGED events, in order.
+        grasp_end: cause that ended RETRACT ("LOAD_SECURED" -> HOLD, "STROKE_END" -> ARMED, ...), or None.
+        guide_at_grasp_end_mm: spindle guide position when RETRACT ended (plant truth), mm.
+        peak_guide_load_n: largest chain load on the guide (bridge), N.
+        follow_ratio, touching_fraction, mean_pull_force_n: the judgement's figures (secured.SecuredMonitor).
+        drag_force_n: force that slides the object on the floor (0 for a fixture), N.
+        diverged: the ChainDivergenceError message, or None.
+        simulated_s, wall_s: simulated time reached, wall time of the run.
+        trace: per-sample rows (time_s, phase, state, rope_speed_mps, guide_mm, guide_load_n, base_pos_m,
+            object_com_m, chain_force_n, loop_tip_pos_m).
+        frames_written: PNG/MP4 paths written with render_dir.
+    """
+
+    name: str
+    object_name: str
+    kind: str
+    seed: int
+    n_links: int
+    verdict: str = "not run"
+    secured: bool | None = None
+    firmware_path: list = field(default_factory=list)
+    grasp_end: str | None = None
+    guide_at_grasp_end_mm: float = float("nan")
+    peak_guide_load_n: float = 0.0
+    follow_ratio: float = float("nan")
+    touching_fraction: float = 0.0
+    mean_pull_force_n: float = 0.0
+    drag_force_n: float = 0.0
+    diverged: str | None = None
+    simulated_s: float = 0.0
+    wall_s: float = 0.0
+    trace: list = field(default_factory=list)
+    frames_written: list = field(default_factory=list)
+
+
+class _FirmwareStopped(Exception):
+    """The firmware did not get through the script (message says where)."""
+
+
+class _Run:
+    """One scenario run: the session, the host, the chain, the bridge, sampling and rendering."""
+
+    def __init__(self, spec: ScenarioSpec, *, seed: int, n_links: int, sample_s: float,
+                 progress: Callable[[str], None] | None, render_dir: Path | None, render_every: int) -> None:
+        self.spec = spec
+        self.script = spec.script
+        self.sample_us = round(sample_s * 1e6)
+        self.progress = progress
+        self.render_dir = render_dir
+        self.render_every = render_every
+        self.params = ChainParams(n_links=n_links)
+        self.table = default_or_synthetic_table()
+        self.phase = "boot"
+        self.outcome = ScenarioOutcome(name=spec.name, object_name=spec.object_name, kind=spec.kind, seed=seed,
+                                       n_links=n_links)
+        self.seed = seed
+        self.monitor: SecuredMonitor | None = None
+        self._next_sample_us = 0
+        self._next_report_s = 0.0
+        self._renderer = None
+        self._frames: list = []
+        self._sample_index = 0
+
+    # --- scene -------------------------------------------------------------------------------
+    def build(self) -> None:
+        spec, script = self.spec, self.script
+        obj = get_object(spec.object_name)
+        quat = pitch_quat_wxyz(math.radians(script.phi_deg), roll_rad=math.radians(script.roll_deg))
+        if spec.kind == "grasp":
+            placed, base = grasp_scene(obj, table=self.table, params=self.params, script=script, seed=self.seed)
+            placement = placed.objects[0]
+            self.grasp_pos_m = np.asarray(base, dtype=float)
+            start = self.grasp_pos_m.copy()
+            self.outcome.drag_force_n = max(self.params.floor_friction, obj.friction) * obj.mass_kg * 9.81
+        else:
+            placement, start = self._door_geometry(obj)
+        self.trajectory = BaseTrajectory(start_pos_m=start, quat_wxyz=quat)
+        self.placement = placement
+        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0)
+        use_chain_loaded_spindle(self.sil, seed=self.seed)
+        guide = min(max(self.sil.spindle.guide_position_mm, 0.0), self.params.guide_stroke_mm)
+        self.chain = ChainPlant(table=self.table, params=self.params, objects=(placement,), floor_height_m=0.0,
+                                initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=guide,
+                                                    base_pos_m=tuple(start), base_quat_wxyz=quat),
+                                airborne=spec.kind == "grasp", seed=self.seed)
+        self.bridge = ChainBridge(self.sil, self.chain, self.trajectory).install()
+
+    def _door_geometry(self, obj) -> tuple[ObjectPlacement, np.ndarray]:
+        """Door face at x = 0 facing -x, lever bar along y at x = -0.06 m, z = 1.0 m, free end at y = -0.12 m.
+
+        The vertical loop (x-z plane) is launched towards the door with its tip 4 cm beyond the bar
+        (2 cm short of the door) and its two branches above and below the bar's height; the module
+        starts 0.45 m to the side of the bar and slides along y so that the loop threads over the
+        bar's free end, 4 cm short of the stand-off."""
+        script = self.script
+        contour = self.table.contour(script.phi_deg, rope_speed_mps=script.airborne_speed_mps)
+        arc = float(np.sum(np.linalg.norm(np.diff(contour, axis=0), axis=1)))
+        contour = contour * (self.params.home_loop_length_m / arc)
+        tip = int(np.argmax(contour[:, 0]))
+        reach = float(contour[tip, 0])
+        z_tip = float(contour[tip, 1])
+        bar_x, bar_z = -0.060, 1.0
+        exit_x = bar_x + 0.04 - reach
+        exit_z = bar_z - z_tip
+        placement = ObjectPlacement(spec=obj, pos_m=(0.0, 0.0, 0.0))
+        self.grasp_pos_m = np.array([exit_x, -0.08, exit_z])
+        self.approach_pos_m = self.grasp_pos_m + np.array([0.0, -0.45, 0.0])
+        return placement, self.approach_pos_m.copy()
+
+    # --- running -----------------------------------------------------------------------------
+    def note(self, text: str) -> None:
+        if self.progress is not None:
+            self.progress(f"[{self.sil.time_s:6.2f} s] {text}")
+
+    def tick(self) -> None:
+        self.host.tick()
+        t_us = self.sil.plant.time_us
+        if t_us >= self._next_sample_us:
+            self._next_sample_us += self.sample_us
+            self._sample()
+        if self.sil.time_s >= self._next_report_s:
+            self._next_report_s += 2.0
+            tel = self.host.last_telemetry
+            state = gen.State(tel.state).name if tel is not None else "-"
+            self.note(f"{self.phase:9s} state {state:9s} rope {self.sil.plant.rope_speed_mps:5.2f} m/s, guide "
+                      f"{self.sil.spindle.guide_position_mm:6.1f} mm, load {self.bridge.guide_load_n:6.2f} N, "
+                      f"lift {self.chain.lift:4.2f}")
+
+    def run_for(self, duration_s: float) -> None:
+        end_us = self.sil.plant.time_us + round(duration_s * 1e6)
+        while self.sil.plant.time_us < end_us:
+            self.tick()
+
+    def run_until(self, predicate, *, timeout_s: float, what: str) -> None:
+        end_us = self.sil.plant.time_us + round(timeout_s * 1e6)
+        while not predicate():
+            if self.sil.plant.time_us >= end_us:
+                raise _FirmwareStopped(f"{what} not reached within {timeout_s:g} s")
+            self.tick()
+
+    def command(self, message: gen.Message) -> None:
+        seq = self.host.send(message)
+        self.run_until(lambda: self.host.verdict_for(seq) is not None, timeout_s=0.1, what=f"{message.NAME} verdict")
+        verdict = self.host.verdict_for(seq)
+        if not isinstance(verdict, gen.Ack):
+            raise _FirmwareStopped(f"{message.NAME} refused: {gen.NackReason(verdict.reason).name}")
+
+    def state(self) -> int | None:
+        tel = self.host.last_telemetry
+        return None if tel is None else tel.state
+
+    def _state_events(self) -> list:
+        return [e for e in self.host.received.events if e.event == gen.EventKind.STATE_CHANGED]
+
+    def _sample(self) -> None:
+        chain, name = self.chain, self.spec.object_name
+        net = chain.chain_object_net_force_n()[name]
+        force = float(np.linalg.norm(net))
+        com = chain.object_com_m(name) if self.spec.kind == "grasp" else chain.object_pos_m(name)
+        base = self.trajectory.pos_at(chain.time_s)
+        tel = self.host.last_telemetry
+        self.outcome.trace.append(dict(
+            time_s=self.sil.time_s, phase=self.phase, state=None if tel is None else int(tel.state),
+            rope_speed_mps=self.sil.plant.rope_speed_mps, guide_mm=self.sil.spindle.guide_position_mm,
+            guide_load_n=self.bridge.guide_load_n, base_pos_m=base, object_com_m=com, chain_force_n=force,
+            loop_tip_pos_m=chain.loop_tip_pos_m()))
+        if self.monitor is not None:
+            self.monitor.update(time_s=chain.time_s, object_com_m=com, base_pos_m=base, chain_force_n=force)
+        if self.render_dir is not None:
+            self._render()
+        self._sample_index += 1
+
+    def _render(self) -> None:
+        from robowrangler_sim.chain.render import ChainRenderer, write_png
+
+        if self._renderer is None:
+            self._renderer = ChainRenderer(self.chain, width_px=640, height_px=360, azimuth_deg=70.0,
+                                           elevation_deg=-20.0, distance_m=1.6)
+        frame = self._renderer.frame()
+        self._frames.append(frame)
+        if self._sample_index % self.render_every == 0:
+            path = self.render_dir / f"{self.spec.name}_{self._sample_index:04d}_{self.phase}.png"
+            self.outcome.frames_written.append(str(write_png(path, frame)))
+
+    def finish_render(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        if self._frames:
+            from robowrangler_sim.chain.render import write_mp4
+
+            mp4 = write_mp4(self.render_dir / f"{self.spec.name}.mp4", self._frames,
+                            fps=1e6 / self.sample_us)
+            self.outcome.frames_written.append(str(mp4))
+
+    # --- the script ----------------------------------------------------------------------------
+    def script_run(self) -> None:
+        script, spec = self.script, self.spec
+        self.host = ScriptedHost(self.sil)
+        self.run_for(BOOT_S)
+        for pname, value in spec.firmware_params:
+            self.command(gen.ParamSet(P[pname].id, float(value)))
+        self.phase = "home"
+        self.note("HOME: the spindle seeks its end stop")
+        self.command(gen.Home())
+        self.run_until(lambda: self.host.last_telemetry.spindle_flags & gen.SpindleFlag.HOMED,
+                       timeout_s=HOMING_TIMEOUT_S, what="spindle HOMED")
+        self.phase = "spinup"
+        self.note(f"ARM, SET_ROPE_SPEED {script.airborne_speed_mps:g} m/s")
+        self.command(gen.Arm())
+        self.command(gen.SetRopeSpeed(round(script.airborne_speed_mps * 1000)))
+        self.run_until(lambda: self.state() == gen.State.AIRBORNE, timeout_s=5.0, what="AIRBORNE")
+        self.run_for(RISE_S)
+        self.phase = "position"
+        self.note("position: the loop flies around the object" if spec.kind == "grasp"
+                  else "position: the robot slides the loop over the lever's free end")
+        t = self.sil.time_s
+        if spec.kind == "grasp":  # the loop already lies around the object (see module doc)
+            self.run_for(SETTLE_S)
+        else:
+            self.trajectory.move_to(self.grasp_pos_m, start_s=t, duration_s=FORWARD_S)
+            self.run_for(FORWARD_S + SETTLE_S)
+        self.phase = "grasp"
+        self.note("GRASP: relax, then retract until the load says secured")
+        n_before = len(self._state_events())
+        self.command(gen.Grasp())
+
+        def retract_over() -> bool:
+            return any(e.state_from == gen.State.RETRACT or e.state_to in (gen.State.FAULT, gen.State.ESTOP)
+                       for e in self._state_events()[n_before:])
+
+        self.run_until(retract_over, timeout_s=GRASP_TIMEOUT_S, what="end of RETRACT")
+        end = next(e for e in self._state_events()[n_before:]
+                   if e.state_from == gen.State.RETRACT or e.state_to in (gen.State.FAULT, gen.State.ESTOP))
+        self.outcome.grasp_end = gen.Cause(end.arg).name
+        self.outcome.guide_at_grasp_end_mm = self.sil.spindle.guide_position_mm
+        self.note(f"RETRACT ended: {gen.Cause(end.arg).name} -> {gen.State(end.state_to).name} at guide "
+                  f"{self.sil.spindle.guide_position_mm:.1f} mm, load {self.bridge.guide_load_n:.2f} N")
+        if end.state_to in (gen.State.FAULT, gen.State.ESTOP):
+            raise _FirmwareStopped(f"RETRACT ended in {gen.State(end.state_to).name}")
+        self.phase = "hold"
+        self.run_for(script.hold_s)
+        self.phase = "pull"
+        self.note(f"pull: the robot moves the module back {script.pull_m:g} m")
+        drag = self.outcome.drag_force_n if self.outcome.drag_force_n > 0 else 1.0
+        self.monitor = SecuredMonitor(drag_force_n=drag, window_s=0.5 * script.pull_s,
+                                      follow_fraction=script.follow_fraction,
+                                      contact_fraction=script.contact_fraction)
+        t = self.sil.time_s
+        self.trajectory.move_to(self.grasp_pos_m + np.array([-script.pull_m, 0.0, script.lift_m]), start_s=t,
+                                duration_s=script.pull_s)
+        self.run_for(script.pull_s)
+        self.judge()
+
+    def judge(self) -> None:
+        o, m = self.outcome, self.monitor
+        o.follow_ratio = m.follow_ratio
+        o.touching_fraction = m.touching_fraction
+        o.mean_pull_force_n = m.mean_force_n
+        if self.spec.kind == "grasp":
+            o.secured = bool(m.secured and not np.isnan(m.follow_ratio))
+            o.verdict = "secured" if o.secured else "slipped"
+        else:  # a fixture does not follow: held = the rope keeps touching and pulling it
+            o.secured = bool(m.touching_fraction >= m.contact_fraction)
+            o.verdict = "held" if o.secured else "lost"
+
+
+def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float = 0.05,
+                 progress: Callable[[str], None] | None = None, render_dir: str | Path | None = None,
+                 render_png_every: int = 10) -> ScenarioOutcome:
+    """Run scenario ``name`` with the firmware in the loop and judge it (see module doc).
+
+    Args:
+        name: a scenario name (catalogue.scenario_names()); ScenarioError otherwise.
+        seed: seeds the plants (sensor noise) and the chain; the same seed gives the same outcome and trace.
+        n_links: chain links, 10..80.
+        sample_s: trace (and render) sampling period, simulated s.
+        progress: called with one-line progress messages (phase changes, every 2 simulated seconds).
+        render_dir: if given, PNG frames (every render_png_every-th sample) and an MP4 are written there
+            (MuJoCo offscreen: set MUJOCO_GL=osmesa before mujoco is imported on a headless machine).
+    Returns:
+        ScenarioOutcome. The firmware process is stopped before returning, also on errors.
+    """
+    spec = get_scenario(name)
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise ScenarioError(f"seed: expected an int >= 0, got {seed!r}")
+    if not (isinstance(sample_s, (int, float)) and 0.001 <= sample_s <= 1.0):
+        raise ScenarioError(f"sample_s: expected 0.001..1.0 s, got {sample_s!r}")
+    if not isinstance(render_png_every, int) or render_png_every < 1:
+        raise ScenarioError(f"render_png_every: expected an int >= 1, got {render_png_every!r}")
+    out_dir = None
+    if render_dir is not None:
+        out_dir = Path(render_dir)
+        out_dir.mkdir(parents=True, exist_ok=True)
+    run = _Run(spec, seed=seed, n_links=n_links, sample_s=sample_s, progress=progress, render_dir=out_dir,
+               render_every=render_png_every)
+    wall0 = time.perf_counter()
+    run.build()
+    try:
+        run.sil.start()
+        try:
+            run.script_run()
+        except ChainDivergenceError as exc:
+            run.outcome.diverged = str(exc)
+            run.outcome.verdict = "diverged"
+            run.note(f"chain simulation diverged: {exc}")
+        except _FirmwareStopped as exc:
+            run.outcome.verdict = f"firmware: {exc}"
+            run.note(f"firmware did not get through the script: {exc}")
+        finally:
+            if getattr(run, "host", None) is not None:
+                run.outcome.firmware_path = [(gen.State(e.state_from).name, gen.State(e.state_to).name,
+                                              gen.Cause(e.arg).name) for e in run._state_events()]
+                run.host.close()
+            run.outcome.peak_guide_load_n = run.bridge.peak_guide_load_n
+            run.outcome.simulated_s = run.sil.time_s
+            if out_dir is not None:
+                run.finish_render()
+    finally:
+        run.sil.stop()
+    run.outcome.wall_s = time.perf_counter() - wall0
+    run.note(f"outcome: {run.outcome.verdict}")
+    return run.outcome
