@@ -330,11 +330,13 @@ class _Run:
     def _show_progress(self, *, final: bool) -> None:
         rec, sil = self.recorder, self.sil
         wall_s = max(time.perf_counter() - self._wall0, 1e-9)
-        print(f"\r  recording {self.path.name}: t = {sil.time_s:6.2f} / {self.script.duration_s:.2f} s sim, "
+        live = bool(getattr(self.progress, "isatty", lambda: False)())  # a terminal: one line, rewritten
+        print(f"{chr(13) if live else ''}  recording {self.path.name}: t = {sil.time_s:6.2f} / "
+              f"{self.script.duration_s:.2f} s sim, "
               f"state {rec.latest_state or '-'}, rope {sil.plant.rope_speed_mps:5.2f} m/s, "
               f"loop {'flying ' if self.loop_airborne else 'hanging'}, {rec.telemetry_count} telemetry, "
               f"{self.observations} frames, {sil.time_s / wall_s:5.2f} sim s/wall s",
-              end="\n" if final else "", file=self.progress, flush=True)
+              end="" if live and not final else "\n", file=self.progress, flush=True)
 
 
 def record_string_shooter(path: str | Path, *, script: RecordingScript | None = None, seed: int = 0,
