@@ -5,7 +5,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from robowrangler_sim.chain.objects import ObjectPlacement, get_object
+from robowrangler_sim.chain.objects import OBJECTS, ObjectPlacement, get_object
 from robowrangler_sim.string_shooter import ModuleMotion, ShooterParams, StringShooter
 from robowrangler_sim.string_shooter.chain_objects import euler_xyz_intrinsic, obstacles_for_placement
 from robowrangler_sim.string_shooter.contact import signed_distance_m
@@ -21,7 +21,7 @@ def test_euler_convention_matches_mujoco():
     assert np.allclose(data.geom_xmat[0].reshape(3, 3), euler_xyz_intrinsic(euler), atol=1e-9)
 
 
-@pytest.mark.parametrize("name", ["door_handle", "mug", "tennis_ball", "sponge"])
+@pytest.mark.parametrize("name", sorted(OBJECTS))  # every object of the chain model's catalogue
 def test_object_surface_agrees_with_mujoco(name):
     """Points on each MuJoCo geom's surface (found by ray casting) lie on our obstacle surface."""
     placement = ObjectPlacement(spec=get_object(name), pos_m=(0.4, -0.1, 0.0), yaw_rad=0.5)

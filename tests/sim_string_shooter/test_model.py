@@ -155,3 +155,30 @@ def test_a_yawing_module_leaves_the_loop_trailing_behind():
     lateral = np.array([-np.sin(2.0), np.cos(2.0), 0.0])  # module's left, at t = 2 s
     tip = f.points_m[np.argmax(np.linalg.norm(f.points_m - f.points_m[0], axis=1))]
     assert (tip - f.points_m[0]) @ lateral < -0.01  # the tip lags: it sits to the module's right
+
+
+def _bend_opening_time_s(bending_n_m2: float, *, width_m: float = 0.15, duration_s: float = 0.4) -> float:
+    """A loop folded tight (two strands 4 cm apart) in weightless vacuum, at rest: only bending moves it.
+    Time for its width to reach width_m (linear between 2 ms frames); inf if it never does."""
+    params = ShooterParams(rope=RopeParams(bending_stiffness_n_m2=bending_n_m2, bending_damping_s=0.0),
+                           air=AirParams(density_kg_per_m3=0.0), gravity_mps2=0.0)
+    sim = StringShooter(params, loop_length_m=1.0, motion=ModuleMotion(wheel_speed_mps=0.0), initial_shape="hanging",
+                        initial_rope_speed_mps=0.0)
+    rec = sim.run(duration_s, frame_interval_s=0.002)
+    w = np.array([np.ptp(f.loop_plane_xz_m()[:, 0]) for f in rec.frames])
+    if not np.any(w >= width_m):
+        return float("inf")
+    i = int(np.argmax(w >= width_m))
+    t = rec.time_s
+    return float(t[i - 1] + (width_m - w[i - 1]) / (w[i] - w[i - 1]) * (t[i] - t[i - 1]))
+
+
+def test_bending_stiffness_unfolds_a_tight_fold_on_the_elastic_time_scale():
+    # with nothing but bending (B) and inertia (lambda), the only time scale is l^2 sqrt(lambda / B):
+    # four times stiffer unfolds twice as fast; without stiffness the fold stays (it only settles onto its
+    # 2.5 cm segments: 4 -> 6.5 cm in 0.4 s)
+    t_soft = _bend_opening_time_s(5e-7)
+    t_stiff = _bend_opening_time_s(2e-6)
+    assert 0.05 < t_soft < 0.4
+    assert t_soft / t_stiff == pytest.approx(2.0, rel=0.05)
+    assert _bend_opening_time_s(0.0, width_m=0.1, duration_s=0.4) == float("inf")
