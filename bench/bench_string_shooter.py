@@ -5,7 +5,8 @@
     uv run python bench/bench_string_shooter.py --only takeoff,waves --plot-dir /tmp/ss
 
 Sections: takeoff (our rope, 2 m loop), length (0.4-2 m), angle (-30..40 deg), vacuum (no air),
-shape (roundness versus phi, the paper's Fig. 5b), waves (v +- c), speed (steady state, 10 s dynamic run).
+shape (roundness versus phi, the paper's Fig. 5b), waves (v +- c), speed (steady state, 10 s dynamic run),
+recording (the 12 s default MCAP recording: SIL firmware + plants + rope; needs the native SIL build).
 Progress goes to stderr, figures to stdout.
 """
 
@@ -26,7 +27,7 @@ from robowrangler_sim.string_shooter.shape import reach_m, roundness
 from robowrangler_sim.string_shooter.takeoff import find_takeoff_speed, no_air
 from robowrangler_sim.string_shooter.waves import measure_wave_speeds, measure_waves_on_loop
 
-SECTIONS = ("takeoff", "length", "angle", "vacuum", "shape", "waves", "speed", "sensitivity")
+SECTIONS = ("takeoff", "length", "angle", "vacuum", "shape", "waves", "speed", "sensitivity", "recording")
 
 
 def log(msg: str) -> None:
@@ -232,6 +233,32 @@ def bench_sensitivity(args, plots):
     ten = sim.segment_tensions_n()
     print(f"  (2 m loop at 8 m/s: tension {1e3 * ten.min():.1f} .. {1e3 * ten.max():.1f} mN, max strain "
           f"{100 * ten.max() / base.rope.axial_stiffness_n:.2f} % at EA = {base.rope.axial_stiffness_n} N)")
+
+
+def bench_recording(args, plots):
+    import json
+    import tempfile
+
+    from robowrangler.recorder import read_recording
+    from robowrangler_sim.string_shooter.recording import record_string_shooter
+    from robowrangler_sim.string_shooter.recording_script import RecordingScript
+
+    print("\n## Recording (SIL firmware + drive/spindle plants in lockstep, rope beside them, 30 Hz camera, "
+          "100 Hz plant truth, MCAP)")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "default.mcap"
+        s = record_string_shooter(path, script=RecordingScript.default(), seed=0, progress=True)
+        rec = read_recording(path)
+        size_kb = path.stat().st_size / 1024
+    tov = json.loads(rec.metadata["/device/params"]["tov_mps"])
+    tel = rec.telemetry
+    above_s = float(tel["time_s"][tel["rope_speed_mps"] > tov][0])
+    print(f"  {s.duration_s:g} s simulated in {s.wall_s:.1f} s wall = {s.sim_s_per_wall_s:.2f} sim s / wall s "
+          f"; {size_kb:.0f} KiB")
+    print(f"  messages: {s.telemetry} telemetry, {s.events} events, {s.commands} commands, {s.gaps} gaps, "
+          f"{s.observations} observations, {s.plant_truth} plant truth")
+    print(f"  firmware telemetry above ToV {tov} m/s from {above_s:.2f} s; camera sees the loop flying from "
+          f"{s.first_airborne_s:.2f} s (lift-off takes {s.first_airborne_s - above_s:.2f} s)")
 
 
 def save_plots(plots, plot_dir: Path) -> None:
