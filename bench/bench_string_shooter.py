@@ -253,8 +253,8 @@ def bench_recording(args, plots):
     tov = json.loads(rec.metadata["/device/params"]["tov_mps"])
     tel = rec.telemetry
     above_s = float(tel["time_s"][tel["rope_speed_mps"] > tov][0])
-    print(f"  {s.duration_s:g} s simulated in {s.wall_s:.1f} s wall = {s.sim_s_per_wall_s:.2f} sim s / wall s "
-          f"; {size_kb:.0f} KiB")
+    print(f"  {s.duration_s:g} s simulated in {s.wall_s:.1f} s wall = {s.sim_s_per_wall_s:.2f} sim s / wall s, "
+          f"{size_kb:.0f} KiB")
     print(f"  messages: {s.telemetry} telemetry, {s.events} events, {s.commands} commands, {s.gaps} gaps, "
           f"{s.observations} observations, {s.plant_truth} plant truth")
     print(f"  firmware telemetry above ToV {tov} m/s from {above_s:.2f} s; camera sees the loop flying from "

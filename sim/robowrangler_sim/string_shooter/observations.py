@@ -1,9 +1,8 @@
 """Per-camera-frame observations of the simulated loop, shaped like the recording schema's records.
 
 These build plain dicts for the ``/loop/observation`` and ``/sim/plant_truth`` channels of the
-recording schema (protocol/recording/schemas/*.schema.json, schema hash 0xDD3A at the time of
-writing). Writing them into an MCAP file, together with drive telemetry from a SIL run, is left to
-the recorder (host/robowrangler/recorder) once it is committed; nothing here writes files.
+recording schema (protocol/recording/schemas/*.schema.json). recording.py writes them into MCAP files
+together with the SIL firmware's telemetry; nothing here writes files.
 """
 
 from __future__ import annotations
