@@ -156,3 +156,24 @@ def test_bad_arguments_name_the_argument() -> None:
         RecordingScript(duration_s=2.0, commands=(ScriptCommand(0.5, gen.Heartbeat(0)),))
     with pytest.raises(StringShooterParamError, match="phi_rad_points: expected strictly increasing times"):
         RecordingScript(duration_s=2.0, phi_rad_points=((0.0, 0.0), (0.0, 0.1)))
+
+
+def test_the_spindle_guide_sets_the_rope_loop_length(native_build_dir: Path, tmp_path: Path) -> None:
+    # HOME drives the guide from 40 mm to the home end: both strands pay out, the loop grows by 8 cm
+    homing_speed = gen.PARAMS_BY_NAME["homing_speed_mmps"].id
+    script = RecordingScript(duration_s=7.0, commands=(ScriptCommand(0.5, gen.ParamSet(homing_speed, 7.5)),
+                                                       ScriptCommand(0.6, gen.Home())))
+    path = tmp_path / "home.mcap"
+    record_string_shooter(path, script=script, seed=SEED, read_params=False)
+    rec = read_recording(path)
+    assert "/device/params" not in rec.metadata
+    assert [(e["event"], e["state_to"]) for e in rec.events][-1] == ("SPINDLE_HOMED", "DISARMED")
+    assert "HOMED" in rec.telemetry["spindle_flags"][-1]
+    truth = rec.table("/sim/plant_truth")
+    assert truth["guide_position_m"][0] == pytest.approx(0.040, abs=1e-4)
+    assert truth["guide_position_m"][-1] == pytest.approx(0.0, abs=5e-4)
+    # the rope's loop follows the spindle plant: 2 m at home, 2 m of rope in per metre of guide travel
+    assert np.allclose(truth["loop_length_m"], 2.0 - 2.0 * truth["guide_position_m"], atol=1e-3)
+    obs = _observations(rec)
+    contour_m = [float(np.sum(np.linalg.norm(np.diff(np.asarray(o["points_m"]), axis=0), axis=1))) for o in obs]
+    assert np.mean(contour_m[-10:]) - np.mean(contour_m[:10]) == pytest.approx(0.08, abs=0.02)  # the camera sees it
