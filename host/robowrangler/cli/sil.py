@@ -22,6 +22,35 @@ class SimulatorUnavailable(RoboWranglerError):
     """The SIL firmware or the simulator cannot run here; the message says what to build or install."""
 
 
+class ScenarioFailed(RoboWranglerError):
+    """A scenario did not reach its judgement: the chain simulation diverged or the firmware stopped the script."""
+
+
+def _scenario_names() -> tuple[str, ...]:
+    try:
+        from robowrangler_sim.scenarios.catalogue import scenario_names
+    except ImportError:  # pragma: no cover - only without the sim package
+        return ()
+    return scenario_names()
+
+
+class ScenarioName(click.ParamType):
+    """A scenario name, checked against the simulator's catalogue when used (the catalogue imports MuJoCo,
+    so it is loaded only when --scenario is given or --help is shown)."""
+
+    name = "scenario"
+
+    def get_metavar(self, param: click.Parameter, ctx: click.Context) -> str:
+        names = _scenario_names()
+        return "[" + "|".join(names) + "]" if names else "NAME"
+
+    def convert(self, value, param, ctx):
+        names = _scenario_names()
+        if value not in names:
+            self.fail(f"expected one of {', '.join(names)}, got {value!r}", param, ctx)
+        return value
+
+
 def _sil_modules():
     try:
         from robowrangler_sim import demo, sil
@@ -41,15 +70,33 @@ def _sil_modules():
               metavar="SECONDS", help="Stop after this much simulated time (default: until Ctrl-C).")
 @click.option("--state-file", default=None, metavar="PATH",
               help="The SIL device's flash (key, parameters, boot counter); default: a temporary one.")
+@click.option("--scenario", "scenario", type=ScenarioName(), default=None,
+              help="Run a wrangling scenario with the firmware in the loop instead of serving a device: the "
+                   "rope chain (MuJoCo) is the plant; the simulation judges the grasp. Unpaced.")
+@click.option("--links", "n_links", type=click.IntRange(10, 80), default=20, show_default=True,
+              help="Chain links of the scenario's rope model.")
+@click.option("--render", "render_dir", type=click.Path(file_okay=False, writable=True), default=None,
+              metavar="DIR", help="With --scenario: write PNG frames and an MP4 of the run to DIR "
+                                  "(headless: MUJOCO_GL=osmesa, Debian libosmesa6).")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
-                duration_s: float | None, state_file: str | None) -> None:
+                duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
+                render_dir: str | None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
     over its (pseudo-terminal) USB serial with --key-file's key (or a new one, whose file is printed), as a
     board would be.
+
+    With --scenario NAME it runs a wrangle instead (home, spin up, GRASP, pull) with the firmware driving the
+    rope chain, shows progress on stderr and prints the simulation's verdict (secured / slipped; held / lost
+    for the door handle). Exit status 1 if the chain simulation diverged or the firmware stopped the script.
     """
+    if scenario is not None:
+        _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir)
+        return
+    if render_dir is not None:
+        raise click.UsageError("--render needs --scenario")
     sil_pkg, _ = _sil_modules()
     try:
         session = sil_pkg.SilSession(speedup=None if unpaced else speedup, seed=seed, cmd_port=cmd_port,
@@ -83,6 +130,34 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
         session.stop()
     ctx.result({"command": "sil", "simulated_s": round(session.time_s, 3)},
                f"SIL stopped after {session.time_s:.3f} simulated seconds")
+
+
+def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None) -> None:
+    if render_dir is not None:
+        os.environ.setdefault("MUJOCO_GL", "osmesa")  # before mujoco is imported (headless rendering)
+    sil_pkg, _ = _sil_modules()
+    from robowrangler_sim.scenarios import run_scenario
+
+    try:
+        outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir)
+    except sil_pkg.SilError as exc:
+        raise SimulatorUnavailable(str(exc)) from exc
+    data = {"command": "sil", "scenario": name, "verdict": outcome.verdict, "secured": outcome.secured,
+            "grasp_end": outcome.grasp_end, "guide_at_grasp_end_mm": round(outcome.guide_at_grasp_end_mm, 2),
+            "peak_guide_load_n": round(outcome.peak_guide_load_n, 3),
+            "follow_ratio": None if outcome.follow_ratio != outcome.follow_ratio else round(outcome.follow_ratio, 3),
+            "touching_fraction": round(outcome.touching_fraction, 3),
+            "mean_pull_force_n": round(outcome.mean_pull_force_n, 3), "drag_force_n": round(outcome.drag_force_n, 3),
+            "firmware_path": ["->".join(step[:2]) + f" ({step[2]})" for step in outcome.firmware_path],
+            "diverged": outcome.diverged, "simulated_s": round(outcome.simulated_s, 3),
+            "wall_s": round(outcome.wall_s, 2), "seed": seed, "links": n_links, "files": outcome.frames_written}
+    files = f"; {len(outcome.frames_written)} files in {render_dir}" if outcome.frames_written else ""
+    ctx.result(data, f"{name}: {outcome.verdict} (RETRACT ended: {outcome.grasp_end}, follow "
+                     f"{data['follow_ratio']}, rope touching {100 * outcome.touching_fraction:.0f} %, mean pull "
+                     f"{outcome.mean_pull_force_n:.2f} N; {outcome.simulated_s:.1f} simulated s in "
+                     f"{outcome.wall_s:.1f} s){files}")
+    if outcome.secured is None:
+        raise ScenarioFailed(f"scenario {name}: {outcome.verdict}")
 
 
 @click.command("demo")

@@ -86,8 +86,9 @@ class ScenarioOutcome:
         drag_force_n: force that slides the object on the floor (0 for a fixture), N.
         diverged: the ChainDivergenceError message, or None.
         simulated_s, wall_s: simulated time reached, wall time of the run.
-        trace: per-sample rows (time_s, phase, state, rope_speed_mps, guide_mm, guide_load_n, base_pos_m,
-            object_com_m, chain_force_n, loop_tip_pos_m).
+        trace: per-sample rows (time_s, phase, state, rope_speed_mps, guide_mm, guide_load_n,
+            spindle_load_permille (the firmware's last reported AX-12A load), base_pos_m, object_com_m,
+            chain_force_n, loop_tip_pos_m).
         frames_written: PNG/MP4 paths written with render_dir.
     """
 
@@ -121,13 +122,16 @@ class _Run:
     """One scenario run: the session, the host, the chain, the bridge, sampling and rendering."""
 
     def __init__(self, spec: ScenarioSpec, *, seed: int, n_links: int, sample_s: float,
-                 progress: Callable[[str], None] | None, render_dir: Path | None, render_every: int) -> None:
+                 progress: Callable[[str], None] | None, render_dir: Path | None, render_every: int,
+                 render_fps: float) -> None:
         self.spec = spec
         self.script = spec.script
         self.sample_us = round(sample_s * 1e6)
         self.progress = progress
         self.render_dir = render_dir
         self.render_every = render_every
+        self.firmware_params = dict(spec.firmware_params)
+        self.frame_stride = max(1, round(1.0 / (sample_s * render_fps)))
         self.params = ChainParams(n_links=n_links)
         self.table = default_or_synthetic_table()
         self.phase = "boot"
@@ -242,11 +246,13 @@ class _Run:
         self.outcome.trace.append(dict(
             time_s=self.sil.time_s, phase=self.phase, state=None if tel is None else int(tel.state),
             rope_speed_mps=self.sil.plant.rope_speed_mps, guide_mm=self.sil.spindle.guide_position_mm,
-            guide_load_n=self.bridge.guide_load_n, base_pos_m=base, object_com_m=com, chain_force_n=force,
+            guide_load_n=self.bridge.guide_load_n,
+            spindle_load_permille=None if tel is None else int(tel.spindle_load_permille),
+            base_pos_m=base, object_com_m=com, chain_force_n=force,
             loop_tip_pos_m=chain.loop_tip_pos_m()))
         if self.monitor is not None:
             self.monitor.update(time_s=chain.time_s, object_com_m=com, base_pos_m=base, chain_force_n=force)
-        if self.render_dir is not None:
+        if self.render_dir is not None and self._sample_index % self.frame_stride == 0:
             self._render()
         self._sample_index += 1
 
@@ -258,7 +264,7 @@ class _Run:
                                            elevation_deg=-20.0, distance_m=1.6)
         frame = self._renderer.frame()
         self._frames.append(frame)
-        if self._sample_index % self.render_every == 0:
+        if (len(self._frames) - 1) % self.render_every == 0:
             path = self.render_dir / f"{self.spec.name}_{self._sample_index:04d}_{self.phase}.png"
             self.outcome.frames_written.append(str(write_png(path, frame)))
 
@@ -270,7 +276,7 @@ class _Run:
             from robowrangler_sim.chain.render import write_mp4
 
             mp4 = write_mp4(self.render_dir / f"{self.spec.name}.mp4", self._frames,
-                            fps=1e6 / self.sample_us)
+                            fps=1e6 / (self.sample_us * self.frame_stride))
             self.outcome.frames_written.append(str(mp4))
 
     # --- the script ----------------------------------------------------------------------------
@@ -278,7 +284,7 @@ class _Run:
         script, spec = self.script, self.spec
         self.host = ScriptedHost(self.sil)
         self.run_for(BOOT_S)
-        for pname, value in spec.firmware_params:
+        for pname, value in self.firmware_params.items():
             self.command(gen.ParamSet(P[pname].id, float(value)))
         self.phase = "home"
         self.note("HOME: the spindle seeks its end stop")
@@ -347,7 +353,8 @@ class _Run:
 
 def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float = 0.05,
                  progress: Callable[[str], None] | None = None, render_dir: str | Path | None = None,
-                 render_png_every: int = 10) -> ScenarioOutcome:
+                 render_png_every: int = 10, render_fps: float = 10.0,
+                 firmware_params: dict[str, float] | None = None) -> ScenarioOutcome:
     """Run scenario ``name`` with the firmware in the loop and judge it (see module doc).
 
     Args:
@@ -356,8 +363,11 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         n_links: chain links, 10..80.
         sample_s: trace (and render) sampling period, simulated s.
         progress: called with one-line progress messages (phase changes, every 2 simulated seconds).
-        render_dir: if given, PNG frames (every render_png_every-th sample) and an MP4 are written there
-            (MuJoCo offscreen: set MUJOCO_GL=osmesa before mujoco is imported on a headless machine).
+        render_dir: if given, video frames are drawn at about render_fps (simulated time; at most one per
+            sample), written as an MP4 and every render_png_every-th frame as PNG (MuJoCo offscreen: set
+            MUJOCO_GL=osmesa before mujoco is imported on a headless machine; OSMesa draws ~10 frames/s here).
+        firmware_params: {parameter name: value} sent with PARAM_SET before homing, on top of (and
+            overriding) the scenario's own (protocol names and units, e.g. {"guide_max_mm": 120.0}).
     Returns:
         ScenarioOutcome. The firmware process is stopped before returning, also on errors.
     """
@@ -368,12 +378,21 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         raise ScenarioError(f"sample_s: expected 0.001..1.0 s, got {sample_s!r}")
     if not isinstance(render_png_every, int) or render_png_every < 1:
         raise ScenarioError(f"render_png_every: expected an int >= 1, got {render_png_every!r}")
+    if not (isinstance(render_fps, (int, float)) and 0 < render_fps <= 1.0 / sample_s):
+        raise ScenarioError(f"render_fps: expected 0 < fps <= 1 / sample_s = {1.0 / sample_s:g}, got {render_fps!r}")
+    overrides = dict(firmware_params or {})
+    for pname, value in overrides.items():
+        if pname not in P:
+            raise ScenarioError(f"firmware_params: expected parameter names of the protocol, got {pname!r}")
+        if not (isinstance(value, (int, float)) and math.isfinite(value)):
+            raise ScenarioError(f"firmware_params[{pname!r}]: expected a finite number, got {value!r}")
     out_dir = None
     if render_dir is not None:
         out_dir = Path(render_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
     run = _Run(spec, seed=seed, n_links=n_links, sample_s=sample_s, progress=progress, render_dir=out_dir,
-               render_every=render_png_every)
+               render_every=render_png_every, render_fps=render_fps)
+    run.firmware_params.update(overrides)
     wall0 = time.perf_counter()
     run.build()
     try:

@@ -1,0 +1,102 @@
+"""Firmware-driven wrangles: the SIL firmware drives the rope chain (MuJoCo) through the drive and spindle plants.
+
+Fast: one firmware-driven grasp (the mug, N = 10 links), its determinism, the load coupling, bad input.
+Slow: chips can and tennis ball at N = 20 (the paper's Table I outcomes).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robowrangler.protocol import generated as gen
+from robowrangler_sim.chain.errors import ChainModelError
+from robowrangler_sim.scenarios import ScenarioError, run_scenario, scenario_names
+
+FAST_LINKS = 10
+
+
+@pytest.fixture(scope="module")
+def mug(native_build_dir: Path):
+    return run_scenario("mug", seed=3, n_links=FAST_LINKS)
+
+
+def test_firmware_grasp_secures_the_mug(mug) -> None:
+    # the real protocol path: GRASP relaxed the rope, the firmware retracted once the rope had stopped
+    assert mug.firmware_path[-3:] == [("AIRBORNE", "RELAX", "COMMAND"), ("RELAX", "RETRACT", "SPEED_REACHED"),
+                                      ("RETRACT", "ARMED", "STROKE_END")]
+    assert mug.grasp_end == "STROKE_END" and mug.guide_at_grasp_end_mm == pytest.approx(178.0, abs=1.0)
+    # the chain followed the firmware: airborne while the firmware flew it, lying once it relaxed
+    by_phase = {}
+    for row in mug.trace:
+        by_phase.setdefault(row["phase"], []).append(row)
+    assert max(r["rope_speed_mps"] for r in by_phase["position"]) > 3.5
+    assert by_phase["pull"][-1]["guide_mm"] > 170.0
+    assert mug.verdict == "secured" and mug.secured is True
+    assert mug.follow_ratio > 0.5 and mug.touching_fraction >= 0.8
+    moved = mug.trace[-1]["object_com_m"] - mug.trace[0]["object_com_m"]
+    assert moved[0] < -0.1  # dragged back with the module (pull: -0.3 m in x)
+    assert mug.diverged is None
+
+
+def test_same_seed_same_outcome_and_trajectory(mug, native_build_dir: Path) -> None:
+    again = run_scenario("mug", seed=3, n_links=FAST_LINKS)
+    assert (again.verdict, again.grasp_end, again.firmware_path) == (mug.verdict, mug.grasp_end, mug.firmware_path)
+    assert len(again.trace) == len(mug.trace)
+    for a, b in zip(again.trace, mug.trace):
+        assert a["time_s"] == b["time_s"] and a["state"] == b["state"]
+        np.testing.assert_array_equal(a["object_com_m"], b["object_com_m"])
+        np.testing.assert_array_equal(a["loop_tip_pos_m"], b["loop_tip_pos_m"])
+        assert a["guide_mm"] == b["guide_mm"] and a["spindle_load_permille"] == b["spindle_load_permille"]
+
+
+def test_chain_load_reaches_the_firmwares_spindle_load(native_build_dir: Path) -> None:
+    # the door: with the whole stroke the loop tightens on the lever while the firmware retracts; the guide
+    # load from the chain must show in the AX-12A load the firmware reads (about 2.4 permille per N)
+    out = run_scenario("door_handle", seed=0, n_links=FAST_LINKS, firmware_params={"guide_max_mm": 178.0})
+    retract = [r for r in out.trace if r["phase"] == "grasp" and r["state"] == gen.State.RETRACT]
+    assert retract, "no RETRACT samples"
+    quiet = [r["spindle_load_permille"] for r in retract if r["guide_load_n"] < 0.05]
+    loaded = [r for r in retract if r["guide_load_n"] > 5.0]
+    assert len(quiet) > 20 and loaded, f"peak guide load {out.peak_guide_load_n:.2f} N"
+    base = float(np.median(quiet))
+    for r in loaded:
+        assert r["spindle_load_permille"] > base + 1.0 * r["guide_load_n"], (r, base)
+
+
+def test_unknown_scenario_is_a_clear_error() -> None:
+    with pytest.raises(ScenarioError, match=r"scenario: expected one of chips_can, .*door_handle, got 'wok'"):
+        run_scenario("wok")
+    with pytest.raises(ScenarioError, match="seed: expected an int >= 0, got -1"):
+        run_scenario("mug", seed=-1)
+    with pytest.raises(ScenarioError, match="firmware_params: expected parameter names"):
+        run_scenario("mug", firmware_params={"not_a_param": 1.0})
+
+
+def test_bad_link_count_names_the_argument(native_build_dir: Path) -> None:
+    with pytest.raises(ChainModelError, match="n_links: expected 10..80, got 5"):
+        run_scenario("mug", n_links=5)
+
+
+def test_catalogue_has_every_table_i_object_and_the_door() -> None:
+    names = scenario_names()
+    assert {"chips_can", "mug", "tennis_ball", "golf_ball", "credit_card", "door_handle"} <= set(names)
+    assert len(names) == 14
+
+
+CHIPS_CAN_MARGINAL = pytest.mark.xfail(
+    strict=True, reason="docs/table_i.md: the can follows the module (follow 1.35) but the rope touches it in 76 % "
+                        "of the judged samples (< 80 %); plant level flips the same way with the firmware's slow "
+                        "retract to 178 mm")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("name", "expected"), [pytest.param("chips_can", "secured", marks=CHIPS_CAN_MARGINAL),
+                                                ("tennis_ball", "slipped"), ("mug", "secured"), ("cup", "secured"),
+                                                ("golf_ball", "slipped")])
+def test_firmware_grasp_reproduces_table_i(name: str, expected: str, native_build_dir: Path) -> None:
+    out = run_scenario(name, seed=0, n_links=20)
+    assert out.diverged is None
+    assert out.verdict == expected, (out.follow_ratio, out.touching_fraction, out.mean_pull_force_n)
