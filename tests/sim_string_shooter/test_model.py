@@ -182,3 +182,21 @@ def test_bending_stiffness_unfolds_a_tight_fold_on_the_elastic_time_scale():
     assert 0.05 < t_soft < 0.4
     assert t_soft / t_stiff == pytest.approx(2.0, rel=0.05)
     assert _bend_opening_time_s(0.0, width_m=0.1, duration_s=0.4) == float("inf")
+
+
+@pytest.mark.parametrize("normal_drag_coeff", [1.2, 2.4])
+def test_a_slack_rope_falls_broadside_at_the_normal_drag_terminal_speed(normal_drag_coeff):
+    # a string twice as long as the 1 m span of the rig, at rest, dropped: its middle falls broadside, so only
+    # the normal (pressure) drag 0.5 rho C_n d v^2 per metre acts: v(t) = v_t tanh(g t / v_t),
+    # v_t = sqrt(2 lambda g / (rho C_n d)) (1.23 m/s at C_n 1.2), until the slack is used up
+    rope = RopeParams(bending_stiffness_n_m2=0.0, compression_stiffness_ratio=0.0, normal_drag_coeff=normal_drag_coeff)
+    params = ShooterParams(rope=rope, geometry=ModuleGeometry(span_m=1.0, exit_offset_m=0.0, return_offset_m=0.0))
+    sim = StringShooter(params, loop_length_m=2.0, initial_shape="straight", motion=ModuleMotion(wheel_speed_mps=0.0),
+                        initial_rope_speed_mps=0.0)
+    v_t = np.sqrt(2 * rope.linear_density_kg_per_m * params.gravity_mps2
+                  / (params.air.density_kg_per_m3 * normal_drag_coeff * rope.diameter_m))
+    for t_s in (0.1, 0.3):
+        sim.step_for(t_s - sim.time_s)
+        mid = sim.n_nodes // 2
+        expected = v_t * np.tanh(params.gravity_mps2 * sim.time_s / v_t)
+        assert -sim.vel[mid, 2] == pytest.approx(expected, rel=0.01)
