@@ -96,3 +96,12 @@ def test_a_hole_still_open_at_the_end_is_written_and_a_restart_at_once(tmp_path:
     _record(tmp_path / "r.mcap", frames)
     gaps = [(g["from_seq"], g["to_seq"], g["missing"]) for g in read_recording(tmp_path / "r.mcap").gaps]
     assert gaps == [(502, 503, 2), (506, None, None)]  # the held hole first: written in the order detected
+
+
+def test_a_frame_as_late_as_the_detector_still_calls_reordered_fills_the_hole(tmp_path: Path) -> None:
+    frames = [telemetry_frame(0, seq=10), telemetry_frame(1, seq=11)]
+    frames += [telemetry_frame(i, seq=i + 10) for i in range(3, REORDER_WINDOW + 3)]  # 13 .. 12 + 64
+    frames += [event_frame(2, seq=12)]  # exactly REORDER_WINDOW behind the newest frame
+    rec = _record(tmp_path / "r.mcap", frames)
+    assert rec.gap_detector.reordered == 1 and rec.reordered_filled == 1
+    assert read_recording(tmp_path / "r.mcap").gaps == []

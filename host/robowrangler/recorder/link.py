@@ -181,7 +181,7 @@ class LinkRecorder:
         while self._held:
             held = self._held[0]
             gap = held.gap
-            if not everything and last is not None and (last - gap.to_seq) % SEQ_MODULUS < REORDER_WINDOW:
+            if not everything and last is not None and (last - gap.to_seq) % SEQ_MODULUS <= REORDER_WINDOW:
                 return
             self._held.pop(0)
             run_start = None
