@@ -177,3 +177,11 @@ def test_the_spindle_guide_sets_the_rope_loop_length(native_build_dir: Path, tmp
     obs = _observations(rec)
     contour_m = [float(np.sum(np.linalg.norm(np.diff(np.asarray(o["points_m"]), axis=0), axis=1))) for o in obs]
     assert np.mean(contour_m[-10:]) - np.mean(contour_m[:10]) == pytest.approx(0.08, abs=0.02)  # the camera sees it
+
+
+def test_the_command_line_refuses_bad_input_with_exit_1(tmp_path: Path, capsys) -> None:
+    from robowrangler_sim.string_shooter.recording import main
+
+    assert main([str(tmp_path / "x.mcap"), "--camera-rate-hz", "0"]) == 1
+    assert "camera_rate_hz: expected a rate in [0.5, 1000] Hz, got 0.0" in capsys.readouterr().err
+    assert not (tmp_path / "x.mcap").exists()
