@@ -21,7 +21,8 @@ from .params import StringShooterParamError
 
 @dataclass(frozen=True)
 class ScriptCommand:
-    """One host command sent at simulated time at_s [s] (sent at the first tick at or after it)."""
+    """One host command sent at simulated time at_s [s]: at the first tick at or after it, and not before the
+    parameter read a recording starts with (about 0.12 s) has finished."""
 
     at_s: float
     message: gen.Message
