@@ -50,6 +50,7 @@
 #include "rw_pi_controller.h"
 #include "rw_protocol.h"
 #include "rw_ramp.h"
+#include "rw_signer.h"
 #include "rw_spindle.h"
 #include "rw_throttle_map.h"
 #include "rw_tov_guard.h"
@@ -68,6 +69,12 @@
 #define RW_CORE_SPINDLE_PERIOD_MS 10u
 /* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
+/* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
+ * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
+ * and what finishing it costs (the last two blocks, four finalization rounds, the send). */
+#define RW_CORE_MAC_TICK_BUDGET 8u
+#define RW_CORE_MAC_BEGIN_COST 3u
+#define RW_CORE_MAC_FINISH_COST 4u
 
 typedef struct rw_core_counters {
     uint16_t rx_ok;
@@ -98,6 +105,7 @@ typedef struct rw_core {
         rw_spindle spindle;
         rw_duplicate_cache duplicates;
         rw_outbox outbox;
+        rw_signer signer;         /* the outbox frame being signed for the WiFi peer (over idle ticks) */
         rw_core_counters counters;
         rw_config config;         /* the stored record (RAM copy): key, WiFi, boot counter; staged changes */
         bool config_dirty;        /* provisioning changed it since the last PROVISION_COMMIT */
@@ -157,6 +165,9 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us);
 
 /* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. */
 int rw_core_set_param(rw_core *core, uint8_t param_id, float value);
+
+/* True when nothing waits to be sent: the outbox is empty and no frame is being signed. */
+bool rw_core_tx_idle(const rw_core *core);
 
 /* sizeof(rw_core), for bindings that allocate the core themselves (the pytest suites use ctypes). */
 size_t rw_core_sizeof(void);

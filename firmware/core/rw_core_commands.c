@@ -121,11 +121,16 @@ static verdict cmd_spindown(rw_core *core)
     }
 }
 
-static verdict cmd_estop(rw_core *core)
+/* ESTOP stops the rope (the ESC minimum, in this tick's control step) and the spindle in the tick it arrives:
+ * the servo is written at once, not at the next spindle step (up to RW_CORE_SPINDLE_PERIOD_MS later). */
+static verdict cmd_estop(rw_core *core, const rw_hal *hal)
 {
     core->state.target_mps = 0.0f;
     core->state.grasp_pending = false;
     rw_spindle_stop(&core->state.spindle);
+    if (hal->spindle != NULL) {
+        hal->spindle->write_moving_speed_raw(hal->spindle->ctx, 0u);
+    }
     rw_core_set_state(core, RW_STATE_ESTOP, RW_CAUSE_COMMAND);
     return ACCEPT;
 }
@@ -265,7 +270,7 @@ static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
     case RW_MSG_ID_SPINDOWN:
         return cmd_spindown(core);
     case RW_MSG_ID_ESTOP:
-        return cmd_estop(core);
+        return cmd_estop(core, hal);
     case RW_MSG_ID_PARAM_GET: {
         rw_msg_param_get msg;
         rw_msg_param_get_unpack(&msg, frame->payload);

@@ -111,6 +111,8 @@ def declare_core(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.rw_core_init.argtypes = [c_void_p]
     lib.rw_core_tick.restype = None
     lib.rw_core_tick.argtypes = [c_void_p, POINTER(_Hal), c_uint32]
+    lib.rw_core_tx_idle.restype = ctypes.c_bool
+    lib.rw_core_tx_idle.argtypes = [c_void_p]
     lib.rw_core_set_param.restype = ctypes.c_int
     lib.rw_core_set_param.argtypes = [c_void_p, c_uint8, ctypes.c_float]
     lib.rw_config_defaults.restype = None
@@ -486,10 +488,22 @@ class CoreHarness:
         """TELEMETRY messages sent so far (the live list: it grows with later ticks; do not modify)."""
         return self._telemetry
 
-    def drain(self, ticks: int = 12) -> None:
-        """Runs ticks with heartbeats withheld so queued frames go out (outbox: 8 slots)."""
+    def drain(self, ticks: int = 12, *, max_ms: int = 200) -> None:
+        """Runs `ticks` ticks with heartbeats withheld, then more until every queued frame has gone out (the
+        core signs on idle ticks, so a frame leaves a few ticks after it was queued); AssertionError if the
+        queue has not emptied within max_ms."""
         for _ in range(ticks):
             self.tick()
+        for _ in range(int(max_ms)):
+            if self.lib.rw_core_tx_idle(self.core):
+                return
+            self.tick()
+        raise AssertionError(f"frames still queued after {max_ms} ms (t = {self.t_ms} ms)")
+
+    @property
+    def tx_idle(self) -> bool:
+        """Nothing queued and nothing being signed in the core."""
+        return bool(self.lib.rw_core_tx_idle(self.core))
 
     @property
     def state(self) -> proto.State:

@@ -544,6 +544,16 @@ size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uin
    unsigned frame. */
 size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,
                      const uint8_t key[RW_KEY_LEN]);
+/* The same in steps, so that a MAC can be spread over time and the counter taken only when the frame is
+   sent: rw_frame_sign_begin sets the flag, recomputes the checksum and appends session_id (returns len,
+   0 as rw_frame_sign would); the first RW_FRAME_SIGN_FIXED_LEN(len) bytes of the tagged part are then
+   final. rw_frame_sign_counter appends the counter and returns the length the tag covers
+   (RW_FRAME_SIGN_TAGGED_LEN(len)); rw_frame_sign_tag appends the tag and returns the signed length. */
+#define RW_FRAME_SIGN_FIXED_LEN(len) ((len) + 4u)
+#define RW_FRAME_SIGN_TAGGED_LEN(len) ((len) + 12u)
+size_t rw_frame_sign_begin(uint8_t *frame, size_t len, size_t cap, uint32_t session_id);
+size_t rw_frame_sign_counter(uint8_t *frame, size_t len, uint64_t counter);
+size_t rw_frame_sign_tag(uint8_t *frame, size_t len, uint64_t tag);
 /* True if a decoded signed frame's tag is right for key (constant-time comparison). */
 int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN]);
 
