@@ -197,7 +197,7 @@ void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, 
         .arg = arg,
     };
     uint8_t frame[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_event_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
+    size_t len = rw_msg_event_encode(&msg, 0u, frame, sizeof frame); /* numbered when it leaves */
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_EVENT, frame, len);
 }
 
@@ -456,6 +456,17 @@ static const rw_hal_link *link_of(const rw_hal *hal, rw_link_id link)
     return link == RW_LINK_SERIAL ? hal->serial : (link == RW_LINK_WIFI ? hal->link : NULL);
 }
 
+uint16_t rw_core_take_seq(rw_core *core)
+{
+    rw_signer *signer = &core->state.signer;
+    if (!rw_signer_busy(signer)) {
+        return core->state.tx_seq++;
+    }
+    uint16_t seq = rw_signer_seq(signer);
+    (void)rw_signer_renumber(signer, core->state.tx_seq++, rw_core_session_id(core), core->state.config.key);
+    return seq;
+}
+
 void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len)
 {
     const rw_hal_link *l = link_of(hal, link);
@@ -532,9 +543,8 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
     };
     /* encoded straight into its outbox slot (no copy); a full outbox drops it (counted), as a push would */
     rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_TELEMETRY);
-    uint16_t seq = core->state.tx_seq++;
     if (slot != NULL) {
-        size_t len = rw_msg_telemetry_encode(&msg, seq, slot->bytes, sizeof slot->bytes);
+        size_t len = rw_msg_telemetry_encode(&msg, 0u, slot->bytes, sizeof slot->bytes); /* numbered when it leaves */
         rw_outbox_commit(&core->state.outbox, slot, RW_OUTBOX_TELEMETRY, len);
     }
 }
@@ -565,14 +575,18 @@ static void send_queued(rw_core *core, const rw_hal *hal, bool sent, bool idle_t
             return;
         }
         if (core->state.peer_link != RW_LINK_WIFI || core->state.config.key_set == 0u) {
-            rw_core_link_send(core, hal, (rw_link_id)core->state.peer_link, false, slot->bytes, slot->len);
+            uint8_t frame[RW_MAX_FRAME_LEN];
+            memcpy(frame, slot->bytes, slot->len);
+            size_t len = rw_frame_renumber(frame, slot->len, core->state.tx_seq++);
+            rw_core_link_send(core, hal, (rw_link_id)core->state.peer_link, false, frame, len);
             rw_outbox_pop(&core->state.outbox, slot);
             return;
         }
         if (!idle_tick) {
             return;
         }
-        (void)rw_signer_begin(signer, slot->bytes, slot->len, rw_core_session_id(core), core->state.config.key);
+        (void)rw_signer_begin(signer, slot->bytes, slot->len, core->state.tx_seq++, rw_core_session_id(core),
+                              core->state.config.key);
         rw_outbox_pop(&core->state.outbox, slot);
         size_t left = rw_signer_blocks_left(signer);
         size_t budget = RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BEGIN_COST;

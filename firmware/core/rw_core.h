@@ -18,7 +18,8 @@
  *      collapse, battery cutoff -> SPINDOWN, spindle outcomes (homed, secured, stall, no answer) -> grasp states
  *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us), on speed ticks;
  *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
- *   5. telemetry at telemetry_rate_hz; one queued frame to the peer
+ *   5. telemetry at telemetry_rate_hz; one queued frame to the peer (over a keyed WiFi link: signed over idle
+ *      ticks first, see below)
  *
  * Schedule: the calls alternate between two kinds of tick, so that the expensive periodic jobs never
  * share a tick (the worst-case tick is one job plus the per-tick work, not their sum; on the M0+ every
@@ -29,7 +30,13 @@
  *                              (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick of its kind;
  *                              with neither, the feed-forward's battery factor (60 / (2 pi r kv V), one
  *                              division) is refreshed if the battery reading changed, so the speed tick
- *                              never divides for it (the feed-forward sees the battery a few ms late)
+ *                              never divides for it (the feed-forward sees the battery a few ms late);
+ *                              and an idle other tick (neither job) advances the signing of the next queued
+ *                              frame (rw_signer.h): begin + a few MAC blocks, or the last blocks + finish +
+ *                              send, RW_CORE_MAC_TICK_BUDGET blocks' worth a tick, so a telemetry frame leaves
+ *                              two idle ticks (about 4-8 ms) after it was packed and no tick carries a whole
+ *                              MAC. A received command is still verified, executed and ACKed (signed in one
+ *                              piece) in the tick it arrives: that tick is the one over the periodic budget.
  * A telemetry frame held back by the schedule (at most 2 ms) does not shift the next one: the period
  * counts from when it was due. A spindle step held back measures its real elapsed time as always. The
  * first call is an "other" tick, so the first telemetry frame leaves at uptime 0.
@@ -73,7 +80,7 @@
  * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
  * and what finishing it costs (the last two blocks, four finalization rounds, the send). */
 #define RW_CORE_MAC_TICK_BUDGET 8u
-#define RW_CORE_MAC_BEGIN_COST 3u
+#define RW_CORE_MAC_BEGIN_COST 4u
 #define RW_CORE_MAC_FINISH_COST 4u
 
 typedef struct rw_core_counters {

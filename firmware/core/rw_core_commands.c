@@ -307,12 +307,12 @@ static void send_verdict(rw_core *core, const rw_hal *hal, rw_link_id link, uint
     size_t len;
     if (v.reason == 0u) {
         rw_msg_ack ack = { .cmd_msg_id = msg_id, .cmd_seq = seq, .state = core->state.state };
-        len = rw_msg_ack_encode(&ack, core->state.tx_seq++, frame, sizeof frame);
+        len = rw_msg_ack_encode(&ack, rw_core_take_seq(core), frame, sizeof frame);
     } else {
         rw_msg_nack nack = {
             .cmd_msg_id = msg_id, .cmd_seq = seq, .reason = v.reason, .state = core->state.state, .detail = v.detail,
         };
-        len = rw_msg_nack_encode(&nack, core->state.tx_seq++, frame, sizeof frame);
+        len = rw_msg_nack_encode(&nack, rw_core_take_seq(core), frame, sizeof frame);
         ++core->state.counters.nacks;
     }
     rw_core_link_send(core, hal, link, true, frame, len);
@@ -331,7 +331,7 @@ static void reply_session_info(rw_core *core, const rw_hal *hal, rw_link_id link
         .schema_hash = (uint16_t)RW_PROTOCOL_SCHEMA_HASH,
     };
     uint8_t out[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_session_info_encode(&info, core->state.tx_seq++, out, sizeof out);
+    size_t len = rw_msg_session_info_encode(&info, rw_core_take_seq(core), out, sizeof out);
     rw_core_link_send(core, hal, link, true, out, len);
 }
 
@@ -348,7 +348,7 @@ static void queue_provision_status(rw_core *core)
     };
     memcpy(st.wifi_ssid, c->wifi_ssid, sizeof st.wifi_ssid);
     uint8_t out[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_provision_status_encode(&st, core->state.tx_seq++, out, sizeof out);
+    size_t len = rw_msg_provision_status_encode(&st, 0u, out, sizeof out); /* numbered when it leaves */
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
 }
 
@@ -429,7 +429,7 @@ static void queue_param_value(rw_core *core, const rw_frame *frame)
         .param_id = param_id, .value = core->params.value[param_id], .param_count = (uint8_t)RW_PARAM_COUNT,
     };
     uint8_t out[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_param_value_encode(&msg, core->state.tx_seq++, out, sizeof out);
+    size_t len = rw_msg_param_value_encode(&msg, 0u, out, sizeof out); /* numbered when it leaves */
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
 }
 

@@ -289,6 +289,8 @@ class CoreHarness:
         self._events: list[proto.Event] = []          # sent EVENT frames, in order (cache of hal.out)
         self._transitions: list[tuple[int, int, int, int]] = []
         self._telemetry: list[proto.Telemetry] = []
+        self._last_signed: tuple[int, int] = (-1, -1)  # (session, counter) of the newest signed frame sent
+        self._last_seq: int | None = None  # seq of the newest frame sent: frames are numbered in send order
         self.t_us = 0
         self.started = False
         self.seq = 0
@@ -322,6 +324,16 @@ class CoreHarness:
             def out(_ctx, frame, length):
                 raw = ctypes.string_at(frame, length)
                 fr, msg = proto.decode_message(raw)  # the core must only emit well-formed frames
+                if fr.signed:  # as a host checks it: the tag, and a counter above every one before
+                    if not proto.tag_valid(fr, TEST_KEY):
+                        raise AssertionError(f"the core sent a frame with a bad tag: {msg}")
+                    if (fr.session_id, fr.counter) <= self._last_signed:
+                        raise AssertionError(f"the core's counter went back: {(fr.session_id, fr.counter)} after "
+                                             f"{self._last_signed} ({msg})")
+                    self._last_signed = (fr.session_id, fr.counter)
+                if self._last_seq is not None and fr.seq != (self._last_seq + 1) % 65536:
+                    raise AssertionError(f"the core's seq is not in send order: {fr.seq} after {self._last_seq} ({msg})")
+                self._last_seq = fr.seq
                 hal.out.append(Out(self.t_us // 1000, channel, raw, fr, msg))
                 if channel == "send" and isinstance(msg, proto.Event):
                     self._events.append(msg)
