@@ -152,6 +152,7 @@ void rw_core_init(rw_core *core)
     rw_tov_guard_init(&core->state.guard, &guard);
     rw_duplicate_cache_reset(&core->state.duplicates);
     rw_outbox_reset(&core->state.outbox);
+    rw_signer_reset(&core->state.signer);
     rw_spindle_config spindle = { 0 };
     rw_spindle_init(&core->state.spindle, &spindle);
     rw_core_apply_params(core);
@@ -162,6 +163,11 @@ void rw_core_init(rw_core *core)
 
 /* Bindings hand rw_config_set_params the core's address for its parameter values. */
 _Static_assert(offsetof(rw_core, params) == 0, "rw_core.params must stay the first member");
+
+bool rw_core_tx_idle(const rw_core *core)
+{
+    return rw_outbox_peek(&core->state.outbox) == NULL && !rw_signer_busy(&core->state.signer);
+}
 
 size_t rw_core_sizeof(void)
 {
@@ -191,7 +197,7 @@ void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, 
         .arg = arg,
     };
     uint8_t frame[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_event_encode(&msg, core->state.tx_seq++, frame, sizeof frame);
+    size_t len = rw_msg_event_encode(&msg, 0u, frame, sizeof frame); /* numbered when it leaves */
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_EVENT, frame, len);
 }
 
@@ -450,6 +456,17 @@ static const rw_hal_link *link_of(const rw_hal *hal, rw_link_id link)
     return link == RW_LINK_SERIAL ? hal->serial : (link == RW_LINK_WIFI ? hal->link : NULL);
 }
 
+uint16_t rw_core_take_seq(rw_core *core)
+{
+    rw_signer *signer = &core->state.signer;
+    if (!rw_signer_busy(signer)) {
+        return core->state.tx_seq++;
+    }
+    uint16_t seq = rw_signer_seq(signer);
+    (void)rw_signer_renumber(signer, core->state.tx_seq++, rw_core_session_id(core), core->state.config.key);
+    return seq;
+}
+
 void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len)
 {
     const rw_hal_link *l = link_of(hal, link);
@@ -526,9 +543,8 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
     };
     /* encoded straight into its outbox slot (no copy); a full outbox drops it (counted), as a push would */
     rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_TELEMETRY);
-    uint16_t seq = core->state.tx_seq++;
     if (slot != NULL) {
-        size_t len = rw_msg_telemetry_encode(&msg, seq, slot->bytes, sizeof slot->bytes);
+        size_t len = rw_msg_telemetry_encode(&msg, 0u, slot->bytes, sizeof slot->bytes); /* numbered when it leaves */
         rw_outbox_commit(&core->state.outbox, slot, RW_OUTBOX_TELEMETRY, len);
     }
 }
@@ -542,6 +558,53 @@ static uint32_t telemetry_period_ms(rw_core *core)
         core->state.telemetry_rate_hz_memo = rate_hz;
     }
     return core->state.telemetry_period_ms;
+}
+
+/* Step 5's send: the next outbox frame goes to the peer, at most one datagram a tick (none when this tick
+ * already answered a command). Over a keyed WiFi link it is signed first, on idle ticks only and in steps
+ * (rw_signer.h), each idle tick doing at most RW_CORE_MAC_TICK_BUDGET blocks' worth of work: begin (copy,
+ * checksum: RW_CORE_MAC_BEGIN_COST), absorb (one per block), finish and send (RW_CORE_MAC_FINISH_COST). So no
+ * tick carries a whole MAC, and a telemetry frame leaves within two idle ticks. Its counter is taken when it
+ * leaves. A frame the signer refuses (not a well-formed frame) is dropped. */
+static void send_queued(rw_core *core, const rw_hal *hal, bool sent, bool idle_tick)
+{
+    rw_signer *signer = &core->state.signer;
+    if (!rw_signer_busy(signer)) {
+        const rw_outbox_slot *slot = sent ? NULL : rw_outbox_peek(&core->state.outbox);
+        if (slot == NULL) {
+            return;
+        }
+        if (core->state.peer_link != RW_LINK_WIFI || core->state.config.key_set == 0u) {
+            uint8_t frame[RW_MAX_FRAME_LEN];
+            memcpy(frame, slot->bytes, slot->len);
+            size_t len = rw_frame_renumber(frame, slot->len, core->state.tx_seq++);
+            rw_core_link_send(core, hal, (rw_link_id)core->state.peer_link, false, frame, len);
+            rw_outbox_pop(&core->state.outbox, slot);
+            return;
+        }
+        if (!idle_tick) {
+            return;
+        }
+        (void)rw_signer_begin(signer, slot->bytes, slot->len, core->state.tx_seq++, rw_core_session_id(core),
+                              core->state.config.key);
+        rw_outbox_pop(&core->state.outbox, slot);
+        size_t left = rw_signer_blocks_left(signer);
+        size_t budget = RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BEGIN_COST;
+        (void)rw_signer_absorb(signer, left < budget ? left : budget);
+        return;
+    }
+    if (!idle_tick) {
+        return;
+    }
+    size_t left = rw_signer_blocks_left(signer);
+    size_t now = left < RW_CORE_MAC_TICK_BUDGET ? left : RW_CORE_MAC_TICK_BUDGET;
+    (void)rw_signer_absorb(signer, now);
+    if (rw_signer_blocks_left(signer) == 0u && now + RW_CORE_MAC_FINISH_COST <= RW_CORE_MAC_TICK_BUDGET && !sent &&
+        hal->link != NULL) {
+        const uint8_t *frame = NULL;
+        size_t len = rw_signer_finish(signer, ++core->state.tx_counter, &frame);
+        hal->link->send(hal->link->ctx, frame, len);
+    }
 }
 
 void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
@@ -604,7 +667,8 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         core->state.ff_battery_v = core->state.battery_v;
         rw_throttle_map_prepare_battery(&core->state.throttle, core->state.ff_battery_v);
     }
-    if (!speed_tick && !telemetry_due && spindle_due) {
+    const bool spindle_ran = !speed_tick && !telemetry_due && spindle_due;
+    if (spindle_ran) {
         /* the real time since the last spindle step: after a tick gap the dead reckoning must cover it */
         uint32_t elapsed_ms = core->state.uptime_ms - core->state.spindle_last_ms;
         if (elapsed_ms == 0u || elapsed_ms > 60000u) {
@@ -618,18 +682,13 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
 
     /* 5. telemetry, then at most one datagram out per tick */
-    if (!speed_tick && telemetry_due) {
+    const bool telemetry_tick = !speed_tick && telemetry_due;
+    if (telemetry_tick) {
         queue_telemetry(core, hal);
         /* held back by the schedule (<= 2 ms): the next frame is due one period after this one was */
         uint32_t late_ms = core->state.uptime_ms - core->state.telemetry_due_ms;
         late_ms = late_ms <= RW_CORE_SCHEDULE_MAX_HOLD_MS ? late_ms : 0u;
         core->state.telemetry_due_ms = core->state.uptime_ms + telemetry_period_ms(core) - late_ms;
     }
-    if (!sent) {
-        const rw_outbox_slot *slot = rw_outbox_peek(&core->state.outbox);
-        if (slot != NULL) {
-            rw_core_link_send(core, hal, (rw_link_id)core->state.peer_link, false, slot->bytes, slot->len);
-            rw_outbox_pop(&core->state.outbox, slot);
-        }
-    }
+    send_queued(core, hal, sent, !speed_tick && !telemetry_tick && !spindle_ran);
 }

@@ -18,7 +18,8 @@
  *      collapse, battery cutoff -> SPINDOWN, spindle outcomes (homed, secured, stall, no answer) -> grasp states
  *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us), on speed ticks;
  *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
- *   5. telemetry at telemetry_rate_hz; one queued frame to the peer
+ *   5. telemetry at telemetry_rate_hz; one queued frame to the peer (over a keyed WiFi link: signed over idle
+ *      ticks first, see below)
  *
  * Schedule: the calls alternate between two kinds of tick, so that the expensive periodic jobs never
  * share a tick (the worst-case tick is one job plus the per-tick work, not their sum; on the M0+ every
@@ -29,7 +30,13 @@
  *                              (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick of its kind;
  *                              with neither, the feed-forward's battery factor (60 / (2 pi r kv V), one
  *                              division) is refreshed if the battery reading changed, so the speed tick
- *                              never divides for it (the feed-forward sees the battery a few ms late)
+ *                              never divides for it (the feed-forward sees the battery a few ms late);
+ *                              and an idle other tick (neither job) advances the signing of the next queued
+ *                              frame (rw_signer.h): begin + a few MAC blocks, or the last blocks + finish +
+ *                              send, RW_CORE_MAC_TICK_BUDGET blocks' worth a tick, so a telemetry frame leaves
+ *                              two idle ticks (about 4-8 ms) after it was packed and no tick carries a whole
+ *                              MAC. A received command is still verified, executed and ACKed (signed in one
+ *                              piece) in the tick it arrives: that tick is the one over the periodic budget.
  * A telemetry frame held back by the schedule (at most 2 ms) does not shift the next one: the period
  * counts from when it was due. A spindle step held back measures its real elapsed time as always. The
  * first call is an "other" tick, so the first telemetry frame leaves at uptime 0.
@@ -50,6 +57,7 @@
 #include "rw_pi_controller.h"
 #include "rw_protocol.h"
 #include "rw_ramp.h"
+#include "rw_signer.h"
 #include "rw_spindle.h"
 #include "rw_throttle_map.h"
 #include "rw_tov_guard.h"
@@ -68,6 +76,12 @@
 #define RW_CORE_SPINDLE_PERIOD_MS 10u
 /* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
+/* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
+ * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
+ * and what finishing it costs (the last two blocks, four finalization rounds, the send). */
+#define RW_CORE_MAC_TICK_BUDGET 8u
+#define RW_CORE_MAC_BEGIN_COST 4u
+#define RW_CORE_MAC_FINISH_COST 4u
 
 typedef struct rw_core_counters {
     uint16_t rx_ok;
@@ -98,6 +112,7 @@ typedef struct rw_core {
         rw_spindle spindle;
         rw_duplicate_cache duplicates;
         rw_outbox outbox;
+        rw_signer signer;         /* the outbox frame being signed for the WiFi peer (over idle ticks) */
         rw_core_counters counters;
         rw_config config;         /* the stored record (RAM copy): key, WiFi, boot counter; staged changes */
         bool config_dirty;        /* provisioning changed it since the last PROVISION_COMMIT */
@@ -157,6 +172,9 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us);
 
 /* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. */
 int rw_core_set_param(rw_core *core, uint8_t param_id, float value);
+
+/* True when nothing waits to be sent: the outbox is empty and no frame is being signed. */
+bool rw_core_tx_idle(const rw_core *core);
 
 /* sizeof(rw_core), for bindings that allocate the core themselves (the pytest suites use ctypes). */
 size_t rw_core_sizeof(void);

@@ -121,11 +121,16 @@ static verdict cmd_spindown(rw_core *core)
     }
 }
 
-static verdict cmd_estop(rw_core *core)
+/* ESTOP stops the rope (the ESC minimum, in this tick's control step) and the spindle in the tick it arrives:
+ * the servo is written at once, not at the next spindle step (up to RW_CORE_SPINDLE_PERIOD_MS later). */
+static verdict cmd_estop(rw_core *core, const rw_hal *hal)
 {
     core->state.target_mps = 0.0f;
     core->state.grasp_pending = false;
     rw_spindle_stop(&core->state.spindle);
+    if (hal->spindle != NULL) {
+        hal->spindle->write_moving_speed_raw(hal->spindle->ctx, 0u);
+    }
     rw_core_set_state(core, RW_STATE_ESTOP, RW_CAUSE_COMMAND);
     return ACCEPT;
 }
@@ -265,7 +270,7 @@ static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
     case RW_MSG_ID_SPINDOWN:
         return cmd_spindown(core);
     case RW_MSG_ID_ESTOP:
-        return cmd_estop(core);
+        return cmd_estop(core, hal);
     case RW_MSG_ID_PARAM_GET: {
         rw_msg_param_get msg;
         rw_msg_param_get_unpack(&msg, frame->payload);
@@ -302,12 +307,12 @@ static void send_verdict(rw_core *core, const rw_hal *hal, rw_link_id link, uint
     size_t len;
     if (v.reason == 0u) {
         rw_msg_ack ack = { .cmd_msg_id = msg_id, .cmd_seq = seq, .state = core->state.state };
-        len = rw_msg_ack_encode(&ack, core->state.tx_seq++, frame, sizeof frame);
+        len = rw_msg_ack_encode(&ack, rw_core_take_seq(core), frame, sizeof frame);
     } else {
         rw_msg_nack nack = {
             .cmd_msg_id = msg_id, .cmd_seq = seq, .reason = v.reason, .state = core->state.state, .detail = v.detail,
         };
-        len = rw_msg_nack_encode(&nack, core->state.tx_seq++, frame, sizeof frame);
+        len = rw_msg_nack_encode(&nack, rw_core_take_seq(core), frame, sizeof frame);
         ++core->state.counters.nacks;
     }
     rw_core_link_send(core, hal, link, true, frame, len);
@@ -326,7 +331,7 @@ static void reply_session_info(rw_core *core, const rw_hal *hal, rw_link_id link
         .schema_hash = (uint16_t)RW_PROTOCOL_SCHEMA_HASH,
     };
     uint8_t out[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_session_info_encode(&info, core->state.tx_seq++, out, sizeof out);
+    size_t len = rw_msg_session_info_encode(&info, rw_core_take_seq(core), out, sizeof out);
     rw_core_link_send(core, hal, link, true, out, len);
 }
 
@@ -343,7 +348,7 @@ static void queue_provision_status(rw_core *core)
     };
     memcpy(st.wifi_ssid, c->wifi_ssid, sizeof st.wifi_ssid);
     uint8_t out[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_provision_status_encode(&st, core->state.tx_seq++, out, sizeof out);
+    size_t len = rw_msg_provision_status_encode(&st, 0u, out, sizeof out); /* numbered when it leaves */
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
 }
 
@@ -424,7 +429,7 @@ static void queue_param_value(rw_core *core, const rw_frame *frame)
         .param_id = param_id, .value = core->params.value[param_id], .param_count = (uint8_t)RW_PARAM_COUNT,
     };
     uint8_t out[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_param_value_encode(&msg, core->state.tx_seq++, out, sizeof out);
+    size_t len = rw_msg_param_value_encode(&msg, 0u, out, sizeof out); /* numbered when it leaves */
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
 }
 

@@ -12,7 +12,7 @@
 
 #include "rw_protocol.h"
 
-#define RW_OUTBOX_SLOTS 8u
+#define RW_OUTBOX_SLOTS 12u
 
 typedef enum {
     RW_OUTBOX_REPLY = 0,     /* PARAM_VALUE after an ACK */

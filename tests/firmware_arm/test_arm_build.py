@@ -174,10 +174,11 @@ class _Link:
         return got
 
     def telemetry_after(self) -> proto.Telemetry:
-        """The next TELEMETRY frame the core sends."""
+        """The first TELEMETRY frame packed after now (one packed earlier may still be on its way out)."""
+        now_ms = self.now_us // 1000
         for _ in range(100):
             for _, msg in self.tick():
-                if isinstance(msg, proto.Telemetry):
+                if isinstance(msg, proto.Telemetry) and msg.time_ms > now_ms:
                     return msg
         raise AssertionError("no telemetry within 100 ticks")
 

@@ -111,6 +111,8 @@ def declare_core(lib: ctypes.CDLL) -> ctypes.CDLL:
     lib.rw_core_init.argtypes = [c_void_p]
     lib.rw_core_tick.restype = None
     lib.rw_core_tick.argtypes = [c_void_p, POINTER(_Hal), c_uint32]
+    lib.rw_core_tx_idle.restype = ctypes.c_bool
+    lib.rw_core_tx_idle.argtypes = [c_void_p]
     lib.rw_core_set_param.restype = ctypes.c_int
     lib.rw_core_set_param.argtypes = [c_void_p, c_uint8, ctypes.c_float]
     lib.rw_config_defaults.restype = None
@@ -287,6 +289,8 @@ class CoreHarness:
         self._events: list[proto.Event] = []          # sent EVENT frames, in order (cache of hal.out)
         self._transitions: list[tuple[int, int, int, int]] = []
         self._telemetry: list[proto.Telemetry] = []
+        self._last_signed: tuple[int, int] = (-1, -1)  # (session, counter) of the newest signed frame sent
+        self._last_seq: int | None = None  # seq of the newest frame sent: frames are numbered in send order
         self.t_us = 0
         self.started = False
         self.seq = 0
@@ -320,6 +324,16 @@ class CoreHarness:
             def out(_ctx, frame, length):
                 raw = ctypes.string_at(frame, length)
                 fr, msg = proto.decode_message(raw)  # the core must only emit well-formed frames
+                if fr.signed:  # as a host checks it: the tag, and a counter above every one before
+                    if not proto.tag_valid(fr, TEST_KEY):
+                        raise AssertionError(f"the core sent a frame with a bad tag: {msg}")
+                    if (fr.session_id, fr.counter) <= self._last_signed:
+                        raise AssertionError(f"the core's counter went back: {(fr.session_id, fr.counter)} after "
+                                             f"{self._last_signed} ({msg})")
+                    self._last_signed = (fr.session_id, fr.counter)
+                if self._last_seq is not None and fr.seq != (self._last_seq + 1) % 65536:
+                    raise AssertionError(f"the core's seq is not in send order: {fr.seq} after {self._last_seq} ({msg})")
+                self._last_seq = fr.seq
                 hal.out.append(Out(self.t_us // 1000, channel, raw, fr, msg))
                 if channel == "send" and isinstance(msg, proto.Event):
                     self._events.append(msg)
@@ -486,10 +500,22 @@ class CoreHarness:
         """TELEMETRY messages sent so far (the live list: it grows with later ticks; do not modify)."""
         return self._telemetry
 
-    def drain(self, ticks: int = 12) -> None:
-        """Runs ticks with heartbeats withheld so queued frames go out (outbox: 8 slots)."""
+    def drain(self, ticks: int = 12, *, max_ms: int = 200) -> None:
+        """Runs `ticks` ticks with heartbeats withheld, then more until every queued frame has gone out (the
+        core signs on idle ticks, so a frame leaves a few ticks after it was queued); AssertionError if the
+        queue has not emptied within max_ms."""
         for _ in range(ticks):
             self.tick()
+        for _ in range(int(max_ms)):
+            if self.lib.rw_core_tx_idle(self.core):
+                return
+            self.tick()
+        raise AssertionError(f"frames still queued after {max_ms} ms (t = {self.t_ms} ms)")
+
+    @property
+    def tx_idle(self) -> bool:
+        """Nothing queued and nothing being signed in the core."""
+        return bool(self.lib.rw_core_tx_idle(self.core))
 
     @property
     def state(self) -> proto.State:

@@ -26,8 +26,7 @@ def test_unsigned_and_forged_commands_are_dropped_and_counted(host: ScriptedHost
 def test_a_captured_frame_replayed_is_dropped(host: ScriptedHost) -> None:
     frame = host.frame(gen.Arm(), 900)
     host.send_raw(frame)
-    host.run_for(0.02)
-    assert host.last_telemetry.state == gen.State.ARMED
+    assert host.run_until(lambda h: h.last_telemetry.state == gen.State.ARMED, timeout_s=0.1)
     assert isinstance(host.command(gen.Disarm()), gen.Ack)
     before = host.last_telemetry
     host.send_raw(frame)  # the recorded ARM, sent again by someone on the network
@@ -55,8 +54,7 @@ def test_frames_of_an_earlier_boot_never_count_again(native_build_dir: Path, tmp
         h1.run_for(0.6)
         captured = h1.frame(gen.Arm(), 5)
         h1.send_raw(captured)
-        h1.run_for(0.02)
-        assert h1.last_telemetry.state == gen.State.ARMED
+        assert h1.run_until(lambda h: h.last_telemetry.state == gen.State.ARMED, timeout_s=0.1)
         old_session = h1.session_id
         h1.close()
     with SilSession(speedup=None, key=key, state_file=flash, provision=False) as second:  # reboot: same flash

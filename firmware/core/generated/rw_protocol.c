@@ -161,24 +161,63 @@ int rw_frame_decode(const uint8_t *buf, size_t len, rw_frame *out)
     return RW_DECODE_OK;
 }
 
-size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,
-                     const uint8_t key[RW_KEY_LEN])
+/* The message info of an unsigned, well-formed frame of len bytes (cap: room for a signature, 0 if none
+   needed), or NULL. */
+static const rw_msg_info *unsigned_frame_info(const uint8_t *frame, size_t len, size_t cap)
 {
     if (frame == NULL || len < RW_FRAME_HEADER_LEN + RW_FRAME_CHECKSUM_LEN || frame[2] != 0u ||
-        len != RW_FRAME_HEADER_LEN + (size_t)frame[6] + RW_FRAME_CHECKSUM_LEN || cap < len + RW_SIGNATURE_LEN) {
-        return 0u;
+        len != RW_FRAME_HEADER_LEN + (size_t)frame[6] + RW_FRAME_CHECKSUM_LEN || (cap != 0u && cap < len + RW_SIGNATURE_LEN)) {
+        return NULL;
     }
-    const rw_msg_info *info = rw_msg_info_find(frame[3]);
+    return rw_msg_info_find(frame[3]);
+}
+
+size_t rw_frame_renumber(uint8_t *frame, size_t len, uint16_t seq)
+{
+    const rw_msg_info *info = unsigned_frame_info(frame, len, 0u);
     if (info == NULL) {
         return 0u;
     }
     size_t body_len = len - RW_FRAME_CHECKSUM_LEN;
+    put_u16(frame + 4, seq);
+    put_u16(frame + body_len, frame_checksum(frame, body_len, info->crc_extra));
+    return len;
+}
+
+size_t rw_frame_sign_begin(uint8_t *frame, size_t len, size_t cap, uint16_t seq, uint32_t session_id)
+{
+    const rw_msg_info *info = unsigned_frame_info(frame, len, cap);
+    if (info == NULL) {
+        return 0u;
+    }
+    size_t body_len = len - RW_FRAME_CHECKSUM_LEN;
+    put_u16(frame + 4, seq);
     frame[2] = RW_FRAME_FLAG_SIGNED;
     put_u16(frame + body_len, frame_checksum(frame, body_len, info->crc_extra));
     put_u32(frame + len, session_id);
+    return len;
+}
+
+size_t rw_frame_sign_counter(uint8_t *frame, size_t len, uint64_t counter)
+{
     put_u64(frame + len + 4u, counter);
-    put_u64(frame + len + 12u, rw_siphash24(key, frame, len + 12u));
+    return RW_FRAME_SIGN_TAGGED_LEN(len);
+}
+
+size_t rw_frame_sign_tag(uint8_t *frame, size_t len, uint64_t tag)
+{
+    put_u64(frame + len + 12u, tag);
     return len + RW_SIGNATURE_LEN;
+}
+
+size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,
+                     const uint8_t key[RW_KEY_LEN])
+{
+    if (frame == NULL || len < RW_FRAME_HEADER_LEN || rw_frame_sign_begin(frame, len, cap, get_u16(frame + 4), session_id) == 0u) {
+        return 0u;
+    }
+    size_t tagged_len = rw_frame_sign_counter(frame, len, counter);
+    return rw_frame_sign_tag(frame, len, rw_siphash24(key, frame, tagged_len));
 }
 
 int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN])

@@ -219,7 +219,7 @@ typedef struct {
     uint16_t spindle_rejected; /* Spindle position readings rejected as impossible jumps (wraps). */
     uint16_t rx_auth_failed; /* Frames dropped for a missing or wrong signature (wraps). */
     uint16_t rx_replayed; /* Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps). */
-    uint16_t tx_dropped; /* Frames the device numbered but dropped from its send queue (full: telemetry goes first) - holes in its seq that no network caused (wraps). */
+    uint16_t tx_dropped; /* Frames the device queued but dropped from its full send queue (telemetry goes first). Queued frames are numbered when they leave, so a gap in seq is always the network's (wraps). */
 } rw_msg_telemetry;
 void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload);
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload);
@@ -544,6 +544,19 @@ size_t rw_frame_encode(uint8_t msg_id, uint16_t seq, const uint8_t *payload, uin
    unsigned frame. */
 size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id, uint64_t counter,
                      const uint8_t key[RW_KEY_LEN]);
+/* The same in steps, so that a MAC can be spread over time and the counter taken only when the frame is
+   sent: rw_frame_sign_begin sets seq and the flag, recomputes the checksum, appends session_id (returns len,
+   0 as rw_frame_sign would); the first RW_FRAME_SIGN_FIXED_LEN(len) bytes of the tagged part are then
+   final. rw_frame_sign_counter appends the counter and returns the length the tag covers
+   (RW_FRAME_SIGN_TAGGED_LEN(len)); rw_frame_sign_tag appends the tag and returns the signed length. */
+#define RW_FRAME_SIGN_FIXED_LEN(len) ((len) + 4u)
+#define RW_FRAME_SIGN_TAGGED_LEN(len) ((len) + 12u)
+size_t rw_frame_sign_begin(uint8_t *frame, size_t len, size_t cap, uint16_t seq, uint32_t session_id);
+/* Renumber an unsigned frame of len bytes in place: the new seq and its checksum (frames queued for the link
+   are numbered when they leave, so seq grows in the order frames are sent). Returns len, 0 if malformed. */
+size_t rw_frame_renumber(uint8_t *frame, size_t len, uint16_t seq);
+size_t rw_frame_sign_counter(uint8_t *frame, size_t len, uint64_t counter);
+size_t rw_frame_sign_tag(uint8_t *frame, size_t len, uint64_t tag);
 /* True if a decoded signed frame's tag is right for key (constant-time comparison). */
 int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN]);
 

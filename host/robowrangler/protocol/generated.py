@@ -393,7 +393,7 @@ class Telemetry(Message):
         spindle_rejected: uint16 Spindle position readings rejected as impossible jumps (wraps).
         rx_auth_failed: uint16 Frames dropped for a missing or wrong signature (wraps).
         rx_replayed: uint16 Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps).
-        tx_dropped: uint16 Frames the device numbered but dropped from its send queue (full: telemetry goes first) - holes in its seq that no network caused (wraps).
+        tx_dropped: uint16 Frames the device queued but dropped from its full send queue (telemetry goes first). Queued frames are numbered when they leave, so a gap in seq is always the network's (wraps).
     """
 
     MSG_ID: ClassVar[int] = 3
@@ -427,7 +427,7 @@ class Telemetry(Message):
         FieldSpec('spindle_rejected', 'uint16', '', '', 'Spindle position readings rejected as impossible jumps (wraps).'),
         FieldSpec('rx_auth_failed', 'uint16', '', '', 'Frames dropped for a missing or wrong signature (wraps).'),
         FieldSpec('rx_replayed', 'uint16', '', '', 'Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps).'),
-        FieldSpec('tx_dropped', 'uint16', '', '', 'Frames the device numbered but dropped from its send queue (full: telemetry goes first) - holes in its seq that no network caused (wraps).'),
+        FieldSpec('tx_dropped', 'uint16', '', '', "Frames the device queued but dropped from its full send queue (telemetry goes first). Queued frames are numbered when they leave, so a gap in seq is always the network's (wraps)."),
     )
 
     time_ms: int
