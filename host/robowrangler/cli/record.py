@@ -130,10 +130,10 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
                 progress.note(f"link lost: no telemetry for {silent_s:.1f} s; still recording, waiting for it")
             elif lost and silent_s < ctx.timeout_s:
                 lost = False
-                progress.note(f"link back: telemetry again ({recorder.gap_detector.missing} frames missing so far)")
+                progress.note(f"link back: telemetry again ({recorder.frames_missing} frames missing so far)")
             progress.show(f"{out.name}: {now_s - start_s:6.1f} s, {recorder.telemetry_count} telemetry, "
                           f"{recorder.event_count} events, {recorder.command_count} commands, "
-                          f"{recorder.gap_detector.gaps} gaps, state {recorder.latest_state or '-'}", now_s)
+                          f"{recorder.gaps_written} gaps, state {recorder.latest_state or '-'}", now_s)
     except KeyboardInterrupt:
         interrupted = True
     finally:
@@ -147,8 +147,8 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
         raise LinkTimeout(f"no TELEMETRY from {ctx.url} during the whole recording ({elapsed_s:.1f} s); {out} was "
                           "written but holds none", url=ctx.url, waited_s=elapsed_s)
     counts = {"telemetry": recorder.telemetry_count, "events": recorder.event_count,
-              "commands": recorder.command_count, "gaps": recorder.gap_detector.gaps,
-              "missing_frames": recorder.gap_detector.missing}
+              "commands": recorder.command_count, "gaps": recorder.gaps_written,
+              "missing_frames": recorder.frames_missing}
     ctx.result({"command": "record", "path": str(out), "duration_s": round(elapsed_s, 3),
                 "interrupted": interrupted, **counts},
                f"recorded {elapsed_s:.1f} s to {out}: " + ", ".join(f"{v} {k}" for k, v in counts.items()))
