@@ -60,10 +60,11 @@ def test_chain_load_reaches_the_firmwares_spindle_load(native_build_dir: Path) -
     assert retract, "no RETRACT samples"
     quiet = [r["spindle_load_permille"] for r in retract if r["guide_load_n"] < 0.05]
     loaded = [r for r in retract if r["guide_load_n"] > 5.0]
-    assert len(quiet) > 20 and loaded, f"peak guide load {out.peak_guide_load_n:.2f} N"
-    base = float(np.median(quiet))
-    for r in loaded:
-        assert r["spindle_load_permille"] > base + 1.0 * r["guide_load_n"], (r, base)
+    assert len(quiet) > 20 and len(loaded) >= 5, f"peak guide load {out.peak_guide_load_n:.2f} N"
+    # medians: the register carries noise (8 permille, 1 sigma) and the telemetry lags the load by up to 20 ms
+    rise = float(np.median([r["spindle_load_permille"] for r in loaded]) - np.median(quiet))
+    per_n = rise / float(np.median([r["guide_load_n"] for r in loaded]))
+    assert 1.2 < per_n < 4.0, (rise, per_n)
 
 
 def test_unknown_scenario_is_a_clear_error() -> None:

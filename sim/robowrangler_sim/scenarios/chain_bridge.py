@@ -102,8 +102,8 @@ class ChainBridge:
             self._couple()
 
     def _couple(self) -> None:
-        normal_obj, _, normal_floor = self.chain.contact_forces_n()
-        net = self.chain.chain_object_net_force_n()
+        # one pass over the contacts (contact_forces_n() and chain_object_net_force_n() would each make one)
+        normal_obj, _, normal_floor, net = self.chain._contact_summary()
         total = np.zeros(3)
         for f in net.values():
             total += f

@@ -74,7 +74,7 @@ class ScenarioOutcome:
     """What the simulation says about one scenario run (SI units).
 
     Attributes:
-        name, object_name, kind, seed, n_links: what ran.
+        name, object_name, kind, seed, n_links, chain_noise_rad: what ran.
         verdict: "secured" / "slipped" (grasp), "held" / "lost" (door), "diverged", or "firmware: ..." when the
             firmware did not get through the script (a NACK, a fault, a state not reached).
         secured: True if secured/held, False if slipped/lost, None if the run did not reach the judgement.
@@ -97,6 +97,7 @@ class ScenarioOutcome:
     kind: str
     seed: int
     n_links: int
+    chain_noise_rad: float = 0.0
     verdict: str = "not run"
     secured: bool | None = None
     firmware_path: list = field(default_factory=list)
@@ -123,8 +124,9 @@ class _Run:
 
     def __init__(self, spec: ScenarioSpec, *, seed: int, n_links: int, sample_s: float,
                  progress: Callable[[str], None] | None, render_dir: Path | None, render_every: int,
-                 render_fps: float) -> None:
+                 render_fps: float, chain_noise_rad: float) -> None:
         self.spec = spec
+        self.chain_noise_rad = chain_noise_rad
         self.script = spec.script
         self.sample_us = round(sample_s * 1e6)
         self.progress = progress
@@ -136,7 +138,7 @@ class _Run:
         self.table = default_or_synthetic_table()
         self.phase = "boot"
         self.outcome = ScenarioOutcome(name=spec.name, object_name=spec.object_name, kind=spec.kind, seed=seed,
-                                       n_links=n_links)
+                                       n_links=n_links, chain_noise_rad=float(chain_noise_rad))
         self.seed = seed
         self.monitor: SecuredMonitor | None = None
         self._next_sample_us = 0
@@ -166,7 +168,8 @@ class _Run:
         self.chain = ChainPlant(table=self.table, params=self.params, objects=(placement,), floor_height_m=0.0,
                                 initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=guide,
                                                     base_pos_m=tuple(start), base_quat_wxyz=quat),
-                                airborne=spec.kind == "grasp", seed=self.seed)
+                                airborne=spec.kind == "grasp", seed=self.seed,
+                                initial_noise_rad=self.chain_noise_rad)
         self.bridge = ChainBridge(self.sil, self.chain, self.trajectory).install()
 
     def _door_geometry(self, obj) -> tuple[ObjectPlacement, np.ndarray]:
@@ -354,7 +357,8 @@ class _Run:
 def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float = 0.05,
                  progress: Callable[[str], None] | None = None, render_dir: str | Path | None = None,
                  render_png_every: int = 10, render_fps: float = 10.0,
-                 firmware_params: dict[str, float] | None = None) -> ScenarioOutcome:
+                 firmware_params: dict[str, float] | None = None,
+                 chain_noise_rad: float = 0.0) -> ScenarioOutcome:
     """Run scenario ``name`` with the firmware in the loop and judge it (see module doc).
 
     Args:
@@ -368,6 +372,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
             MUJOCO_GL=osmesa before mujoco is imported on a headless machine; OSMesa draws ~10 frames/s here).
         firmware_params: {parameter name: value} sent with PARAM_SET before homing, on top of (and
             overriding) the scenario's own (protocol names and units, e.g. {"guide_max_mm": 120.0}).
+        chain_noise_rad: standard deviation of seeded noise on the chain's initial joint angles, rad (a
+            perturbed rollout: how robust an outcome is; 0 = none).
     Returns:
         ScenarioOutcome. The firmware process is stopped before returning, also on errors.
     """
@@ -380,6 +386,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         raise ScenarioError(f"render_png_every: expected an int >= 1, got {render_png_every!r}")
     if not (isinstance(render_fps, (int, float)) and 0 < render_fps <= 1.0 / sample_s):
         raise ScenarioError(f"render_fps: expected 0 < fps <= 1 / sample_s = {1.0 / sample_s:g}, got {render_fps!r}")
+    if not (isinstance(chain_noise_rad, (int, float)) and 0.0 <= chain_noise_rad <= 0.5):
+        raise ScenarioError(f"chain_noise_rad: expected 0..0.5 rad, got {chain_noise_rad!r}")
     overrides = dict(firmware_params or {})
     for pname, value in overrides.items():
         if pname not in P:
@@ -391,7 +399,7 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         out_dir = Path(render_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
     run = _Run(spec, seed=seed, n_links=n_links, sample_s=sample_s, progress=progress, render_dir=out_dir,
-               render_every=render_png_every, render_fps=render_fps)
+               render_every=render_png_every, render_fps=render_fps, chain_noise_rad=chain_noise_rad)
     run.firmware_params.update(overrides)
     wall0 = time.perf_counter()
     run.build()
