@@ -456,15 +456,9 @@ static const rw_hal_link *link_of(const rw_hal *hal, rw_link_id link)
     return link == RW_LINK_SERIAL ? hal->serial : (link == RW_LINK_WIFI ? hal->link : NULL);
 }
 
-uint16_t rw_core_take_seq(rw_core *core)
+uint16_t rw_core_take_seq(rw_core *core, rw_link_id link)
 {
-    rw_signer *signer = &core->state.signer;
-    if (!rw_signer_busy(signer)) {
-        return core->state.tx_seq++;
-    }
-    uint16_t seq = rw_signer_seq(signer);
-    (void)rw_signer_renumber(signer, core->state.tx_seq++, rw_core_session_id(core), core->state.config.key);
-    return seq;
+    return core->state.tx_seq[link == RW_LINK_SERIAL ? 1 : 0]++;
 }
 
 void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len)
@@ -577,7 +571,7 @@ static void send_queued(rw_core *core, const rw_hal *hal, bool sent, bool idle_t
         if (core->state.peer_link != RW_LINK_WIFI || core->state.config.key_set == 0u) {
             uint8_t frame[RW_MAX_FRAME_LEN];
             memcpy(frame, slot->bytes, slot->len);
-            size_t len = rw_frame_renumber(frame, slot->len, core->state.tx_seq++);
+            size_t len = rw_frame_renumber(frame, slot->len, rw_core_take_seq(core, (rw_link_id)core->state.peer_link));
             rw_core_link_send(core, hal, (rw_link_id)core->state.peer_link, false, frame, len);
             rw_outbox_pop(&core->state.outbox, slot);
             return;
@@ -585,8 +579,8 @@ static void send_queued(rw_core *core, const rw_hal *hal, bool sent, bool idle_t
         if (!idle_tick) {
             return;
         }
-        (void)rw_signer_begin(signer, slot->bytes, slot->len, core->state.tx_seq++, rw_core_session_id(core),
-                              core->state.config.key);
+        (void)rw_signer_begin(signer, slot->bytes, slot->len, rw_core_take_seq(core, RW_LINK_WIFI),
+                              rw_core_session_id(core), core->state.config.key);
         rw_outbox_pop(&core->state.outbox, slot);
         size_t left = rw_signer_blocks_left(signer);
         size_t budget = RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BEGIN_COST;

@@ -147,7 +147,7 @@ typedef struct rw_core {
         float telemetry_rate_hz_memo; /* the rate telemetry_period_ms was computed for (0: none yet) */
         uint32_t telemetry_period_ms; /* round(1000 / telemetry_rate_hz) */
         float ff_battery_v;       /* the battery voltage the feed-forward uses (refreshed on idle ticks) */
-        uint16_t tx_seq;
+        uint16_t tx_seq[2];       /* next seq per link: [0] WiFi, [1] USB serial (rw_core_take_seq) */
         uint16_t last_cmd_seq;
 
         float target_mps;         /* commanded rope speed */

@@ -307,12 +307,12 @@ static void send_verdict(rw_core *core, const rw_hal *hal, rw_link_id link, uint
     size_t len;
     if (v.reason == 0u) {
         rw_msg_ack ack = { .cmd_msg_id = msg_id, .cmd_seq = seq, .state = core->state.state };
-        len = rw_msg_ack_encode(&ack, rw_core_take_seq(core), frame, sizeof frame);
+        len = rw_msg_ack_encode(&ack, rw_core_take_seq(core, link), frame, sizeof frame);
     } else {
         rw_msg_nack nack = {
             .cmd_msg_id = msg_id, .cmd_seq = seq, .reason = v.reason, .state = core->state.state, .detail = v.detail,
         };
-        len = rw_msg_nack_encode(&nack, rw_core_take_seq(core), frame, sizeof frame);
+        len = rw_msg_nack_encode(&nack, rw_core_take_seq(core, link), frame, sizeof frame);
         ++core->state.counters.nacks;
     }
     rw_core_link_send(core, hal, link, true, frame, len);
@@ -331,7 +331,7 @@ static void reply_session_info(rw_core *core, const rw_hal *hal, rw_link_id link
         .schema_hash = (uint16_t)RW_PROTOCOL_SCHEMA_HASH,
     };
     uint8_t out[RW_MAX_FRAME_LEN];
-    size_t len = rw_msg_session_info_encode(&info, rw_core_take_seq(core), out, sizeof out);
+    size_t len = rw_msg_session_info_encode(&info, rw_core_take_seq(core, link), out, sizeof out);
     rw_core_link_send(core, hal, link, true, out, len);
 }
 

@@ -13,9 +13,11 @@ void rw_core_raise_fault(rw_core *core, uint16_t fault_bit);
 bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link);
 /* Send a frame on a link (reply: to the sender of the last datagram; else to that link's peer); frames on
  * WiFi are signed when a key is set. */
-/* The seq of a frame that leaves in this tick (a reply): when a queued frame is being signed, the reply takes
- * that frame's seq and the frame is renumbered (its MAC starts over), so seq grows in the order frames leave. */
-uint16_t rw_core_take_seq(rw_core *core);
+/* The seq of a frame about to leave on `link` (a reply now, a queued frame when its signing begins). Each link
+ * numbers its own frames, so a host on one link sees no holes for frames sent on the other, and a frame the
+ * outbox drops spends no seq. A reply may overtake a queued frame whose signing has begun (by a few ms): the
+ * host sees those two out of order, never a hole. */
+uint16_t rw_core_take_seq(rw_core *core, rw_link_id link);
 void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len);
 
 #endif /* RW_CORE_INTERNAL_H */

@@ -18,32 +18,15 @@ bool rw_signer_begin(rw_signer *s, const uint8_t *frame, size_t len, uint16_t se
     if (rw_signer_busy(s) || frame == NULL || len == 0u || len + RW_SIGNATURE_LEN > sizeof s->state.frame) {
         return false;
     }
-    memmove(s->state.frame, frame, len); /* frame may be the signer's own (rw_signer_renumber) */
+    memcpy(s->state.frame, frame, len);
     if (rw_frame_sign_begin(s->state.frame, len, sizeof s->state.frame, seq, session_id) == 0u) {
         return false;
     }
     s->state.len = (uint8_t)len;
-    s->state.seq = seq;
     s->state.fixed_blocks = (uint8_t)(RW_FRAME_SIGN_FIXED_LEN(len) / RW_SIPHASH_BLOCK_LEN);
     s->state.done_blocks = 0u;
     rw_siphash_init(&s->state.mac, key);
     return true;
-}
-
-uint16_t rw_signer_seq(const rw_signer *s)
-{
-    return rw_signer_busy(s) ? s->state.seq : 0u;
-}
-
-bool rw_signer_renumber(rw_signer *s, uint16_t seq, uint32_t session_id, const uint8_t key[RW_KEY_LEN])
-{
-    if (!rw_signer_busy(s)) {
-        return false;
-    }
-    size_t len = s->state.len;
-    s->state.frame[2] = 0u; /* unsigned again (the flags byte): begin signs it afresh */
-    s->state.len = 0u;
-    return rw_signer_begin(s, s->state.frame, len, seq, session_id, key);
 }
 
 size_t rw_signer_blocks_left(const rw_signer *s)

@@ -5,7 +5,7 @@
  * signed flag, checksum, session id), absorb the blocks that do not depend on the counter a few at a time, then
  * finish: the counter is taken only now, when the frame is about to leave, so counters grow in the order
  * frames are sent (the host refuses a counter it has passed), whatever was signed in between (an ACK is
- * signed in one piece in the tick of its command). The tag equals rw_frame_sign's.
+ * signed in one piece in the tick of its command). The seq is given at begin. The tag equals rw_frame_sign's.
  */
 #ifndef RW_SIGNER_H
 #define RW_SIGNER_H
@@ -23,7 +23,6 @@ typedef struct rw_signer {
         uint8_t len;          /* the unsigned frame's length; 0 when idle */
         uint8_t fixed_blocks; /* MAC blocks before the counter */
         uint8_t done_blocks;  /* of those, absorbed */
-        uint16_t seq;         /* the frame's seq */
         rw_siphash mac;
     } state;
 } rw_signer;
@@ -35,11 +34,6 @@ bool rw_signer_busy(const rw_signer *s);
  * refuse, or when busy. */
 bool rw_signer_begin(rw_signer *s, const uint8_t *frame, size_t len, uint16_t seq, uint32_t session_id,
                      const uint8_t key[RW_KEY_LEN]);
-/* The seq of the frame being signed (0 when idle). */
-uint16_t rw_signer_seq(const rw_signer *s);
-/* Give the frame being signed another seq: its MAC starts over (what was absorbed is lost). For a reply that
- * must leave now and takes this frame's seq, so that seq grows in the order frames are sent. False when idle. */
-bool rw_signer_renumber(rw_signer *s, uint16_t seq, uint32_t session_id, const uint8_t key[RW_KEY_LEN]);
 /* Absorb up to max_blocks more of the blocks before the counter; true when all of them are absorbed. */
 bool rw_signer_absorb(rw_signer *s, size_t max_blocks);
 /* Blocks still to absorb before rw_signer_finish may be called. */

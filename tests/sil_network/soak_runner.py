@@ -559,9 +559,9 @@ class Soak:
     def _on_telemetry(self, time_us: int, seq: int, t: gen.Telemetry) -> None:
         f = self.figures
         f.telemetry_checked += 1
-        # Frames are numbered as they leave, and a telemetry frame leaves a few ticks after it was packed: it
-        # counts every repeat answered before the previous telemetry frame left (that one was packed earlier and
-        # left first), and at most those answered before it left itself.
+        # Queued frames are numbered when their signing begins, a few ticks after they were packed: a telemetry
+        # frame counts every repeat answered before the previous telemetry frame was numbered (that one was
+        # packed earlier), and at most those numbered before it.
         expected = bisect.bisect_left(self._repeat_verdict_seqs, seq)
         i = bisect.bisect_left(self._telemetry_seqs, seq)  # the telemetry frame before it (reordering allowed)
         previous = self._telemetry_seqs[i - 1] if i > 0 else 0

@@ -1,6 +1,6 @@
 /*
  * Unity tests of rw_signer (a frame signed in steps over control ticks): the signed bytes equal
- * rw_frame_sign's for every absorb budget and the counter given at finish; the seq is the one given at begin, and a frame renumbered mid-way signs afresh; the counter is the one taken at
+ * rw_frame_sign's for every absorb budget and the counter given at finish; the seq is the one given at begin; the counter is the one taken at
  * finish, not at begin; finish is refused while blocks are left; begin is refused while busy and for frames
  * rw_frame_sign refuses (already signed, wrong length, unknown id); the frame decodes and its tag verifies,
  * and a flipped bit does not. Run with `pio test -e native`.
@@ -131,32 +131,9 @@ static void test_begin_refuses_when_busy_or_for_a_frame_sign_would_refuse(void)
     TEST_ASSERT_NULL(out);
 }
 
-/* A reply that must leave now takes the frame's seq; the frame, renumbered mid-way, signs as if new. */
-static void test_renumber_mid_way_signs_the_frame_afresh_with_the_new_seq(void)
-{
-    uint8_t frame[RW_MAX_FRAME_LEN];
-    uint8_t ref[RW_MAX_FRAME_LEN];
-    size_t n = telemetry_frame(frame, 0u);
-    TEST_ASSERT_FALSE(rw_signer_renumber(&signer, 9u, 1u, key)); /* idle */
-    TEST_ASSERT_TRUE(rw_signer_begin(&signer, frame, n, 40u, 1u, key));
-    (void)rw_signer_absorb(&signer, 3u);
-    TEST_ASSERT_EQUAL_UINT16(40u, rw_signer_seq(&signer));
-    TEST_ASSERT_TRUE(rw_signer_renumber(&signer, 41u, 1u, key));
-    TEST_ASSERT_EQUAL_UINT16(41u, rw_signer_seq(&signer));
-    while (rw_signer_blocks_left(&signer) != 0u) {
-        (void)rw_signer_absorb(&signer, 2u);
-    }
-    const uint8_t *out = NULL;
-    size_t len = rw_signer_finish(&signer, 5u, &out);
-    size_t m = telemetry_frame(ref, 41u);
-    TEST_ASSERT_EQUAL_UINT(rw_frame_sign(ref, m, sizeof ref, 1u, 5u, key), len);
-    TEST_ASSERT_EQUAL_HEX8_ARRAY(ref, out, len);
-}
-
 int main(void)
 {
     UNITY_BEGIN();
-    RUN_TEST(test_renumber_mid_way_signs_the_frame_afresh_with_the_new_seq);
     RUN_TEST(test_steps_give_rw_frame_sign_bytes_for_every_budget);
     RUN_TEST(test_the_counter_is_the_one_given_at_finish);
     RUN_TEST(test_a_tampered_counter_fails_the_tag);
