@@ -87,17 +87,24 @@ def test_catalogue_has_every_table_i_object_and_the_door() -> None:
     assert len(names) == 14
 
 
-CHIPS_CAN_MARGINAL = pytest.mark.xfail(
-    strict=True, reason="docs/table_i.md: the can follows the module (follow 1.35) but the rope touches it in 76 % "
-                        "of the judged samples (< 80 %); plant level flips the same way with the firmware's slow "
-                        "retract to 178 mm")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize(("name", "expected"), [pytest.param("chips_can", "secured", marks=CHIPS_CAN_MARGINAL),
-                                                ("tennis_ball", "slipped"), ("mug", "secured"), ("cup", "secured"),
+@pytest.mark.parametrize(("name", "expected"), [("chips_can", "secured"), ("tennis_ball", "slipped"), ("mug", "secured"), ("cup", "secured"),
                                                 ("golf_ball", "slipped")])
 def test_firmware_grasp_reproduces_table_i(name: str, expected: str, native_build_dir: Path) -> None:
+    # the chips can is marginal (docs/table_i.md): it flipped to "slipped" (rope touching 76 % < 80 %) with the
+    # firmware build before 37c9cb7/0906311 changed when frames leave, i.e. the tick GRASP is taken at
     out = run_scenario(name, seed=0, n_links=20)
     assert out.diverged is None
     assert out.verdict == expected, (out.follow_ratio, out.touching_fraction, out.mean_pull_force_n)
+
+
+@pytest.mark.slow
+def test_door_handle_is_threaded_held_and_perturbed_runs_are_reported(native_build_dir: Path) -> None:
+    held = run_scenario("door_handle", seed=0, n_links=20)
+    assert held.verdict == "held" and held.diverged is None
+    assert held.mean_pull_force_n > 1.0  # the 5 cm pull loads the rope on the lever
+    assert held.grasp_end == "STROKE_END" and held.guide_at_grasp_end_mm == pytest.approx(60.0, abs=1.0)
+    # a perturbed rollout whose loop flies in a swung plane misses the lever: reported as lost, never hidden
+    missed = run_scenario("door_handle", seed=1, n_links=20, chain_noise_rad=0.05)
+    assert missed.verdict in ("lost", "diverged")
+    assert missed.secured is False or missed.diverged is not None

@@ -41,9 +41,9 @@ def _paper(spec) -> str:
 
 def _why(o: ScenarioOutcome, spec) -> str:
     """What the figures say happened (a reading of the judged numbers, not a rule on the shape)."""
-    if o.touching_fraction == 0.0 and (math.isnan(o.follow_ratio) or abs(o.follow_ratio) < 0.1):
-        return (f"the rope did not touch it in the judged half of the pull and it stayed where it was (peak guide "
-                f"load {o.peak_guide_load_n:.2f} N before that): the loop lost it; the object is "
+    if o.touching_fraction < 0.8 and (math.isnan(o.follow_ratio) or abs(o.follow_ratio) < 0.1):
+        return (f"it stayed where it was and the rope touched it in {100 * o.touching_fraction:.0f} % of the judged "
+                f"half of the pull (peak guide load {o.peak_guide_load_n:.2f} N): the loop lost it; the object is "
                 f"{1000 * spec.height_m:.0f} mm tall, the rope rests 10 mm above the floor and leaves the exit 30 mm "
                 "up, so a pulled rope can ride over a low object")
     if o.follow_ratio > 1.2 and o.touching_fraction < 0.5:
@@ -120,6 +120,11 @@ def markdown(sil: list[ScenarioOutcome], plant: list[dict], door: list[ScenarioO
         "in about 23 s (the AX-12A's top speed, 7.6 mm/s); outcomes that differ between the two columns are",
         "objects whose result depends on that (chips can at plant level: secured with 180 mm in 3 s or 23 s,",
         "slipped with 178 mm in 23 s). No rule on the shape class was tuned to move any outcome.",
+        "",
+        "Marginal cases move with small timing changes: the chips can slipped in this SIL with the firmware",
+        "build before commits 37c9cb7/0906311 (they change the ticks at which the firmware's frames leave, so",
+        "the script steps a few ticks apart): follow 1.35, rope touching 76 % (< 80 %), the can tipping in the loop; with the current",
+        "build it is secured (100 %). The mug, the spheres and the low objects did not change.",
     ]
     lines += ["", "## Door handle (fixture): loop threaded over the lever, GRASP, pull 5 cm", "",
               "Seed 0 unperturbed; the other rows are perturbed rollouts: seeded noise on the chain's initial joint",
