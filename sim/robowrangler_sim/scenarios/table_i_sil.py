@@ -123,8 +123,9 @@ def markdown(sil: list[ScenarioOutcome], plant: list[dict], door: list[ScenarioO
         "",
         "Marginal cases move with small timing changes: the chips can slipped in this SIL with the firmware",
         "build before commits 37c9cb7/0906311 (they change the ticks at which the firmware's frames leave, so",
-        "the script steps a few ticks apart): follow 1.35, rope touching 76 % (< 80 %), the can tipping in the loop; with the current",
-        "build it is secured (100 %). The mug, the spheres and the low objects did not change.",
+        "the script steps a few ticks apart): follow 1.35, rope touching 76 % (< 80 %), the can tipping in",
+        "the loop; with the current build it is secured (100 %). The mug, the spheres and the low objects did",
+        "not change.",
     ]
     lines += ["", "## Door handle (fixture): loop threaded over the lever, GRASP, pull 5 cm", "",
               "Seed 0 unperturbed; the other rows are perturbed rollouts: seeded noise on the chain's initial joint",
