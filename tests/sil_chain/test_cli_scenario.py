@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import io
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
+
+import pytest
 
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
@@ -43,3 +48,17 @@ def test_scenario_runs_with_progress_and_a_json_verdict(native_build_dir: Path) 
     assert result["grasp_end"] == "STROKE_END" and result["diverged"] is None
     assert "RETRACT->ARMED (STROKE_END)" in result["firmware_path"]
     assert "GRASP" in err and "pull" in err  # progress on stderr
+
+
+@pytest.mark.slow
+def test_scenario_renders_png_frames_and_an_mp4(native_build_dir: Path, tmp_path: Path) -> None:
+    # its own process: MuJoCo's GL backend is fixed at the first import (the CLI picks OSMesa for --render)
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    proc = subprocess.run([sys.executable, "-c", "from robowrangler.cli.main import entry_point; entry_point()",
+                           "sil", "--scenario", "golf_ball", "--links", "10", "--render", str(tmp_path)],
+                          capture_output=True, text=True, env=env, timeout=280)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    pngs = sorted(p.name for p in tmp_path.glob("golf_ball_*.png"))
+    assert len(pngs) > 20 and any(name.endswith("_pull.png") for name in pngs)
+    assert (tmp_path / "golf_ball.mp4").stat().st_size > 10_000
+    assert "slipped" in proc.stdout

@@ -34,6 +34,16 @@ def _scenario_names() -> tuple[str, ...]:
     return scenario_names()
 
 
+def _headless_gl(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
+    """--render: pick MuJoCo's headless OpenGL (OSMesa) unless the user chose one, before --scenario's check
+    imports MuJoCo (the backend is fixed at its first import)."""
+    if value is not None:
+        os.environ.setdefault("MUJOCO_GL", "osmesa")
+        if os.environ["MUJOCO_GL"] in ("osmesa", "egl"):
+            os.environ.setdefault("PYOPENGL_PLATFORM", os.environ["MUJOCO_GL"])
+    return value
+
+
 class ScenarioName(click.ParamType):
     """A scenario name, checked against the simulator's catalogue when used (the catalogue imports MuJoCo,
     so it is loaded only when --scenario is given or --help is shown)."""
@@ -76,7 +86,7 @@ def _sil_modules():
 @click.option("--links", "n_links", type=click.IntRange(10, 80), default=20, show_default=True,
               help="Chain links of the scenario's rope model.")
 @click.option("--render", "render_dir", type=click.Path(file_okay=False, writable=True), default=None,
-              metavar="DIR", help="With --scenario: write PNG frames and an MP4 of the run to DIR "
+              metavar="DIR", is_eager=True, callback=_headless_gl, help="With --scenario: write PNG frames and an MP4 of the run to DIR "
                                   "(headless: MUJOCO_GL=osmesa, Debian libosmesa6).")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
@@ -133,8 +143,6 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
 
 
 def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None) -> None:
-    if render_dir is not None:
-        os.environ.setdefault("MUJOCO_GL", "osmesa")  # before mujoco is imported (headless rendering)
     sil_pkg, _ = _sil_modules()
     from robowrangler_sim.scenarios import run_scenario
 
