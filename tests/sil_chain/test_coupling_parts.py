@@ -57,3 +57,34 @@ def test_bad_scenario_options_name_the_argument() -> None:
         run_scenario("mug", chain_noise_rad=2)
     with pytest.raises(ScenarioError, match="sample_s: expected 0.001..1.0 s"):
         run_scenario("mug", sample_s=0.0)
+
+
+def test_bridge_steps_the_chain_with_the_plants_and_loads_the_drive_with_rope_friction(native_build_dir) -> None:
+    from robowrangler_sim.chain.default_table import default_or_synthetic_table
+    from robowrangler_sim.chain.params import ChainParams
+    from robowrangler_sim.chain.plant import ChainPlant, PlantInputs
+    from robowrangler_sim.scenarios.chain_bridge import ChainBridge, use_chain_loaded_spindle
+    from robowrangler_sim.sil import SilSession
+    from robowrangler_sim.sil.scripted_host import ScriptedHost
+
+    params = ChainParams(n_links=10)
+    quat = pitch_quat_wxyz(0.0, roll_rad=np.pi / 2)  # loop plane horizontal, exit 3 cm above the floor
+    sil = SilSession(speedup=None, trace_every=0, seed=5)
+    spindle = use_chain_loaded_spindle(sil, seed=5)
+    chain = ChainPlant(table=default_or_synthetic_table(), params=params, floor_height_m=0.0, airborne=False,
+                       initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=40.0, base_pos_m=(0, 0, 0.03),
+                                           base_quat_wxyz=quat))
+    bridge = ChainBridge(sil, chain, BaseTrajectory(start_pos_m=(0, 0, 0.03), quat_wxyz=quat)).install()
+    with sil:
+        host = ScriptedHost(sil)
+        host.run_for(1.0)
+        host.close()
+        # lockstep: one 5 ms chain step per five 1 ms ticks, on the same clock
+        assert chain.time_s == pytest.approx(sil.time_s, abs=params.timestep_s)
+        assert bridge.chain_steps == round(sil.time_s / params.timestep_s)
+        # the loop follows the spindle's guide (40 mm at power-up: 80 mm of rope inside)
+        assert chain.loop_length_m() == pytest.approx(params.loop_length_m(spindle.guide_position_mm), abs=1e-9)
+        # lying on the floor: the drive feels Coulomb friction of the rope's weight, mu x m g (a few mN)
+        weight_n = params.rope_linear_density_kg_per_m * chain.loop_length_m() * 9.81
+        assert sil.plant.external_rope_load_n == pytest.approx(0.3 * weight_n, rel=0.35)
+        assert spindle.guide_load_n == 0.0  # nothing to pull on
