@@ -39,11 +39,17 @@ class TimedBridge(ChainBridge):
     """ChainBridge that adds up the wall time of its tick hook (chain steps + coupling)."""
 
     hook_wall_s = 0.0
+    couple_wall_s = 0.0
 
     def __call__(self, sil) -> None:
         t0 = time.perf_counter()
         super().__call__(sil)
         self.hook_wall_s += time.perf_counter() - t0
+
+    def _couple(self) -> None:
+        t0 = time.perf_counter()
+        super()._couple()
+        self.couple_wall_s += time.perf_counter() - t0
 
 
 def _time_lockstep(sil) -> list[float]:
@@ -62,9 +68,10 @@ def _time_lockstep(sil) -> list[float]:
     return spent
 
 
-def measure(*, n_links: int, seconds: float, chain: bool, relaxed: bool) -> tuple[float, float, int, float]:
+def measure(*, n_links: int, seconds: float, chain: bool,
+            relaxed: bool) -> tuple[float, float, int, float, float]:
     """Returns (real-time factor, share of wall time in the chain hook, chain steps, share in the lockstep
-    exchange with the firmware process)."""
+    exchange with the firmware process, wall seconds in the load pass over the contacts)."""
     script = GraspScript()
     table = default_or_synthetic_table()
     params = ChainParams(n_links=n_links)
@@ -87,6 +94,7 @@ def measure(*, n_links: int, seconds: float, chain: bool, relaxed: bool) -> tupl
             host.run_for(1.5)  # rope stands: the loop lies on the floor around the mug
         if bridge is not None:
             bridge.hook_wall_s = 0.0
+            bridge.couple_wall_s = 0.0
             steps0 = bridge.chain_steps
         lockstep = _time_lockstep(sil)
         t0 = time.perf_counter()
@@ -96,8 +104,9 @@ def measure(*, n_links: int, seconds: float, chain: bool, relaxed: bool) -> tupl
             assert host.last_telemetry.state == gen.State.AIRBORNE
         host.close()
     if bridge is None:
-        return seconds / wall, 0.0, 0, lockstep[0] / wall
-    return seconds / wall, bridge.hook_wall_s / wall, bridge.chain_steps - steps0, lockstep[0] / wall
+        return seconds / wall, 0.0, 0, lockstep[0] / wall, 0.0
+    return (seconds / wall, bridge.hook_wall_s / wall, bridge.chain_steps - steps0, lockstep[0] / wall,
+            bridge.couple_wall_s)
 
 
 def main() -> int:
@@ -107,17 +116,18 @@ def main() -> int:
     args = ap.parse_args()
     build_native()
     n, s = args.links, args.seconds
-    rtf0, _, _, lock0 = measure(n_links=n, seconds=s, chain=False, relaxed=False)
+    rtf0, _, _, lock0, _ = measure(n_links=n, seconds=s, chain=False, relaxed=False)
     print(f"SIL without chain (firmware + drive + spindle, 1 kHz lockstep): {rtf0:5.1f}x real time "
           f"({1e6 / (rtf0 * 1000):.0f} us wall per 1 ms tick; lockstep exchange {100 * lock0:.0f} %)")
     for relaxed in (False, True):
-        rtf, share, steps, lock = measure(n_links=n, seconds=s, chain=True, relaxed=relaxed)
+        rtf, share, steps, lock, couple_s = measure(n_links=n, seconds=s, chain=True, relaxed=relaxed)
         what = "loop relaxed on the floor around the mug" if relaxed else "loop airborne around the mug"
         tick_us = 1e6 / (rtf * 1000)
         step_us = share * s / rtf / max(steps, 1) * 1e6
         print(f"full SIL, N = {n}, {what}: {rtf:5.1f}x real time ({tick_us:.0f} us wall per 1 ms tick); "
               f"lockstep exchange with the firmware process {100 * lock:.0f} %, chain hook {100 * share:.0f} % "
-              f"({step_us:.0f} us per 5 ms chain step), the rest (Python plants, host, pacing checks) "
+              f"({step_us:.0f} us per 5 ms chain step, of which {couple_s / max(steps, 1) * 1e6:.0f} us the Python "
+              f"pass over the contacts for the loads), the rest (Python plants, host, pacing checks) "
               f"{100 * (1 - lock - share):.0f} %")
     t0 = time.perf_counter()
     out = run_scenario("mug", seed=0, n_links=n)
