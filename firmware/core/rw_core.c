@@ -471,7 +471,8 @@ void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool r
 }
 
 /* First tick: the stored configuration (key, parameters) and a new session: the boot counter goes up and is
- * written back at once, so that no later boot can reuse this session id. */
+ * written back at once, so that no later boot can reuse this session id (session epoch + boot counter,
+ * rw_config.h). With the counter used up the key is forgotten rather than an id reused. */
 static void load_config(rw_core *core, const rw_hal *hal)
 {
     rw_config *c = &core->state.config;
@@ -487,8 +488,10 @@ static void load_config(rw_core *core, const rw_hal *hal)
         rw_config_defaults(c);
         rw_config_set_params(c, core->params.value);
     }
-    c->boot_counter += 1u;
-    rw_config_seal(c);
+    if (!rw_config_next_boot(c)) {
+        rw_config_clear_key(c);
+    }
+    core->state.session_id = rw_config_session_id(c);
     if (hal->config != NULL) {
         (void)hal->config->save(hal->config->ctx, c, sizeof *c);
     }

@@ -11,7 +11,7 @@ extern "C" {
 
 #define RW_PROTOCOL_VERSION 2u
 #define RW_PROTOCOL_MAGIC 0xB7u
-#define RW_PROTOCOL_SCHEMA_HASH 0x6A6Du
+#define RW_PROTOCOL_SCHEMA_HASH 0x1C52u
 #define RW_FRAME_HEADER_LEN 7u
 #define RW_FRAME_CHECKSUM_LEN 2u
 #define RW_MAX_PAYLOAD_LEN 64u
@@ -252,12 +252,12 @@ void rw_msg_param_value_pack(const rw_msg_param_value *msg, uint8_t *payload);
 void rw_msg_param_value_unpack(rw_msg_param_value *msg, const uint8_t *payload);
 size_t rw_msg_param_value_encode(const rw_msg_param_value *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the device's boot counter, kept in flash, so it grows with every boot and frames of an earlier boot never count again. */
+/* SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the provisioning's random epoch plus the device's boot counter, kept in flash, so it grows with every boot (frames of an earlier boot never count again) and starts from a fresh random base at every provisioning (frames of an earlier provisioning never count again). */
 #define RW_MSG_SESSION_INFO_LEN 11u
 #define RW_MSG_SESSION_INFO_CRC_EXTRA 0xC5E6u
 typedef struct {
     uint32_t host_nonce; /* Echo of HELLO.host_nonce (fresh answer, not a replay). */
-    uint32_t session_id; /* The device's current session (boot counter). */
+    uint32_t session_id; /* The device's current session (session epoch + boot counter). */
     uint8_t key_set; /* 1 when a key is provisioned; 0: the device takes no command over WiFi (provision over USB serial). */
     uint16_t schema_hash; /* The device's protocol schema hash. */
 } rw_msg_session_info;
@@ -272,7 +272,7 @@ typedef struct {
     uint8_t key_set; /* 1 when a link key is stored. */
     uint8_t password_set; /* 1 when a WiFi password is stored. */
     char wifi_ssid[33]; /* WiFi network name. */
-    uint32_t boot_counter; /* Boots since the configuration was first written (the session id). */
+    uint32_t boot_counter; /* Boots since the last PROVISION_COMMIT (session id = session epoch + this). */
     uint32_t commits; /* Configuration writes since first written (flash wear). */
     uint16_t config_version; /* Layout version of the stored configuration. */
     uint8_t dirty; /* 1 when something changed since the last PROVISION_COMMIT. */
@@ -452,11 +452,11 @@ void rw_msg_provision_set_wifi_password_pack(const rw_msg_provision_set_wifi_pas
 void rw_msg_provision_set_wifi_password_unpack(rw_msg_provision_set_wifi_password *msg, const uint8_t *payload);
 size_t rw_msg_provision_set_wifi_password_encode(const rw_msg_provision_set_wifi_password *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters) to flash as one versioned record with a CRC. */
-#define RW_MSG_PROVISION_COMMIT_LEN 0u
-#define RW_MSG_PROVISION_COMMIT_CRC_EXTRA 0xAAD1u
+/* PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again). */
+#define RW_MSG_PROVISION_COMMIT_LEN 4u
+#define RW_MSG_PROVISION_COMMIT_CRC_EXTRA 0x606Bu
 typedef struct {
-    uint8_t unused_; /* no fields */
+    uint32_t session_epoch; /* Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids. */
 } rw_msg_provision_commit;
 void rw_msg_provision_commit_pack(const rw_msg_provision_commit *msg, uint8_t *payload);
 void rw_msg_provision_commit_unpack(rw_msg_provision_commit *msg, const uint8_t *payload);

@@ -17,7 +17,7 @@ import siphash24 as _siphash
 
 PROTOCOL_VERSION = 2
 MAGIC = 0xB7
-SCHEMA_HASH = 0x6A6D
+SCHEMA_HASH = 0x1C52
 HEADER_LEN = 7
 CHECKSUM_LEN = 2
 MAX_PAYLOAD_LEN = 64
@@ -523,11 +523,11 @@ class ParamValue(Message):
 
 @dataclass(frozen=True)
 class SessionInfo(Message):
-    """SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the device's boot counter, kept in flash, so it grows with every boot and frames of an earlier boot never count again.
+    """SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the provisioning's random epoch plus the device's boot counter, kept in flash, so it grows with every boot (frames of an earlier boot never count again) and starts from a fresh random base at every provisioning (frames of an earlier provisioning never count again).
 
     Fields:
         host_nonce: uint32 Echo of HELLO.host_nonce (fresh answer, not a replay).
-        session_id: uint32 The device's current session (boot counter).
+        session_id: uint32 The device's current session (session epoch + boot counter).
         key_set: uint8 1 when a key is provisioned; 0: the device takes no command over WiFi (provision over USB serial).
         schema_hash: uint16 The device's protocol schema hash.
     """
@@ -541,7 +541,7 @@ class SessionInfo(Message):
     _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 4294967295), (0, 255), (0, 65535))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('host_nonce', 'uint32', '', '', 'Echo of HELLO.host_nonce (fresh answer, not a replay).'),
-        FieldSpec('session_id', 'uint32', '', '', "The device's current session (boot counter)."),
+        FieldSpec('session_id', 'uint32', '', '', "The device's current session (session epoch + boot counter)."),
         FieldSpec('key_set', 'uint8', '', '', '1 when a key is provisioned; 0: the device takes no command over WiFi (provision over USB serial).'),
         FieldSpec('schema_hash', 'uint16', '', '', "The device's protocol schema hash."),
     )
@@ -560,7 +560,7 @@ class ProvisionStatus(Message):
         key_set: uint8 1 when a link key is stored.
         password_set: uint8 1 when a WiFi password is stored.
         wifi_ssid: char[33] WiFi network name.
-        boot_counter: uint32 Boots since the configuration was first written (the session id).
+        boot_counter: uint32 Boots since the last PROVISION_COMMIT (session id = session epoch + this).
         commits: uint32 Configuration writes since first written (flash wear).
         config_version: uint16 Layout version of the stored configuration.
         dirty: uint8 1 when something changed since the last PROVISION_COMMIT.
@@ -577,7 +577,7 @@ class ProvisionStatus(Message):
         FieldSpec('key_set', 'uint8', '', '', '1 when a link key is stored.'),
         FieldSpec('password_set', 'uint8', '', '', '1 when a WiFi password is stored.'),
         FieldSpec('wifi_ssid', 'char[33]', '', '', 'WiFi network name.'),
-        FieldSpec('boot_counter', 'uint32', '', '', 'Boots since the configuration was first written (the session id).'),
+        FieldSpec('boot_counter', 'uint32', '', '', 'Boots since the last PROVISION_COMMIT (session id = session epoch + this).'),
         FieldSpec('commits', 'uint32', '', '', 'Configuration writes since first written (flash wear).'),
         FieldSpec('config_version', 'uint16', '', '', 'Layout version of the stored configuration.'),
         FieldSpec('dirty', 'uint8', '', '', '1 when something changed since the last PROVISION_COMMIT.'),
@@ -908,17 +908,24 @@ class ProvisionSetWifiPassword(Message):
 
 @dataclass(frozen=True)
 class ProvisionCommit(Message):
-    """PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters) to flash as one versioned record with a CRC.
+    """PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again).
+
+    Fields:
+        session_epoch: uint32 Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids.
     """
 
     MSG_ID: ClassVar[int] = 33
     NAME: ClassVar[str] = "PROVISION_COMMIT"
     KIND: ClassVar[MsgKind] = MsgKind.PROVISION
-    CRC_EXTRA: ClassVar[int] = 0xAAD1
-    PAYLOAD_LEN: ClassVar[int] = 0
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<")
-    _RANGES: ClassVar[tuple[tuple | None, ...]] = ()
-    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()
+    CRC_EXTRA: ClassVar[int] = 0x606B
+    PAYLOAD_LEN: ClassVar[int] = 4
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<I")
+    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295),)
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('session_epoch', 'uint32', '', '', "Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids."),
+    )
+
+    session_epoch: int
 
 
 @dataclass(frozen=True)
