@@ -16,6 +16,7 @@
  *   2. one received datagram -> decode -> duplicate check -> command -> ACK/NACK (straight to its sender)
  *   3. supervision (every tick): arming hold, heartbeat loss -> SPINDOWN, encoder silence -> FAULT, loop
  *      collapse, battery cutoff -> SPINDOWN, spindle outcomes (homed, secured, stall, no answer) -> grasp states
+ *      (and, on speed ticks after the PI step, the load-loss monitor: load vanished -> SPINDOWN)
  *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us), on speed ticks;
  *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
  *   5. telemetry at telemetry_rate_hz; one queued frame to the peer
@@ -44,6 +45,7 @@
 #include "rw_config.h"
 #include "rw_duplicate_cache.h"
 #include "rw_hal.h"
+#include "rw_load_monitor.h"
 #include "rw_mt_speed_estimator.h"
 #include "rw_outbox.h"
 #include "rw_params.h"
@@ -96,6 +98,7 @@ typedef struct rw_core {
         rw_throttle_map throttle;
         rw_tov_guard guard;
         rw_spindle spindle;
+        rw_load_monitor load_monitor; /* load loss of the flying rope (rw_core_load_loss.c) */
         rw_duplicate_cache duplicates;
         rw_outbox outbox;
         rw_core_counters counters;

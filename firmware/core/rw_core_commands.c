@@ -77,7 +77,7 @@ static verdict cmd_set_rope_speed(rw_core *core, const rw_msg_set_rope_speed *ms
     if (msg->rope_speed_mmps > max_mmps) {
         return refuse(RW_NACK_REASON_OUT_OF_RANGE, max_mmps);
     }
-    if ((core->state.fault_bits & RW_FAULT_BATTERY_LOW) != 0u) {
+    if ((core->state.fault_bits & (RW_FAULT_BATTERY_LOW | RW_FAULT_LOAD_LOST)) != 0u) {
         return refuse(RW_NACK_REASON_BAD_STATE, (int32_t)core->state.fault_bits);
     }
     float target_mps = (float)msg->rope_speed_mmps * 1.0e-3f;

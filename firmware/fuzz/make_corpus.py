@@ -32,7 +32,8 @@ OPT_FUZZ_RECORD, OPT_SEAL_RECORD, OPT_NO_STORE, OPT_SAVE_FAILS = 0x01, 0x02, 0x0
 OPT_SIGN_WIFI, OPT_NO_SPINDLE, OPT_PREROLL, OPT_SESSION_STALE = 0x10, 0x20, 0x40, 0x80
 SERIAL, WIFI, SENSORS, NOTHING = 0, 1, 2, 3
 CONFIG_MAGIC, CONFIG_VERSION = 0x46435752, 2
-CONFIG_SIZE_BYTES = 276  # sizeof(rw_config) on the host (rw_config.h)
+CONFIG_HEAD_FORMAT = "<IHHIII16sBB2s33s64s3s"  # rw_config.h up to the parameters
+CONFIG_SIZE_BYTES = struct.calcsize(CONFIG_HEAD_FORMAT) + 4 * len(gen.PARAMS) + 4  # sizeof(rw_config), CRC included
 DELIVERY_CAP_BYTES = gen.MAX_FRAME_LEN + 1  # the core's receive buffer
 
 
@@ -69,7 +70,7 @@ def sensors(*, battery_mv: int = 12000, encoder_silent: bool = False, spindle_si
 
 def config_record(*, params: list[float], key: bytes | None, boot_counter: int, session_epoch: int = 0) -> bytes:
     """An rw_config record (rw_config.h layout, little-endian), sealed with its CRC-32."""
-    body = struct.pack("<IHHIII16sBB2s33s64s3s", CONFIG_MAGIC, CONFIG_VERSION, CONFIG_SIZE_BYTES, boot_counter, 0,
+    body = struct.pack(CONFIG_HEAD_FORMAT, CONFIG_MAGIC, CONFIG_VERSION, CONFIG_SIZE_BYTES, boot_counter, 0,
                        session_epoch, key or bytes(16), 1 if key else 0, 0, b"", b"lab", b"", b"")
     body += struct.pack(f"<{len(params)}f", *params)
     assert len(body) == CONFIG_SIZE_BYTES - 4, len(body)

@@ -882,4 +882,7 @@ const rw_param_info rw_param_table[RW_PARAM_COUNT] = {
     { "battery_cutoff_v", 6.0f, 13.0f, 9.9f, 0u },
     { "battery_cutoff_time_s", 0.05f, 10.0f, 1.0f, 0u },
     { "spindle_timeout_s", 0.02f, 2.0f, 0.2f, 0u },
+    { "load_loss_drop_n", 0.0f, 50.0f, 1.0f, 0u },
+    { "load_loss_time_s", 0.02f, 2.0f, 0.1f, 0u },
+    { "drive_resistance_ohm", 0.01f, 1.0f, 0.085f, 0u },
 };

@@ -76,8 +76,9 @@ typedef enum {
     RW_EVENT_KIND_SPINDLE_HOMED = 7, /* Homing found the end of the stroke; guide position 0 set. arg = 1 by stall, 2 by limit switch. */
     RW_EVENT_KIND_SPINDLE_TARGET_REACHED = 8, /* The guide reached its target within spindle_tolerance_mm; arg = position, um. */
     RW_EVENT_KIND_FAULT_CLEARED = 9, /* arg = the fault bits cleared (by DISARM). */
+    RW_EVENT_KIND_LOAD_LOST = 10, /* The drive's load estimate (speed PI integral x battery voltage, as rope force) fell by more than load_loss_drop_n for load_loss_time_s while airborne at a steady setpoint: the rope broke or the object came off the loop. The rope is spun down (SPINDOWN, cause LOAD_LOST) and fault LOAD_LOST latched. arg = the drop, mN. Loads under about load_loss_drop_n (a free loop: 0.16 N) cannot be seen: see docs/load_loss.md. */
 } rw_event_kind;
-#define RW_EVENT_KIND_COUNT 10u
+#define RW_EVENT_KIND_COUNT 11u
 
 /* Why a state changed (EVENT.arg of STATE_CHANGED). */
 typedef enum {
@@ -89,8 +90,9 @@ typedef enum {
     RW_CAUSE_BATTERY_LOW = 5, /* Battery under battery_cutoff_v for battery_cutoff_time_s. */
     RW_CAUSE_LOAD_SECURED = 6, /* Spindle load reached grasp_secure_load_pct while retracting: the object is held. */
     RW_CAUSE_STROKE_END = 7, /* Retracting reached the end of the guide stroke without securing a load. */
+    RW_CAUSE_LOAD_LOST = 8, /* The load on the flying rope vanished (EVENT LOAD_LOST): rope broken or object lost. */
 } rw_cause;
-#define RW_CAUSE_COUNT 8u
+#define RW_CAUSE_COUNT 9u
 
 /* Spindle status bits (TELEMETRY.spindle_flags). */
 typedef enum {
@@ -108,6 +110,7 @@ typedef enum {
     RW_FAULT_TICK_OVERRUN = 4, /* Control tick overran its period repeatedly. */
     RW_FAULT_SPINDLE_STALL = 8, /* Spindle commanded to move, load high and no motion for spindle_stall_time_s (outside a grasp). */
     RW_FAULT_SPINDLE_NO_ANSWER = 16, /* The AX-12A did not answer for spindle_timeout_s. */
+    RW_FAULT_LOAD_LOST = 32, /* The load on the flying rope vanished (EVENT LOAD_LOST): the rope is landed and SET_ROPE_SPEED refused (BAD_STATE) until DISARM clears it (inspect the rope first). */
 } rw_fault;
 
 /* Result of rw_frame_decode: RW_DECODE_OK or an rw_nack_reason. */
@@ -548,7 +551,7 @@ size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id
 int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN]);
 
 /* Parameters (SI units, float32 on the wire). */
-#define RW_PARAM_COUNT 33u
+#define RW_PARAM_COUNT 36u
 #define RW_PARAM_FLAG_LOCKED 0x01u  /* settable only while DISARMED */
 #define RW_PARAM_FLAG_INTEGER 0x02u /* value must be a whole number */
 typedef enum {
@@ -585,6 +588,9 @@ typedef enum {
     RW_PARAM_BATTERY_CUTOFF_V = 30, /* [V] Battery under this (3S: 3.3 V a cell) for battery_cutoff_time_s: BATTERY_LOW fault, spin-down. */
     RW_PARAM_BATTERY_CUTOFF_TIME_S = 31, /* [s] How long the battery must stay under the cutoff (load sags are brief). */
     RW_PARAM_SPINDLE_TIMEOUT_S = 32, /* [s] No answer from the AX-12A for this long: SPINDLE_NO_ANSWER fault, spindle stopped. */
+    RW_PARAM_LOAD_LOSS_DROP_N = 33, /* [N] Airborne at a steady setpoint, a fall of the drive's load estimate (rope force) by more than this for load_loss_time_s is a load loss (rope broken, object lost): EVENT LOAD_LOST, spin-down. 0 = off. Smaller loads (a free loop: 0.16 N) are not detectable: docs/load_loss.md. */
+    RW_PARAM_LOAD_LOSS_TIME_S = 34, /* [s] How long the load drop must last to count as a load loss. */
+    RW_PARAM_DRIVE_RESISTANCE_OHM = 35, /* [ohm] Winding plus ESC resistance per motor: turns the speed loop's extra drive voltage into rope force for the load-loss monitor (2 motors, kv, wheel radius: 12 N/V at the defaults). */
 } rw_param_id;
 /* Parameter defaults, for code that needs one as a constant (firmware/core/rw_defaults.h). */
 #define RW_PARAM_DEFAULT_TOV_MPS 2.6f
@@ -620,6 +626,9 @@ typedef enum {
 #define RW_PARAM_DEFAULT_BATTERY_CUTOFF_V 9.9f
 #define RW_PARAM_DEFAULT_BATTERY_CUTOFF_TIME_S 1.0f
 #define RW_PARAM_DEFAULT_SPINDLE_TIMEOUT_S 0.2f
+#define RW_PARAM_DEFAULT_LOAD_LOSS_DROP_N 1.0f
+#define RW_PARAM_DEFAULT_LOAD_LOSS_TIME_S 0.1f
+#define RW_PARAM_DEFAULT_DRIVE_RESISTANCE_OHM 0.085f
 typedef struct {
     const char *name;
     float min_value;

@@ -127,6 +127,8 @@ class EventKind(IntEnum):
     """The guide reached its target within spindle_tolerance_mm; arg = position, um."""
     FAULT_CLEARED = 9
     """arg = the fault bits cleared (by DISARM)."""
+    LOAD_LOST = 10
+    """The drive's load estimate (speed PI integral x battery voltage, as rope force) fell by more than load_loss_drop_n for load_loss_time_s while airborne at a steady setpoint: the rope broke or the object came off the loop. The rope is spun down (SPINDOWN, cause LOAD_LOST) and fault LOAD_LOST latched. arg = the drop, mN. Loads under about load_loss_drop_n (a free loop: 0.16 N) cannot be seen: see docs/load_loss.md."""
 
 
 class Cause(IntEnum):
@@ -148,6 +150,8 @@ class Cause(IntEnum):
     """Spindle load reached grasp_secure_load_pct while retracting: the object is held."""
     STROKE_END = 7
     """Retracting reached the end of the guide stroke without securing a load."""
+    LOAD_LOST = 8
+    """The load on the flying rope vanished (EVENT LOAD_LOST): rope broken or object lost."""
 
 
 class SpindleFlag(IntFlag):
@@ -178,6 +182,8 @@ class Fault(IntFlag):
     """Spindle commanded to move, load high and no motion for spindle_stall_time_s (outside a grasp)."""
     SPINDLE_NO_ANSWER = 16
     """The AX-12A did not answer for spindle_timeout_s."""
+    LOAD_LOST = 32
+    """The load on the flying rope vanished (EVENT LOAD_LOST): the rope is landed and SET_ROPE_SPEED refused (BAD_STATE) until DISARM clears it (inspect the rope first)."""
 
 
 class MsgKind(IntEnum):
@@ -1209,5 +1215,8 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(30, 'battery_cutoff_v', 'V', 6.0, 13.0, 9.9, False, False, 'Battery under this (3S: 3.3 V a cell) for battery_cutoff_time_s: BATTERY_LOW fault, spin-down.'),
     ParamSpec(31, 'battery_cutoff_time_s', 's', 0.05, 10.0, 1.0, False, False, 'How long the battery must stay under the cutoff (load sags are brief).'),
     ParamSpec(32, 'spindle_timeout_s', 's', 0.02, 2.0, 0.2, False, False, 'No answer from the AX-12A for this long: SPINDLE_NO_ANSWER fault, spindle stopped.'),
+    ParamSpec(33, 'load_loss_drop_n', 'N', 0.0, 50.0, 1.0, False, False, "Airborne at a steady setpoint, a fall of the drive's load estimate (rope force) by more than this for load_loss_time_s is a load loss (rope broken, object lost): EVENT LOAD_LOST, spin-down. 0 = off. Smaller loads (a free loop: 0.16 N) are not detectable: docs/load_loss.md."),
+    ParamSpec(34, 'load_loss_time_s', 's', 0.02, 2.0, 0.1, False, False, 'How long the load drop must last to count as a load loss.'),
+    ParamSpec(35, 'drive_resistance_ohm', 'ohm', 0.01, 1.0, 0.085, False, False, "Winding plus ESC resistance per motor: turns the speed loop's extra drive voltage into rope force for the load-loss monitor (2 motors, kv, wheel radius: 12 N/V at the defaults)."),
 )
 PARAMS_BY_NAME: dict[str, ParamSpec] = {p.name: p for p in PARAMS}

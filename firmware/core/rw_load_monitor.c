@@ -1,0 +1,107 @@
+#include "rw_load_monitor.h"
+
+#include <math.h>
+
+void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg)
+{
+    cfg->n_per_v = rw_load_monitor_n_per_v(2.0f, 1250.0f, 0.085f, 0.015f);
+    cfg->drop_n = 1.0f;
+    cfg->time_s = 0.1f;
+    cfg->filter_tau_s = RW_LOAD_MONITOR_FILTER_TAU_S;
+    cfg->reference_tau_s = RW_LOAD_MONITOR_REFERENCE_TAU_S;
+    cfg->settle_s = RW_LOAD_MONITOR_SETTLE_S;
+}
+
+void rw_load_monitor_init(rw_load_monitor *m, const rw_load_monitor_config *cfg)
+{
+    m->cfg = *cfg;
+    rw_lowpass_config lp = { .tau_s = cfg->filter_tau_s };
+    rw_lowpass_init(&m->state.load, &lp);
+    lp.tau_s = cfg->reference_tau_s;
+    rw_lowpass_init(&m->state.reference, &lp);
+    rw_load_monitor_reset(m);
+}
+
+void rw_load_monitor_reset(rw_load_monitor *m)
+{
+    rw_lowpass_reset(&m->state.load);
+    rw_lowpass_reset(&m->state.reference);
+    m->state.steady = false;
+    m->state.reported = false;
+    m->state.steady_s = 0.0f;
+    m->state.drop_s = 0.0f;
+}
+
+float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resistance_ohm, float wheel_radius_m)
+{
+    if (!(isfinite(motor_count) && isfinite(kv_rpm_per_v) && isfinite(resistance_ohm) && isfinite(wheel_radius_m)) ||
+        motor_count <= 0.0f || kv_rpm_per_v <= 0.0f || resistance_ohm <= 0.0f || wheel_radius_m <= 0.0f) {
+        return 0.0f;
+    }
+    /* Kt = 60 / (2 pi kv) N m/A; F = n Kt I / r with I = V / R */
+    float kt_nm_per_a = 60.0f / (6.2831853f * kv_rpm_per_v);
+    return motor_count * kt_nm_per_a / (resistance_ohm * wheel_radius_m);
+}
+
+bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)
+{
+    return isfinite(cfg->n_per_v) && cfg->n_per_v > 0.0f && isfinite(cfg->drop_n) && isfinite(cfg->time_s) &&
+           cfg->time_s >= 0.0f && isfinite(cfg->filter_tau_s) && cfg->filter_tau_s >= 0.0f &&
+           isfinite(cfg->reference_tau_s) && cfg->reference_tau_s >= 0.0f && isfinite(cfg->settle_s) &&
+           cfg->settle_s >= 0.0f;
+}
+
+bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float battery_v, float dt_s)
+{
+    const rw_load_monitor_config *c = &m->cfg;
+    if (!steady || !(c->drop_n > 0.0f) || !rw_load_monitor_config_is_valid(c) || !isfinite(integral) ||
+        !isfinite(battery_v) || !(dt_s > 0.0f)) {
+        if (m->state.steady || m->state.reported) {
+            rw_load_monitor_reset(m);
+        }
+        return false;
+    }
+    m->state.load.cfg.tau_s = c->filter_tau_s;
+    m->state.reference.cfg.tau_s = c->reference_tau_s;
+    float force_n = c->n_per_v * integral * battery_v;
+    if (!m->state.steady) { /* a new steady spell: start from here */
+        m->state.steady = true;
+        m->state.steady_s = 0.0f;
+        m->state.drop_s = 0.0f;
+        rw_lowpass_reset_to(&m->state.load, force_n);
+        rw_lowpass_reset_to(&m->state.reference, force_n);
+    }
+    float load = rw_lowpass_step(&m->state.load, force_n, dt_s);
+    if (m->state.steady_s < c->settle_s) { /* learning: the PI is still settling */
+        m->state.steady_s += dt_s;
+        rw_lowpass_reset_to(&m->state.reference, load);
+        return false;
+    }
+    float reference = rw_lowpass_output(&m->state.reference);
+    if (load >= reference) {
+        rw_lowpass_reset_to(&m->state.reference, load);
+        m->state.drop_s = 0.0f;
+        return false;
+    }
+    if (reference - load > c->drop_n) {
+        m->state.drop_s += dt_s; /* the reference holds while a drop is pending */
+        if (m->state.drop_s >= c->time_s && !m->state.reported) {
+            m->state.reported = true;
+            return true;
+        }
+        return false;
+    }
+    m->state.drop_s = 0.0f;
+    (void)rw_lowpass_step(&m->state.reference, load, dt_s);
+    return false;
+}
+
+float rw_load_monitor_load_n(const rw_load_monitor *m)
+{
+    return rw_lowpass_output(&m->state.load);
+}
+
+float rw_load_monitor_drop_n(const rw_load_monitor *m)
+{
+    return rw_lowpass_output(&m->state.reference) - rw_lowpass_output(&m->state.load);
+}
