@@ -1,6 +1,7 @@
 #include "rw_load_monitor.h"
 
 #include <math.h>
+#include <string.h>
 
 void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg)
 {
@@ -15,6 +16,7 @@ void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg)
 void rw_load_monitor_init(rw_load_monitor *m, const rw_load_monitor_config *cfg)
 {
     m->cfg = *cfg;
+    memset(m->state.drive_memo, 0, sizeof m->state.drive_memo);
     rw_lowpass_config lp = { .tau_s = cfg->filter_tau_s };
     rw_lowpass_init(&m->state.load, &lp);
     lp.tau_s = cfg->reference_tau_s;
@@ -41,6 +43,17 @@ float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resis
     /* Kt = 60 / (2 pi kv) N m/A; F = n Kt I / r with I = V / R */
     float kt_nm_per_a = 60.0f / (6.2831853f * kv_rpm_per_v);
     return motor_count * kt_nm_per_a / (resistance_ohm * wheel_radius_m);
+}
+
+void rw_load_monitor_set_drive(rw_load_monitor *m, float motor_count, float kv_rpm_per_v, float resistance_ohm,
+                               float wheel_radius_m)
+{
+    const float args[4] = { motor_count, kv_rpm_per_v, resistance_ohm, wheel_radius_m };
+    float *memo = m->state.drive_memo;
+    if (memcmp(args, memo, sizeof args) != 0 || !(m->cfg.n_per_v > 0.0f)) {
+        memcpy(memo, args, sizeof args);
+        m->cfg.n_per_v = rw_load_monitor_n_per_v(motor_count, kv_rpm_per_v, resistance_ohm, wheel_radius_m);
+    }
 }
 
 bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)

@@ -59,6 +59,7 @@ typedef struct rw_load_monitor {
         bool reported;        /**< the loss was reported (once per steady spell) */
         float steady_s;       /**< time steady, s (saturates past settle_s) */
         float drop_s;         /**< time the drop has exceeded drop_n, s */
+        float drive_memo[4];  /**< the rw_load_monitor_set_drive arguments n_per_v was computed for */
     } state;                  /**< private history */
 } rw_load_monitor;
 
@@ -71,6 +72,10 @@ void rw_load_monitor_reset(rw_load_monitor *m);
 /** n_per_v for motor_count motors of kv_rpm_per_v behind resistance_ohm each, on wheels of wheel_radius_m;
  *  0 when an argument is not finite and > 0. */
 float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resistance_ohm, float wheel_radius_m);
+/** cfg.n_per_v = rw_load_monitor_n_per_v(...), computed only when an argument changed (a division and three
+ *  products, ~1,400 instructions on the M0+, saved on every parameter change that is not one of these). */
+void rw_load_monitor_set_drive(rw_load_monitor *m, float motor_count, float kv_rpm_per_v, float resistance_ohm,
+                               float wheel_radius_m);
 /**
  * One speed-loop step. steady: airborne at a setpoint that is not moving, PI not saturated (else the monitor
  * restarts and returns false). integral: the speed PI's integral term (throttle fraction); battery_v: the
