@@ -50,8 +50,10 @@ def physics() -> None:
     no_rope = dataclasses.replace(no_drag, guide_friction_n=0.0, nip_friction_n=0.0, nip_viscous_n_s_per_m=0.0)
     for v in (5.0, 15.0):
         full = steady_throttle_for_speed(p, v)
-        print(f"   free-loop break at {v:4.1f} m/s: drag only {1000 * (full - steady_throttle_for_speed(no_drag, v)):.2f} us,"
-              f" whole rope out of the nip {1000 * (full - steady_throttle_for_speed(no_rope, v)):.2f} us of pulse")
+        drag_us = 1000 * (full - steady_throttle_for_speed(no_drag, v))
+        rope_us = 1000 * (full - steady_throttle_for_speed(no_rope, v))
+        print(f"   free-loop break at {v:4.1f} m/s: drag only {drag_us:.2f} us, whole rope out of the nip {rope_us:.2f} us"
+              " of pulse")
     print("   (the estimate's offset at zero load is the ESC dead band and motor friction; only changes are judged)")
 
 

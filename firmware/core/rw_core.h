@@ -6,9 +6,9 @@
  * received per link and one sent per tick).
  *
  * Link security: over WiFi every frame but HELLO must be signed (SipHash-2-4 with the provisioned key) for
- * the current session (session epoch + boot counter, kept in the configuration record) with a counter above the last
- * accepted one; anything else is dropped and counted (rx_auth_failed, rx_replayed). Without a key nothing
- * is accepted over WiFi. USB serial is trusted: unsigned frames and the PROVISION_* messages.
+ * the current session (session epoch + boot counter, kept in the configuration record) with a counter above
+ * the last accepted one; anything else is dropped and counted (rx_auth_failed, rx_replayed). Without a key
+ * nothing is accepted over WiFi. USB serial is trusted: unsigned frames and the PROVISION_* messages.
  *
  * Tick (period = the time between calls, 1 ms on the board and in SIL):
  *   1. encoder (every tick, for the silence check) -> M/T estimator -> rope speed (m/s), on speed ticks;

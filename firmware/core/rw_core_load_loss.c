@@ -25,7 +25,8 @@ void rw_core_load_loss_apply_params(rw_core *core)
     rw_load_monitor_config *c = &core->state.load_monitor.cfg;
     rw_load_monitor_set_drive(&core->state.load_monitor, RW_CORE_DRIVE_MOTOR_COUNT,
                               rw_params_get(p, RW_PARAM_MOTOR_KV_RPM_PER_V),
-                              rw_params_get(p, RW_PARAM_DRIVE_RESISTANCE_OHM), rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M));
+                              rw_params_get(p, RW_PARAM_DRIVE_RESISTANCE_OHM),
+                              rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M));
     c->drop_n = rw_params_get(p, RW_PARAM_LOAD_LOSS_DROP_N);
     c->time_s = rw_params_get(p, RW_PARAM_LOAD_LOSS_TIME_S);
 }

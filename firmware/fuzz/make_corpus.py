@@ -77,6 +77,9 @@ def config_record(*, params: list[float], key: bytes | None, boot_counter: int, 
     return body + struct.pack("<I", zlib.crc32(body))
 
 
+COMMIT = gen.ProvisionCommit(session_epoch=0x1234567)  # a commit with a fixed epoch (reproducible corpus)
+
+
 def frame(msg: gen.Message, seq: int) -> bytes:
     return gen.encode_frame(msg, seq)
 
@@ -139,7 +142,7 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
         + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
         + chunk(SERIAL, frame(gen.ProvisionSetWifiSsid(ssid="lab"), 2))
         + chunk(SERIAL, frame(gen.ProvisionSetWifiPassword(password="correct horse"), 3))
-        + chunk(SERIAL, frame(gen.ProvisionCommit(session_epoch=0x1234567), 4))
+        + chunk(SERIAL, frame(COMMIT, 4))
         + chunk(SERIAL, frame(gen.ProvisionGet(), 5), ticks=3)
         + chunk(WIFI, frame(gen.Hello(host_nonce=1), 6))
         + chunk(WIFI, frame(gen.Arm(), 7))
@@ -154,13 +157,13 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
                                                 + chunk(WIFI, frame(gen.Arm(), 1), ticks=2)
                                                 + chunk(SERIAL, frame(gen.Disarm(), 2), ticks=2)
                                                 + chunk(SERIAL, frame(gen.ProvisionSetKey(key=test_key), 3))
-                                                + chunk(SERIAL, frame(gen.ProvisionCommit(session_epoch=0x1234567), 4), ticks=2)
+                                                + chunk(SERIAL, frame(COMMIT, 4), ticks=2)
                                                 + chunk(NOTHING, b"\x01", ticks=2))
     programs["provision_store_fails"] = (bytes([OPT_SAVE_FAILS])
                                          + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
-                                         + chunk(SERIAL, frame(gen.ProvisionCommit(session_epoch=0x1234567), 2), ticks=3))
+                                         + chunk(SERIAL, frame(COMMIT, 2), ticks=3))
     programs["provision_no_store"] = (bytes([OPT_NO_STORE])
-                                      + chunk(SERIAL, frame(gen.ProvisionCommit(session_epoch=0x1234567), 1), ticks=3)
+                                      + chunk(SERIAL, frame(COMMIT, 1), ticks=3)
                                       + chunk(WIFI, frame(gen.Arm(), 2), ticks=3))
     defaults = [p.default for p in gen.PARAMS]
     good = config_record(params=defaults, key=test_key, boot_counter=41, session_epoch=0x2345678)
@@ -171,8 +174,8 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
                                                                    session_epoch=0x7FFFFFFF)
                                                    + chunk(SERIAL, frame(gen.Arm(), 1), ticks=3))
     programs["stored_record_sessions_used_up"] = (bytes([OPT_FUZZ_RECORD])
-                                                  + config_record(params=defaults, key=test_key, boot_counter=0x7FFFFFFF,
-                                                                  session_epoch=0x1234567)
+                                                  + config_record(params=defaults, key=test_key,
+                                                                  boot_counter=0x7FFFFFFF, session_epoch=0x1234567)
                                                   + chunk(WIFI, frame(gen.Arm(), 1), ticks=3))
     programs["stored_record_epoch_out_of_range"] = (bytes([OPT_FUZZ_RECORD])
                                                     + config_record(params=defaults, key=test_key, boot_counter=3,

@@ -40,8 +40,8 @@ def session_ids_of_one_provisioning(state_file: Path) -> tuple[list[int], bytes]
     return ids, recorded
 
 
-def test_two_provisionings_with_the_same_key_have_disjoint_session_ids_and_refuse_old_frames(tmp_path: Path,
-                                                                                            native_build_dir: Path) -> None:
+def test_two_provisionings_with_the_same_key_have_disjoint_session_ids_and_refuse_old_frames(
+        tmp_path: Path, native_build_dir: Path) -> None:
     flash = tmp_path / "flash.bin"
     first, recorded = session_ids_of_one_provisioning(flash)
     assert first == list(range(first[0], first[0] + BOOTS))  # epoch + boot counter: one more per boot
