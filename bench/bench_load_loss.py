@@ -7,7 +7,9 @@ Prints (never asserts):
   2. SIL, the default monitor (load_loss_drop_n 1 N, load_loss_time_s 0.1 s): rope breaks under loads of
      0.5-5 N at 5 and 15 m/s: detected or not, latency from the break, the drop the device reported;
   3. SIL noise floor: the smallest load_loss_drop_n that raises no false alarm over 4 s of steady flight after
-     the spin-up (the settling of the PI after a step is the largest disturbance).
+     the spin-up (the settling of the PI after a step is the largest disturbance);
+  4. SIL, a harsh sequence (spin-up to 20 m/s, six speed steps, 3 N and 6 N loads coming on, a step under load,
+     a battery sag of 12 V to 9.4 V in 50 ms for 0.5 s) over seeds: false alarms by threshold.
 
 Run:  uv run python bench/bench_load_loss.py [--quick]
 """
@@ -23,7 +25,7 @@ from robowrangler.protocol.generated import EventKind
 from robowrangler_sim.plants.drive import kv_throttle_for_speed, steady_battery_v, steady_throttle_for_speed
 from robowrangler_sim.plants.drive_params import DriveParams
 from robowrangler_sim.sil import SilSession
-from robowrangler_sim.sil.plant_faults import RopeBreak
+from robowrangler_sim.sil.plant_faults import BatterySag, RopeBreak
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 
 P = gen.PARAMS_BY_NAME
@@ -103,6 +105,32 @@ def noise_floor(quick: bool) -> None:
         print(f"   {speed / 1000:4.1f} m/s  " + ", ".join(row))
 
 
+def harsh(quick: bool) -> None:
+    print("4. SIL: false alarms over spin-up, steps, loads and a fast sag (seeds), by threshold")
+    for drop_n in (0.3, 0.5, 1.0):
+        alarms = []
+        for seed in range(2 if quick else 5):
+            with SilSession(speedup=None, seed=seed) as sil:
+                host = ScriptedHost(sil)
+                host.run_for(0.6)
+                host.command(gen.ParamSet(P["load_loss_drop_n"].id, drop_n))
+                host.arm_and_spin(20000, settle_s=2.0)
+                for mmps in (4000, 12000, 3100, 8000, 20000, 3000):
+                    host.command(gen.SetRopeSpeed(mmps))
+                    host.run_for(1.5)
+                sil.set_rope_load(3.0)
+                host.run_for(1.0)
+                sil.set_rope_load(6.0)
+                host.run_for(1.0)
+                host.command(gen.SetRopeSpeed(5000))
+                host.run_for(1.5)
+                BatterySag(start_s=sil.time_s, target_v=9.4, ramp_s=0.05, duration_s=0.5).install(sil)
+                host.run_for(1.5)
+                alarms.append(sum(e.event == EventKind.LOAD_LOST for e in host.received.events))
+                host.close()
+        print(f"   {drop_n:.1f} N: false alarms per seed {alarms}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer speeds and loads")
@@ -110,6 +138,7 @@ def main() -> None:
     physics()
     detection(args.quick)
     noise_floor(args.quick)
+    harsh(args.quick)
 
 
 if __name__ == "__main__":

@@ -10,6 +10,8 @@ void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg)
     cfg->time_s = 0.1f;
     cfg->filter_tau_s = RW_LOAD_MONITOR_FILTER_TAU_S;
     cfg->reference_tau_s = RW_LOAD_MONITOR_REFERENCE_TAU_S;
+    cfg->rise_tau_s = RW_LOAD_MONITOR_RISE_TAU_S;
+    cfg->battery_tau_s = RW_LOAD_MONITOR_BATTERY_TAU_S;
     cfg->settle_s = RW_LOAD_MONITOR_SETTLE_S;
 }
 
@@ -21,6 +23,10 @@ void rw_load_monitor_init(rw_load_monitor *m, const rw_load_monitor_config *cfg)
     rw_lowpass_init(&m->state.load, &lp);
     lp.tau_s = cfg->reference_tau_s;
     rw_lowpass_init(&m->state.reference, &lp);
+    lp.tau_s = cfg->rise_tau_s;
+    rw_lowpass_init(&m->state.rise, &lp);
+    lp.tau_s = cfg->battery_tau_s;
+    rw_lowpass_init(&m->state.battery, &lp);
     rw_load_monitor_reset(m);
 }
 
@@ -60,7 +66,9 @@ bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)
 {
     return isfinite(cfg->n_per_v) && cfg->n_per_v > 0.0f && isfinite(cfg->drop_n) && isfinite(cfg->time_s) &&
            cfg->time_s >= 0.0f && isfinite(cfg->filter_tau_s) && cfg->filter_tau_s >= 0.0f &&
-           isfinite(cfg->reference_tau_s) && cfg->reference_tau_s >= 0.0f && isfinite(cfg->settle_s) &&
+           isfinite(cfg->reference_tau_s) && cfg->reference_tau_s >= 0.0f && isfinite(cfg->rise_tau_s) &&
+           cfg->rise_tau_s >= 0.0f && isfinite(cfg->battery_tau_s) && cfg->battery_tau_s >= 0.0f &&
+           isfinite(cfg->settle_s) &&
            cfg->settle_s >= 0.0f;
 }
 
@@ -76,14 +84,18 @@ bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float
     }
     m->state.load.cfg.tau_s = c->filter_tau_s;
     m->state.reference.cfg.tau_s = c->reference_tau_s;
-    float force_n = c->n_per_v * integral * battery_v;
+    m->state.rise.cfg.tau_s = c->rise_tau_s;
+    m->state.battery.cfg.tau_s = c->battery_tau_s;
     if (!m->state.steady) { /* a new steady spell: start from here */
         m->state.steady = true;
         m->state.steady_s = 0.0f;
         m->state.drop_s = 0.0f;
-        rw_lowpass_reset_to(&m->state.load, force_n);
-        rw_lowpass_reset_to(&m->state.reference, force_n);
+        rw_lowpass_reset_to(&m->state.battery, battery_v);
+        float force0_n = c->n_per_v * integral * battery_v;
+        rw_lowpass_reset_to(&m->state.load, force0_n);
+        rw_lowpass_reset_to(&m->state.reference, force0_n);
     }
+    float force_n = c->n_per_v * integral * rw_lowpass_step(&m->state.battery, battery_v, dt_s);
     float load = rw_lowpass_step(&m->state.load, force_n, dt_s);
     if (m->state.steady_s < c->settle_s) { /* learning: the PI is still settling */
         m->state.steady_s += dt_s;
@@ -91,8 +103,9 @@ bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float
         return false;
     }
     float reference = rw_lowpass_output(&m->state.reference);
-    if (load >= reference) {
-        rw_lowpass_reset_to(&m->state.reference, load);
+    if (load >= reference) { /* rises: the reference climbs with rise_tau_s */
+        rw_lowpass_reset_to(&m->state.rise, reference);
+        rw_lowpass_reset_to(&m->state.reference, rw_lowpass_step(&m->state.rise, load, dt_s));
         m->state.drop_s = 0.0f;
         return false;
     }
