@@ -162,6 +162,11 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
     programs["provision_store_fails"] = (bytes([OPT_SAVE_FAILS])
                                          + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
                                          + chunk(SERIAL, frame(COMMIT, 2), ticks=3))
+    programs["provision_epoch_out_of_range"] = (bytes([OPT_SIGN_WIFI | OPT_PREROLL])
+                                                + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
+                                                + chunk(SERIAL, frame(gen.ProvisionCommit(session_epoch=1 << 31), 2),
+                                                        ticks=2)
+                                                + chunk(WIFI, frame(gen.Arm(), 3), ticks=2))
     programs["provision_no_store"] = (bytes([OPT_NO_STORE])
                                       + chunk(SERIAL, frame(COMMIT, 1), ticks=3)
                                       + chunk(WIFI, frame(gen.Arm(), 2), ticks=3))
