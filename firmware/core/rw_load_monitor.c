@@ -3,6 +3,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "rw_float_bits.h"
+
 void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg)
 {
     cfg->n_per_v = rw_load_monitor_n_per_v(2.0f, 1250.0f, 0.085f, 0.015f);
@@ -62,21 +64,26 @@ void rw_load_monitor_set_drive(rw_load_monitor *m, float motor_count, float kv_r
     }
 }
 
-bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)
+/* x finite and >= 0 (+0 included, -0 not), from the bit pattern: no soft-float call. */
+static bool nonneg_finite(float x)
 {
-    return isfinite(cfg->n_per_v) && cfg->n_per_v > 0.0f && isfinite(cfg->drop_n) && isfinite(cfg->time_s) &&
-           cfg->time_s >= 0.0f && isfinite(cfg->filter_tau_s) && cfg->filter_tau_s >= 0.0f &&
-           isfinite(cfg->reference_tau_s) && cfg->reference_tau_s >= 0.0f && isfinite(cfg->rise_tau_s) &&
-           cfg->rise_tau_s >= 0.0f && isfinite(cfg->battery_tau_s) && cfg->battery_tau_s >= 0.0f &&
-           isfinite(cfg->settle_s) &&
-           cfg->settle_s >= 0.0f;
+    return rw_f32_bits(x) < 0x7F800000u;
 }
 
+bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)
+{
+    return rw_f32_positive_finite(cfg->n_per_v) && rw_f32_finite(cfg->drop_n) && nonneg_finite(cfg->time_s) &&
+           nonneg_finite(cfg->filter_tau_s) && nonneg_finite(cfg->reference_tau_s) && nonneg_finite(cfg->rise_tau_s) &&
+           nonneg_finite(cfg->battery_tau_s) && nonneg_finite(cfg->settle_s);
+}
+
+/* Comparisons and checks on bit patterns (rw_float_bits.h): on the M0+ every float compare is a libgcc call,
+ * and this runs every speed tick. */
 bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float battery_v, float dt_s)
 {
     const rw_load_monitor_config *c = &m->cfg;
-    if (!steady || !(c->drop_n > 0.0f) || !rw_load_monitor_config_is_valid(c) || !isfinite(integral) ||
-        !isfinite(battery_v) || !(dt_s > 0.0f)) {
+    if (!steady || !rw_f32_positive(c->drop_n) || !rw_load_monitor_config_is_valid(c) || !rw_f32_finite(integral) ||
+        !rw_f32_finite(battery_v) || !rw_f32_positive_finite(dt_s)) {
         if (m->state.steady || m->state.reported) {
             rw_load_monitor_reset(m);
         }
@@ -97,21 +104,21 @@ bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float
     }
     float force_n = c->n_per_v * integral * rw_lowpass_step(&m->state.battery, battery_v, dt_s);
     float load = rw_lowpass_step(&m->state.load, force_n, dt_s);
-    if (m->state.steady_s < c->settle_s) { /* learning: the PI is still settling */
+    if (rw_f32_lt(m->state.steady_s, c->settle_s)) { /* learning: the PI is still settling */
         m->state.steady_s += dt_s;
         rw_lowpass_reset_to(&m->state.reference, load);
         return false;
     }
     float reference = rw_lowpass_output(&m->state.reference);
-    if (load >= reference) { /* rises: the reference climbs with rise_tau_s */
+    if (rw_f32_ge(load, reference)) { /* rises: the reference climbs with rise_tau_s */
         rw_lowpass_reset_to(&m->state.rise, reference);
         rw_lowpass_reset_to(&m->state.reference, rw_lowpass_step(&m->state.rise, load, dt_s));
         m->state.drop_s = 0.0f;
         return false;
     }
-    if (reference - load > c->drop_n) {
+    if (rw_f32_gt(reference - load, c->drop_n)) {
         m->state.drop_s += dt_s; /* the reference holds while a drop is pending */
-        if (m->state.drop_s >= c->time_s && !m->state.reported) {
+        if (rw_f32_ge(m->state.drop_s, c->time_s) && !m->state.reported) {
             m->state.reported = true;
             return true;
         }
