@@ -9,7 +9,9 @@ Prints (never asserts):
   3. SIL noise floor: the smallest load_loss_drop_n that raises no false alarm over 4 s of steady flight after
      the spin-up (the settling of the PI after a step is the largest disturbance);
   4. SIL, a harsh sequence (spin-up to 20 m/s, six speed steps, 3 N and 6 N loads coming on, a step under load,
-     a battery sag of 12 V to 9.4 V in 50 ms for 0.5 s) over seeds: false alarms by threshold.
+     a battery sag of 12 V to 9.4 V in 50 ms for 0.5 s) over seeds: false alarms by threshold;
+  5. Cortex-M0+ cost (unicorn, the ARM tick harness of bench_tick_instructions.py driven 1 s into steady
+     flight, where the monitor judges): instructions and modelled cycles of the load-loss step per speed tick.
 
 Run:  uv run python bench/bench_load_loss.py [--quick]
 """
@@ -19,6 +21,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import sys
+from pathlib import Path
 
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import EventKind
@@ -131,6 +135,30 @@ def harsh(quick: bool) -> None:
         print(f"   {drop_n:.1f} N: false alarms per seed {alarms}")
 
 
+def m0_cost() -> None:
+    print("5. Cortex-M0+ cost of the load-loss step, steady flight at 5 m/s (unicorn, modelled cycles)")
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    try:
+        import bench_tick_instructions as tick_bench
+        emu = tick_bench.ah.HarnessEmulator(tick_bench.ah.build_arm())
+    except Exception as err:  # no ARM toolchain or unicorn here: say so, measure nothing
+        print(f"   not measured: {type(err).__name__}: {err}")
+        return
+    scenario = tick_bench.Scenario(emu)
+    scenario.to_airborne()
+    scenario.run_quiet(1000)  # past the monitor's learning time: it judges from here
+    rows = []
+    for _ in range(40):
+        scenario.now_us += 1000
+        _, prof = emu.tick(scenario.now_us, count=True, inclusive_roots=("rw_core_load_loss_step",))
+        if prof.per_function.get("rw_pi_controller_step"):  # a speed tick
+            rows.append((prof.inclusive["rw_core_load_loss_step"], prof.inclusive_cycles["rw_core_load_loss_step"],
+                         prof.cycles))
+    instr, cycles, tick_cycles = max(rows, key=lambda r: r[1])
+    print(f"   load-loss step {instr} instructions, {cycles} cycles ({100 * cycles / 48_000:.1f} % of a 1 ms tick at"
+          f" 48 MHz); the whole speed tick {tick_cycles} cycles")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer speeds and loads")
@@ -139,6 +167,7 @@ def main() -> None:
     detection(args.quick)
     noise_floor(args.quick)
     harsh(args.quick)
+    m0_cost()
 
 
 if __name__ == "__main__":
