@@ -58,8 +58,8 @@ def physics() -> None:
         full = steady_throttle_for_speed(p, v)
         drag_us = 1000 * (full - steady_throttle_for_speed(no_drag, v))
         rope_us = 1000 * (full - steady_throttle_for_speed(no_rope, v))
-        print(f"   free-loop break at {v:4.1f} m/s: drag only {drag_us:.2f} us, whole rope out of the nip {rope_us:.2f} us"
-              " of pulse")
+        print(f"   free-loop break at {v:4.1f} m/s: drag only {drag_us:.2f} us, whole rope out of the nip"
+              f" {rope_us:.2f} us of pulse")
     print("   (the estimate's offset at zero load is the ESC dead band and motor friction; only changes are judged)")
 
 
