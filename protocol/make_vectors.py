@@ -46,9 +46,9 @@ FIELD_VALUES = {
     "PROVISION_SET_KEY": {"key": "000102030405060708090a0b0c0d0e0f"},
     "PROVISION_SET_WIFI_SSID": {"ssid": "lab-wifi é"},
     "PROVISION_SET_WIFI_PASSWORD": {"password": "x" * 63},
-    "PROVISION_COMMIT": {}, "PROVISION_GET": {},
+    "PROVISION_COMMIT": {"session_epoch": 0x2BADCAFE}, "PROVISION_GET": {},
     "PROVISION_STATUS": {"key_set": 1, "password_set": 1, "wifi_ssid": "lab", "boot_counter": 17, "commits": 3,
-                         "config_version": 1, "dirty": 0},
+                         "config_version": 2, "dirty": 0},
     "RELAX": {}, "RETRACT": {}, "GRASP": {}, "RELEASE": {}, "HOME": {},
 }
 

@@ -36,6 +36,7 @@ void rw_config_seal(rw_config *c)
 bool rw_config_valid(const rw_config *c)
 {
     return c->magic == RW_CONFIG_MAGIC && c->version == RW_CONFIG_VERSION && c->size == sizeof *c &&
+           c->session_epoch < RW_CONFIG_EPOCH_LIMIT && c->boot_counter <= RW_CONFIG_BOOT_COUNTER_MAX &&
            c->crc32 == rw_crc32(c, (uint32_t)offsetof(rw_config, crc32));
 }
 
@@ -49,5 +50,39 @@ void rw_config_set_key(rw_config *c, const uint8_t key[RW_KEY_LEN])
 void rw_config_set_params(rw_config *c, const float values[RW_PARAM_COUNT])
 {
     memcpy(c->params, values, sizeof c->params);
+    rw_config_seal(c);
+}
+
+uint32_t rw_config_session_id(const rw_config *c)
+{
+    return c->session_epoch + c->boot_counter;
+}
+
+bool rw_config_next_boot(rw_config *c)
+{
+    if (c->boot_counter >= RW_CONFIG_BOOT_COUNTER_MAX) {
+        return false;
+    }
+    c->boot_counter += 1u;
+    rw_config_seal(c);
+    return true;
+}
+
+bool rw_config_new_epoch(rw_config *c, uint32_t session_epoch)
+{
+    if (session_epoch >= RW_CONFIG_EPOCH_LIMIT) {
+        return false;
+    }
+    c->session_epoch = session_epoch;
+    c->boot_counter = 0u;
+    c->commits += 1u;
+    rw_config_seal(c);
+    return true;
+}
+
+void rw_config_clear_key(rw_config *c)
+{
+    memset(c->key, 0, RW_KEY_LEN);
+    c->key_set = 0u;
     rw_config_seal(c);
 }

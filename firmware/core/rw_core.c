@@ -129,6 +129,7 @@ void rw_core_apply_params(rw_core *core)
     sp->secure_load_pct = rw_params_get(p, RW_PARAM_GRASP_SECURE_LOAD_PCT);
     sp->retract_speed_mmps = rw_params_get(p, RW_PARAM_RETRACT_SPEED_MMPS);
     sp->timeout_s = rw_params_get(p, RW_PARAM_SPINDLE_TIMEOUT_S);
+    rw_core_load_loss_apply_params(core);
 }
 
 void rw_core_init(rw_core *core)
@@ -155,6 +156,9 @@ void rw_core_init(rw_core *core)
     rw_signer_reset(&core->state.signer);
     rw_spindle_config spindle = { 0 };
     rw_spindle_init(&core->state.spindle, &spindle);
+    rw_load_monitor_config load_monitor;
+    rw_load_monitor_config_defaults(&load_monitor);
+    rw_load_monitor_init(&core->state.load_monitor, &load_monitor);
     rw_core_apply_params(core);
     core->state.state = RW_STATE_DISARMED;
     core->state.peer_link = RW_LINK_WIFI; /* until a host is heard, the WiFi HAL drops what has no peer */
@@ -482,7 +486,8 @@ void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool r
 }
 
 /* First tick: the stored configuration (key, parameters) and a new session: the boot counter goes up and is
- * written back at once, so that no later boot can reuse this session id. */
+ * written back at once, so that no later boot can reuse this session id (session epoch + boot counter,
+ * rw_config.h). With the counter used up the key is forgotten rather than an id reused. */
 static void load_config(rw_core *core, const rw_hal *hal)
 {
     rw_config *c = &core->state.config;
@@ -498,8 +503,10 @@ static void load_config(rw_core *core, const rw_hal *hal)
         rw_config_defaults(c);
         rw_config_set_params(c, core->params.value);
     }
-    c->boot_counter += 1u;
-    rw_config_seal(c);
+    if (!rw_config_next_boot(c)) {
+        rw_config_clear_key(c);
+    }
+    core->state.session_id = rw_config_session_id(c);
     if (hal->config != NULL) {
         (void)hal->config->save(hal->config->ctx, c, sizeof *c);
     }
@@ -673,6 +680,9 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
     }
     control(core, speed_dt_s, speed_tick);
+    if (speed_tick) {
+        rw_core_load_loss_step(core, speed_dt_s);
+    }
     hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
 
     /* 5. telemetry, then at most one datagram out per tick */

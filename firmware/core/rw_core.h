@@ -6,9 +6,9 @@
  * received per link and one sent per tick).
  *
  * Link security: over WiFi every frame but HELLO must be signed (SipHash-2-4 with the provisioned key) for
- * the current session (the boot counter, kept in the configuration record) with a counter above the last
- * accepted one; anything else is dropped and counted (rx_auth_failed, rx_replayed). Without a key nothing
- * is accepted over WiFi. USB serial is trusted: unsigned frames and the PROVISION_* messages.
+ * the current session (session epoch + boot counter, kept in the configuration record) with a counter above
+ * the last accepted one; anything else is dropped and counted (rx_auth_failed, rx_replayed). Without a key
+ * nothing is accepted over WiFi. USB serial is trusted: unsigned frames and the PROVISION_* messages.
  *
  * Tick (period = the time between calls, 1 ms on the board and in SIL):
  *   1. encoder (every tick, for the silence check) -> M/T estimator -> rope speed (m/s), on speed ticks;
@@ -16,6 +16,7 @@
  *   2. one received datagram -> decode -> duplicate check -> command -> ACK/NACK (straight to its sender)
  *   3. supervision (every tick): arming hold, heartbeat loss -> SPINDOWN, encoder silence -> FAULT, loop
  *      collapse, battery cutoff -> SPINDOWN, spindle outcomes (homed, secured, stall, no answer) -> grasp states
+ *      (and, on speed ticks after the PI step, the load-loss monitor: load vanished -> SPINDOWN)
  *   4. control: target -> ramp -> PI + feed-forward -> ESC pulse (never under esc_min_us), on speed ticks;
  *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
  *   5. telemetry at telemetry_rate_hz; one queued frame to the peer (over a keyed WiFi link: signed over idle
@@ -51,6 +52,7 @@
 #include "rw_config.h"
 #include "rw_duplicate_cache.h"
 #include "rw_hal.h"
+#include "rw_load_monitor.h"
 #include "rw_mt_speed_estimator.h"
 #include "rw_outbox.h"
 #include "rw_params.h"
@@ -110,6 +112,7 @@ typedef struct rw_core {
         rw_throttle_map throttle;
         rw_tov_guard guard;
         rw_spindle spindle;
+        rw_load_monitor load_monitor; /* load loss of the flying rope (rw_core_load_loss.c) */
         rw_duplicate_cache duplicates;
         rw_outbox outbox;
         rw_signer signer;         /* the outbox frame being signed for the WiFi peer (over idle ticks) */
@@ -118,6 +121,7 @@ typedef struct rw_core {
         bool config_dirty;        /* provisioning changed it since the last PROVISION_COMMIT */
         bool key_staged;          /* PROVISION_SET_KEY received; active from the next commit */
         uint8_t staged_key[RW_KEY_LEN];
+        uint32_t session_id;      /* this session: epoch + boot counter at boot, a new epoch at PROVISION_COMMIT */
         uint64_t host_counter;    /* last accepted signed-frame counter of this session */
         uint64_t tx_counter;      /* counter of the device's own signed frames */
         uint8_t peer_link;        /* rw_link_id of the host telemetry and events go to */
@@ -167,7 +171,8 @@ void rw_core_init(rw_core *core);
 
 /* One control tick at time now_us (the tick clock, wraps). The first call latches the clock and loads the
  * configuration record through hal->config: a valid stored record's parameters replace those set before
- * (rw_core_set_param), its key becomes the link key, and its boot counter goes up by one (the session). */
+ * (rw_core_set_param), its key becomes the link key, and its boot counter goes up by one (the session:
+ * session epoch + boot counter). */
 void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us);
 
 /* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. */
@@ -179,10 +184,10 @@ bool rw_core_tx_idle(const rw_core *core);
 /* sizeof(rw_core), for bindings that allocate the core themselves (the pytest suites use ctypes). */
 size_t rw_core_sizeof(void);
 
-/* The session id of this boot (valid from the first tick). */
+/* The current session id (valid from the first tick; a PROVISION_COMMIT starts a new one). */
 static inline uint32_t rw_core_session_id(const rw_core *core)
 {
-    return core->state.config.boot_counter;
+    return core->state.session_id;
 }
 
 static inline uint8_t rw_core_state(const rw_core *core)

@@ -77,7 +77,7 @@ static verdict cmd_set_rope_speed(rw_core *core, const rw_msg_set_rope_speed *ms
     if (msg->rope_speed_mmps > max_mmps) {
         return refuse(RW_NACK_REASON_OUT_OF_RANGE, max_mmps);
     }
-    if ((core->state.fault_bits & RW_FAULT_BATTERY_LOW) != 0u) {
+    if ((core->state.fault_bits & (RW_FAULT_BATTERY_LOW | RW_FAULT_LOAD_LOST)) != 0u) {
         return refuse(RW_NACK_REASON_BAD_STATE, (int32_t)core->state.fault_bits);
     }
     float target_mps = (float)msg->rope_speed_mmps * 1.0e-3f;
@@ -392,21 +392,26 @@ static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame
         if (hal->config == NULL) {
             return refuse(RW_NACK_REASON_STORE_FAILED, 0);
         }
+        rw_msg_provision_commit msg;
+        rw_msg_provision_commit_unpack(&msg, frame->payload);
         rw_config next = *c;
+        if (!rw_config_new_epoch(&next, msg.session_epoch)) {
+            return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)(RW_CONFIG_EPOCH_LIMIT - 1u));
+        }
         rw_config_set_params(&next, core->params.value);
         if (core->state.key_staged) {
             rw_config_set_key(&next, core->state.staged_key);
         }
-        next.commits += 1u;
-        rw_config_seal(&next);
         if (!hal->config->save(hal->config->ctx, &next, sizeof next)) {
             return refuse(RW_NACK_REASON_STORE_FAILED, 1);
         }
         if (core->state.key_staged) {
-            /* the session's counter floor stays: re-committing a key never lets its earlier frames count again */
             core->state.key_staged = false;
             memset(core->state.staged_key, 0, RW_KEY_LEN);
         }
+        /* a new session at once (epoch + 0): no frame signed for an earlier session or provisioning counts */
+        core->state.session_id = rw_config_session_id(&next);
+        core->state.host_counter = 0u;
         *c = next;
         core->state.config_dirty = false;
         return ACCEPT;

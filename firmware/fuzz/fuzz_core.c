@@ -102,6 +102,7 @@ static struct {
     bool stored_present;
     bool record_was_valid;
     uint32_t record_boot_counter;
+    uint32_t record_session_epoch;
     uint64_t sign_counter;
     uint8_t last_signed[RW_MAX_FRAME_LEN]; /* the last signed datagram WiFi delivered, for replays */
     size_t last_signed_len;
@@ -410,7 +411,11 @@ static void tick(const rw_hal *hal)
             }
             RW_FUZZ_REQUIRE(rw_core_session_id(&h.core) == 1u);
         } else {
-            RW_FUZZ_REQUIRE(rw_core_session_id(&h.core) == h.record_boot_counter + 1u);
+            /* session = epoch + boot counter + 1; a used-up counter stays and the key is forgotten */
+            bool used_up = h.record_boot_counter == RW_CONFIG_BOOT_COUNTER_MAX;
+            RW_FUZZ_REQUIRE(rw_core_session_id(&h.core) ==
+                            h.record_session_epoch + h.record_boot_counter + (used_up ? 0u : 1u));
+            RW_FUZZ_REQUIRE(!used_up || h.core.state.config.key_set == 0u);
         }
     }
     RW_FUZZ_REQUIRE(h.core.state.state < RW_STATE_COUNT);
@@ -480,6 +485,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     bool has_store = (h.options & OPT_NO_STORE) == 0u;
     h.record_was_valid = has_store && rw_config_valid(&h.stored);
     h.record_boot_counter = h.stored.boot_counter;
+    h.record_session_epoch = h.stored.session_epoch;
 
     rw_hal hal = {
         .esc = &ESC,

@@ -31,8 +31,9 @@ VECTORS_PATH = HERE.parents[1] / "protocol" / "vectors" / "vectors.json"
 OPT_FUZZ_RECORD, OPT_SEAL_RECORD, OPT_NO_STORE, OPT_SAVE_FAILS = 0x01, 0x02, 0x04, 0x08
 OPT_SIGN_WIFI, OPT_NO_SPINDLE, OPT_PREROLL, OPT_SESSION_STALE = 0x10, 0x20, 0x40, 0x80
 SERIAL, WIFI, SENSORS, NOTHING = 0, 1, 2, 3
-CONFIG_MAGIC, CONFIG_VERSION = 0x46435752, 1
-CONFIG_SIZE_BYTES = 272  # sizeof(rw_config) on the host (rw_config.h)
+CONFIG_MAGIC, CONFIG_VERSION = 0x46435752, 2
+CONFIG_HEAD_FORMAT = "<IHHIII16sBB2s33s64s3s"  # rw_config.h up to the parameters
+CONFIG_SIZE_BYTES = struct.calcsize(CONFIG_HEAD_FORMAT) + 4 * len(gen.PARAMS) + 4  # sizeof(rw_config), CRC included
 DELIVERY_CAP_BYTES = gen.MAX_FRAME_LEN + 1  # the core's receive buffer
 
 
@@ -67,13 +68,16 @@ def sensors(*, battery_mv: int = 12000, encoder_silent: bool = False, spindle_si
     return struct.pack("<HBBHBH", battery_mv, encoder_silent, spindle_silent, spindle_load_raw, limit_switch, tick_us)
 
 
-def config_record(*, params: list[float], key: bytes | None, boot_counter: int) -> bytes:
+def config_record(*, params: list[float], key: bytes | None, boot_counter: int, session_epoch: int = 0) -> bytes:
     """An rw_config record (rw_config.h layout, little-endian), sealed with its CRC-32."""
-    body = struct.pack("<IHHII16sBB2s33s64s3s", CONFIG_MAGIC, CONFIG_VERSION, CONFIG_SIZE_BYTES, boot_counter, 0,
-                       key or bytes(16), 1 if key else 0, 0, b"", b"lab", b"", b"")
+    body = struct.pack(CONFIG_HEAD_FORMAT, CONFIG_MAGIC, CONFIG_VERSION, CONFIG_SIZE_BYTES, boot_counter, 0,
+                       session_epoch, key or bytes(16), 1 if key else 0, 0, b"", b"lab", b"", b"")
     body += struct.pack(f"<{len(params)}f", *params)
     assert len(body) == CONFIG_SIZE_BYTES - 4, len(body)
     return body + struct.pack("<I", zlib.crc32(body))
+
+
+COMMIT = gen.ProvisionCommit(session_epoch=0x1234567)  # a commit with a fixed epoch (reproducible corpus)
 
 
 def frame(msg: gen.Message, seq: int) -> bytes:
@@ -138,7 +142,7 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
         + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
         + chunk(SERIAL, frame(gen.ProvisionSetWifiSsid(ssid="lab"), 2))
         + chunk(SERIAL, frame(gen.ProvisionSetWifiPassword(password="correct horse"), 3))
-        + chunk(SERIAL, frame(gen.ProvisionCommit(), 4))
+        + chunk(SERIAL, frame(COMMIT, 4))
         + chunk(SERIAL, frame(gen.ProvisionGet(), 5), ticks=3)
         + chunk(WIFI, frame(gen.Hello(host_nonce=1), 6))
         + chunk(WIFI, frame(gen.Arm(), 7))
@@ -153,20 +157,35 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
                                                 + chunk(WIFI, frame(gen.Arm(), 1), ticks=2)
                                                 + chunk(SERIAL, frame(gen.Disarm(), 2), ticks=2)
                                                 + chunk(SERIAL, frame(gen.ProvisionSetKey(key=test_key), 3))
-                                                + chunk(SERIAL, frame(gen.ProvisionCommit(), 4), ticks=2)
+                                                + chunk(SERIAL, frame(COMMIT, 4), ticks=2)
                                                 + chunk(NOTHING, b"\x01", ticks=2))
     programs["provision_store_fails"] = (bytes([OPT_SAVE_FAILS])
                                          + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
-                                         + chunk(SERIAL, frame(gen.ProvisionCommit(), 2), ticks=3))
-    programs["provision_no_store"] = (bytes([OPT_NO_STORE]) + chunk(SERIAL, frame(gen.ProvisionCommit(), 1), ticks=3)
+                                         + chunk(SERIAL, frame(COMMIT, 2), ticks=3))
+    programs["provision_epoch_out_of_range"] = (bytes([OPT_SIGN_WIFI | OPT_PREROLL])
+                                                + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
+                                                + chunk(SERIAL, frame(gen.ProvisionCommit(session_epoch=1 << 31), 2),
+                                                        ticks=2)
+                                                + chunk(WIFI, frame(gen.Arm(), 3), ticks=2))
+    programs["provision_no_store"] = (bytes([OPT_NO_STORE])
+                                      + chunk(SERIAL, frame(COMMIT, 1), ticks=3)
                                       + chunk(WIFI, frame(gen.Arm(), 2), ticks=3))
     defaults = [p.default for p in gen.PARAMS]
-    good = config_record(params=defaults, key=test_key, boot_counter=41)
+    good = config_record(params=defaults, key=test_key, boot_counter=41, session_epoch=0x2345678)
     programs["stored_record_valid"] = bytes([OPT_FUZZ_RECORD]) + good + chunk(SERIAL, frame(gen.ProvisionGet(), 1))
     bad_params = [float("nan"), -1.0, 1e30] + defaults[3:]
     programs["stored_record_bad_params_sealed"] = (bytes([OPT_FUZZ_RECORD | OPT_SEAL_RECORD])
-                                                   + config_record(params=bad_params, key=None, boot_counter=0xFFFFFFFF)
+                                                   + config_record(params=bad_params, key=None, boot_counter=0x7FFFFFFF,
+                                                                   session_epoch=0x7FFFFFFF)
                                                    + chunk(SERIAL, frame(gen.Arm(), 1), ticks=3))
+    programs["stored_record_sessions_used_up"] = (bytes([OPT_FUZZ_RECORD])
+                                                  + config_record(params=defaults, key=test_key,
+                                                                  boot_counter=0x7FFFFFFF, session_epoch=0x1234567)
+                                                  + chunk(WIFI, frame(gen.Arm(), 1), ticks=3))
+    programs["stored_record_epoch_out_of_range"] = (bytes([OPT_FUZZ_RECORD])
+                                                    + config_record(params=defaults, key=test_key, boot_counter=3,
+                                                                    session_epoch=0x80000000)
+                                                    + chunk(NOTHING, ticks=3))
     programs["stored_record_bad_crc"] = (bytes([OPT_FUZZ_RECORD]) + good[:-1] + bytes([good[-1] ^ 1])
                                          + chunk(NOTHING, ticks=3))
     programs["stored_record_garbage_sealed"] = (bytes([OPT_FUZZ_RECORD | OPT_SEAL_RECORD])

@@ -40,6 +40,7 @@ from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArg
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
 from robowrangler.telemetry import DeviceEvent, ProvisionStatus, TelemetrySample
+from robowrangler.session_epoch import new_session_epoch
 from robowrangler.transport import DEFAULT_URL, Transport, open_transport, parse_url
 
 RECV_POLL_S = 0.05  # receiver thread wakes this often to notice close()
@@ -422,7 +423,7 @@ class Client:
         if wifi_password is not None:
             self._command(gen.ProvisionSetWifiPassword(wifi_password))
         if commit:
-            self._command(gen.ProvisionCommit())
+            self._command(gen.ProvisionCommit(new_session_epoch()))  # a fresh random base for the session ids
         return self.provision_status()
 
     def _require_serial_link(self) -> None:

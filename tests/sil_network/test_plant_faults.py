@@ -103,22 +103,18 @@ def test_esc_not_responding_collapses_the_loop_then_faults_on_the_silent_encoder
     assert flying.last_telemetry.esc_pulse_us == 1000 and flying.sil.plant.rope_speed_mps == 0.0
 
 
-def test_rope_break_under_load_the_speed_loop_holds_the_speed(flying: ScriptedHost) -> None:
-    pulse_free = flying.last_telemetry.esc_pulse_us
-    flying.sil.set_rope_load(5.0)  # N: the loop drags on an object
-    flying.run_for(1.0)
+def test_rope_break_of_a_free_loop_is_below_what_the_drive_can_see(flying: ScriptedHost) -> None:
+    """A free loop loads the wheels with its air drag only (16 mN at 5 m/s here): 0.1 us of ESC pulse. The
+    speed loop holds the speed and nothing is reported (the detection limit, docs/load_loss.md); a break under
+    a load is detected (test_load_loss.py)."""
     t0_ms = start_ms(flying)
-    pulse_loaded = flying.last_telemetry.esc_pulse_us
     fault = RopeBreak(start_s=t0_ms / 1000).install(flying.sil)
     flying.run_for(1.5)
-    assert flying.sil.plant.rope_drag_n == 0.0 and flying.sil.plant.external_rope_load_n == 0.0
-    assert fault.drag_before_n > 0.0
+    assert flying.sil.plant.rope_drag_n == 0.0 and 0.0 < fault.drag_before_n < 0.02
     peak = peak_plant_speed_mps(flying, t0_ms / 1000)
-    assert TARGET_MMPS / 1000 < peak < 1.2 * TARGET_MMPS / 1000  # the load vanished: a bounded overshoot
+    assert peak < 1.01 * TARGET_MMPS / 1000  # nothing to overshoot
     t = flying.last_telemetry
-    assert abs(t.rope_speed_mmps - TARGET_MMPS) <= 100 and t.state == State.AIRBORNE
-    assert pulse_loaded > pulse_free + 20  # the load was felt
-    assert abs(t.esc_pulse_us - pulse_free) <= 5  # the integrator let go of the load's throttle
+    assert abs(t.rope_speed_mmps - TARGET_MMPS) <= 100 and t.state == State.AIRBORNE and t.fault_bits == 0
     assert not [e for e in events_since(flying, t0_ms) if e[1] != EventKind.STATE_CHANGED]  # nothing reported
 
 

@@ -82,7 +82,7 @@ static const rw_msg_info msg_infos[] = {
     { 30u, RW_MSG_KIND_PROVISION, 16u, 0xE014u, "PROVISION_SET_KEY" },
     { 31u, RW_MSG_KIND_PROVISION, 33u, 0x5F44u, "PROVISION_SET_WIFI_SSID" },
     { 32u, RW_MSG_KIND_PROVISION, 64u, 0xE069u, "PROVISION_SET_WIFI_PASSWORD" },
-    { 33u, RW_MSG_KIND_PROVISION, 0u, 0xAAD1u, "PROVISION_COMMIT" },
+    { 33u, RW_MSG_KIND_PROVISION, 4u, 0x606Bu, "PROVISION_COMMIT" },
     { 34u, RW_MSG_KIND_PROVISION, 0u, 0x9719u, "PROVISION_GET" },
     { 100u, RW_MSG_KIND_SIL, 26u, 0x06DBu, "SIL_SENSORS" },
     { 101u, RW_MSG_KIND_SIL, 8u, 0x01BFu, "SIL_ACTUATORS" },
@@ -793,14 +793,12 @@ size_t rw_msg_provision_set_wifi_password_encode(const rw_msg_provision_set_wifi
 
 void rw_msg_provision_commit_pack(const rw_msg_provision_commit *msg, uint8_t *payload)
 {
-    (void)msg;
-    (void)payload;
+    put_u32(payload + 0, (uint32_t)msg->session_epoch);
 }
 
 void rw_msg_provision_commit_unpack(rw_msg_provision_commit *msg, const uint8_t *payload)
 {
-    msg->unused_ = 0u;
-    (void)payload;
+    msg->session_epoch = (uint32_t)get_u32(payload + 0);
 }
 
 size_t rw_msg_provision_commit_encode(const rw_msg_provision_commit *msg, uint16_t seq, uint8_t *out, size_t out_cap)
@@ -923,4 +921,7 @@ const rw_param_info rw_param_table[RW_PARAM_COUNT] = {
     { "battery_cutoff_v", 6.0f, 13.0f, 9.9f, 0u },
     { "battery_cutoff_time_s", 0.05f, 10.0f, 1.0f, 0u },
     { "spindle_timeout_s", 0.02f, 2.0f, 0.2f, 0u },
+    { "load_loss_drop_n", 0.0f, 50.0f, 1.0f, 0u },
+    { "load_loss_time_s", 0.02f, 2.0f, 0.1f, 0u },
+    { "drive_resistance_ohm", 0.01f, 1.0f, 0.085f, 0u },
 };

@@ -11,7 +11,7 @@ extern "C" {
 
 #define RW_PROTOCOL_VERSION 2u
 #define RW_PROTOCOL_MAGIC 0xB7u
-#define RW_PROTOCOL_SCHEMA_HASH 0x6A6Du
+#define RW_PROTOCOL_SCHEMA_HASH 0x1C52u
 #define RW_FRAME_HEADER_LEN 7u
 #define RW_FRAME_CHECKSUM_LEN 2u
 #define RW_MAX_PAYLOAD_LEN 64u
@@ -76,8 +76,9 @@ typedef enum {
     RW_EVENT_KIND_SPINDLE_HOMED = 7, /* Homing found the end of the stroke; guide position 0 set. arg = 1 by stall, 2 by limit switch. */
     RW_EVENT_KIND_SPINDLE_TARGET_REACHED = 8, /* The guide reached its target within spindle_tolerance_mm; arg = position, um. */
     RW_EVENT_KIND_FAULT_CLEARED = 9, /* arg = the fault bits cleared (by DISARM). */
+    RW_EVENT_KIND_LOAD_LOST = 10, /* The drive's load estimate (speed PI integral x battery voltage, as rope force) fell by more than load_loss_drop_n for load_loss_time_s while airborne at a steady setpoint: the rope broke or the object came off the loop. The rope is spun down (SPINDOWN, cause LOAD_LOST) and fault LOAD_LOST latched. arg = the drop, mN. Loads under about load_loss_drop_n (a free loop: 0.16 N) cannot be seen: see docs/load_loss.md. */
 } rw_event_kind;
-#define RW_EVENT_KIND_COUNT 10u
+#define RW_EVENT_KIND_COUNT 11u
 
 /* Why a state changed (EVENT.arg of STATE_CHANGED). */
 typedef enum {
@@ -89,8 +90,9 @@ typedef enum {
     RW_CAUSE_BATTERY_LOW = 5, /* Battery under battery_cutoff_v for battery_cutoff_time_s. */
     RW_CAUSE_LOAD_SECURED = 6, /* Spindle load reached grasp_secure_load_pct while retracting: the object is held. */
     RW_CAUSE_STROKE_END = 7, /* Retracting reached the end of the guide stroke without securing a load. */
+    RW_CAUSE_LOAD_LOST = 8, /* The load on the flying rope vanished (EVENT LOAD_LOST): rope broken or object lost. */
 } rw_cause;
-#define RW_CAUSE_COUNT 8u
+#define RW_CAUSE_COUNT 9u
 
 /* Spindle status bits (TELEMETRY.spindle_flags). */
 typedef enum {
@@ -108,6 +110,7 @@ typedef enum {
     RW_FAULT_TICK_OVERRUN = 4, /* Control tick overran its period repeatedly. */
     RW_FAULT_SPINDLE_STALL = 8, /* Spindle commanded to move, load high and no motion for spindle_stall_time_s (outside a grasp). */
     RW_FAULT_SPINDLE_NO_ANSWER = 16, /* The AX-12A did not answer for spindle_timeout_s. */
+    RW_FAULT_LOAD_LOST = 32, /* The load on the flying rope vanished (EVENT LOAD_LOST): the rope is landed and SET_ROPE_SPEED refused (BAD_STATE) until DISARM clears it (inspect the rope first). */
 } rw_fault;
 
 /* Result of rw_frame_decode: RW_DECODE_OK or an rw_nack_reason. */
@@ -252,12 +255,12 @@ void rw_msg_param_value_pack(const rw_msg_param_value *msg, uint8_t *payload);
 void rw_msg_param_value_unpack(rw_msg_param_value *msg, const uint8_t *payload);
 size_t rw_msg_param_value_encode(const rw_msg_param_value *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the device's boot counter, kept in flash, so it grows with every boot and frames of an earlier boot never count again. */
+/* SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the provisioning's random epoch plus the device's boot counter, kept in flash, so it grows with every boot (frames of an earlier boot never count again) and starts from a fresh random base at every provisioning (frames of an earlier provisioning never count again). */
 #define RW_MSG_SESSION_INFO_LEN 11u
 #define RW_MSG_SESSION_INFO_CRC_EXTRA 0xC5E6u
 typedef struct {
     uint32_t host_nonce; /* Echo of HELLO.host_nonce (fresh answer, not a replay). */
-    uint32_t session_id; /* The device's current session (boot counter). */
+    uint32_t session_id; /* The device's current session (session epoch + boot counter). */
     uint8_t key_set; /* 1 when a key is provisioned; 0: the device takes no command over WiFi (provision over USB serial). */
     uint16_t schema_hash; /* The device's protocol schema hash. */
 } rw_msg_session_info;
@@ -272,7 +275,7 @@ typedef struct {
     uint8_t key_set; /* 1 when a link key is stored. */
     uint8_t password_set; /* 1 when a WiFi password is stored. */
     char wifi_ssid[33]; /* WiFi network name. */
-    uint32_t boot_counter; /* Boots since the configuration was first written (the session id). */
+    uint32_t boot_counter; /* Boots since the last PROVISION_COMMIT (session id = session epoch + this). */
     uint32_t commits; /* Configuration writes since first written (flash wear). */
     uint16_t config_version; /* Layout version of the stored configuration. */
     uint8_t dirty; /* 1 when something changed since the last PROVISION_COMMIT. */
@@ -452,11 +455,11 @@ void rw_msg_provision_set_wifi_password_pack(const rw_msg_provision_set_wifi_pas
 void rw_msg_provision_set_wifi_password_unpack(rw_msg_provision_set_wifi_password *msg, const uint8_t *payload);
 size_t rw_msg_provision_set_wifi_password_encode(const rw_msg_provision_set_wifi_password *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters) to flash as one versioned record with a CRC. */
-#define RW_MSG_PROVISION_COMMIT_LEN 0u
-#define RW_MSG_PROVISION_COMMIT_CRC_EXTRA 0xAAD1u
+/* PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again). */
+#define RW_MSG_PROVISION_COMMIT_LEN 4u
+#define RW_MSG_PROVISION_COMMIT_CRC_EXTRA 0x606Bu
 typedef struct {
-    uint8_t unused_; /* no fields */
+    uint32_t session_epoch; /* Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids. */
 } rw_msg_provision_commit;
 void rw_msg_provision_commit_pack(const rw_msg_provision_commit *msg, uint8_t *payload);
 void rw_msg_provision_commit_unpack(rw_msg_provision_commit *msg, const uint8_t *payload);
@@ -561,7 +564,7 @@ size_t rw_frame_sign_tag(uint8_t *frame, size_t len, uint64_t tag);
 int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN]);
 
 /* Parameters (SI units, float32 on the wire). */
-#define RW_PARAM_COUNT 33u
+#define RW_PARAM_COUNT 36u
 #define RW_PARAM_FLAG_LOCKED 0x01u  /* settable only while DISARMED */
 #define RW_PARAM_FLAG_INTEGER 0x02u /* value must be a whole number */
 typedef enum {
@@ -598,6 +601,9 @@ typedef enum {
     RW_PARAM_BATTERY_CUTOFF_V = 30, /* [V] Battery under this (3S: 3.3 V a cell) for battery_cutoff_time_s: BATTERY_LOW fault, spin-down. */
     RW_PARAM_BATTERY_CUTOFF_TIME_S = 31, /* [s] How long the battery must stay under the cutoff (load sags are brief). */
     RW_PARAM_SPINDLE_TIMEOUT_S = 32, /* [s] No answer from the AX-12A for this long: SPINDLE_NO_ANSWER fault, spindle stopped. */
+    RW_PARAM_LOAD_LOSS_DROP_N = 33, /* [N] Airborne at a steady setpoint, a fall of the drive's load estimate (rope force) by more than this for load_loss_time_s is a load loss (rope broken, object lost): EVENT LOAD_LOST, spin-down. 0 = off. Smaller loads (a free loop: 0.16 N) are not detectable: docs/load_loss.md. */
+    RW_PARAM_LOAD_LOSS_TIME_S = 34, /* [s] How long the load drop must last to count as a load loss. */
+    RW_PARAM_DRIVE_RESISTANCE_OHM = 35, /* [ohm] Winding plus ESC resistance per motor: turns the speed loop's extra drive voltage into rope force for the load-loss monitor (2 motors, kv, wheel radius: 12 N/V at the defaults). */
 } rw_param_id;
 /* Parameter defaults, for code that needs one as a constant (firmware/core/rw_defaults.h). */
 #define RW_PARAM_DEFAULT_TOV_MPS 2.6f
@@ -633,6 +639,9 @@ typedef enum {
 #define RW_PARAM_DEFAULT_BATTERY_CUTOFF_V 9.9f
 #define RW_PARAM_DEFAULT_BATTERY_CUTOFF_TIME_S 1.0f
 #define RW_PARAM_DEFAULT_SPINDLE_TIMEOUT_S 0.2f
+#define RW_PARAM_DEFAULT_LOAD_LOSS_DROP_N 1.0f
+#define RW_PARAM_DEFAULT_LOAD_LOSS_TIME_S 0.1f
+#define RW_PARAM_DEFAULT_DRIVE_RESISTANCE_OHM 0.085f
 typedef struct {
     const char *name;
     float min_value;

@@ -22,7 +22,7 @@ def _human(status: ProvisionStatus) -> str:
         f"link key       {'set' if status.key_set else 'NOT SET (no command over WiFi)'}",
         f"wifi ssid      {status.wifi_ssid or '-'}",
         f"wifi password  {'set' if status.password_set else 'not set'}",
-        f"boot counter   {status.boot_counter} (session id)",
+        f"boot counter   {status.boot_counter} (boots since the last commit; session id = epoch + this)",
         f"flash commits  {status.commits}",
         f"config version {status.config_version}",
         f"uncommitted    {'yes' if status.dirty else 'no'}",

@@ -17,7 +17,7 @@ import siphash24 as _siphash
 
 PROTOCOL_VERSION = 2
 MAGIC = 0xB7
-SCHEMA_HASH = 0x6A6D
+SCHEMA_HASH = 0x1C52
 HEADER_LEN = 7
 CHECKSUM_LEN = 2
 MAX_PAYLOAD_LEN = 64
@@ -127,6 +127,8 @@ class EventKind(IntEnum):
     """The guide reached its target within spindle_tolerance_mm; arg = position, um."""
     FAULT_CLEARED = 9
     """arg = the fault bits cleared (by DISARM)."""
+    LOAD_LOST = 10
+    """The drive's load estimate (speed PI integral x battery voltage, as rope force) fell by more than load_loss_drop_n for load_loss_time_s while airborne at a steady setpoint: the rope broke or the object came off the loop. The rope is spun down (SPINDOWN, cause LOAD_LOST) and fault LOAD_LOST latched. arg = the drop, mN. Loads under about load_loss_drop_n (a free loop: 0.16 N) cannot be seen: see docs/load_loss.md."""
 
 
 class Cause(IntEnum):
@@ -148,6 +150,8 @@ class Cause(IntEnum):
     """Spindle load reached grasp_secure_load_pct while retracting: the object is held."""
     STROKE_END = 7
     """Retracting reached the end of the guide stroke without securing a load."""
+    LOAD_LOST = 8
+    """The load on the flying rope vanished (EVENT LOAD_LOST): rope broken or object lost."""
 
 
 class SpindleFlag(IntFlag):
@@ -178,6 +182,8 @@ class Fault(IntFlag):
     """Spindle commanded to move, load high and no motion for spindle_stall_time_s (outside a grasp)."""
     SPINDLE_NO_ANSWER = 16
     """The AX-12A did not answer for spindle_timeout_s."""
+    LOAD_LOST = 32
+    """The load on the flying rope vanished (EVENT LOAD_LOST): the rope is landed and SET_ROPE_SPEED refused (BAD_STATE) until DISARM clears it (inspect the rope first)."""
 
 
 class MsgKind(IntEnum):
@@ -523,11 +529,11 @@ class ParamValue(Message):
 
 @dataclass(frozen=True)
 class SessionInfo(Message):
-    """SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the device's boot counter, kept in flash, so it grows with every boot and frames of an earlier boot never count again.
+    """SESSION_INFO (id 6, reply): Answer to HELLO (signed when the device has a key): the session the host must sign its frames for. The session id is the provisioning's random epoch plus the device's boot counter, kept in flash, so it grows with every boot (frames of an earlier boot never count again) and starts from a fresh random base at every provisioning (frames of an earlier provisioning never count again).
 
     Fields:
         host_nonce: uint32 Echo of HELLO.host_nonce (fresh answer, not a replay).
-        session_id: uint32 The device's current session (boot counter).
+        session_id: uint32 The device's current session (session epoch + boot counter).
         key_set: uint8 1 when a key is provisioned; 0: the device takes no command over WiFi (provision over USB serial).
         schema_hash: uint16 The device's protocol schema hash.
     """
@@ -541,7 +547,7 @@ class SessionInfo(Message):
     _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 4294967295), (0, 255), (0, 65535))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('host_nonce', 'uint32', '', '', 'Echo of HELLO.host_nonce (fresh answer, not a replay).'),
-        FieldSpec('session_id', 'uint32', '', '', "The device's current session (boot counter)."),
+        FieldSpec('session_id', 'uint32', '', '', "The device's current session (session epoch + boot counter)."),
         FieldSpec('key_set', 'uint8', '', '', '1 when a key is provisioned; 0: the device takes no command over WiFi (provision over USB serial).'),
         FieldSpec('schema_hash', 'uint16', '', '', "The device's protocol schema hash."),
     )
@@ -560,7 +566,7 @@ class ProvisionStatus(Message):
         key_set: uint8 1 when a link key is stored.
         password_set: uint8 1 when a WiFi password is stored.
         wifi_ssid: char[33] WiFi network name.
-        boot_counter: uint32 Boots since the configuration was first written (the session id).
+        boot_counter: uint32 Boots since the last PROVISION_COMMIT (session id = session epoch + this).
         commits: uint32 Configuration writes since first written (flash wear).
         config_version: uint16 Layout version of the stored configuration.
         dirty: uint8 1 when something changed since the last PROVISION_COMMIT.
@@ -577,7 +583,7 @@ class ProvisionStatus(Message):
         FieldSpec('key_set', 'uint8', '', '', '1 when a link key is stored.'),
         FieldSpec('password_set', 'uint8', '', '', '1 when a WiFi password is stored.'),
         FieldSpec('wifi_ssid', 'char[33]', '', '', 'WiFi network name.'),
-        FieldSpec('boot_counter', 'uint32', '', '', 'Boots since the configuration was first written (the session id).'),
+        FieldSpec('boot_counter', 'uint32', '', '', 'Boots since the last PROVISION_COMMIT (session id = session epoch + this).'),
         FieldSpec('commits', 'uint32', '', '', 'Configuration writes since first written (flash wear).'),
         FieldSpec('config_version', 'uint16', '', '', 'Layout version of the stored configuration.'),
         FieldSpec('dirty', 'uint8', '', '', '1 when something changed since the last PROVISION_COMMIT.'),
@@ -908,17 +914,24 @@ class ProvisionSetWifiPassword(Message):
 
 @dataclass(frozen=True)
 class ProvisionCommit(Message):
-    """PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters) to flash as one versioned record with a CRC.
+    """PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again).
+
+    Fields:
+        session_epoch: uint32 Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids.
     """
 
     MSG_ID: ClassVar[int] = 33
     NAME: ClassVar[str] = "PROVISION_COMMIT"
     KIND: ClassVar[MsgKind] = MsgKind.PROVISION
-    CRC_EXTRA: ClassVar[int] = 0xAAD1
-    PAYLOAD_LEN: ClassVar[int] = 0
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<")
-    _RANGES: ClassVar[tuple[tuple | None, ...]] = ()
-    FIELDS: ClassVar[tuple[FieldSpec, ...]] = ()
+    CRC_EXTRA: ClassVar[int] = 0x606B
+    PAYLOAD_LEN: ClassVar[int] = 4
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<I")
+    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295),)
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('session_epoch', 'uint32', '', '', "Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids."),
+    )
+
+    session_epoch: int
 
 
 @dataclass(frozen=True)
@@ -1202,5 +1215,8 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(30, 'battery_cutoff_v', 'V', 6.0, 13.0, 9.9, False, False, 'Battery under this (3S: 3.3 V a cell) for battery_cutoff_time_s: BATTERY_LOW fault, spin-down.'),
     ParamSpec(31, 'battery_cutoff_time_s', 's', 0.05, 10.0, 1.0, False, False, 'How long the battery must stay under the cutoff (load sags are brief).'),
     ParamSpec(32, 'spindle_timeout_s', 's', 0.02, 2.0, 0.2, False, False, 'No answer from the AX-12A for this long: SPINDLE_NO_ANSWER fault, spindle stopped.'),
+    ParamSpec(33, 'load_loss_drop_n', 'N', 0.0, 50.0, 1.0, False, False, "Airborne at a steady setpoint, a fall of the drive's load estimate (rope force) by more than this for load_loss_time_s is a load loss (rope broken, object lost): EVENT LOAD_LOST, spin-down. 0 = off. Smaller loads (a free loop: 0.16 N) are not detectable: docs/load_loss.md."),
+    ParamSpec(34, 'load_loss_time_s', 's', 0.02, 2.0, 0.1, False, False, 'How long the load drop must last to count as a load loss.'),
+    ParamSpec(35, 'drive_resistance_ohm', 'ohm', 0.01, 1.0, 0.085, False, False, "Winding plus ESC resistance per motor: turns the speed loop's extra drive voltage into rope force for the load-loss monitor (2 motors, kv, wheel radius: 12 N/V at the defaults)."),
 )
 PARAMS_BY_NAME: dict[str, ParamSpec] = {p.name: p for p in PARAMS}

@@ -9,8 +9,9 @@ crosses the boundary or on the plants' settable inputs, never on plant internals
 * EscNotResponding: the ESCs ignore the firmware's pulse; the plant's ESC gets its minimum pulse (zero
   throttle: bridge off, the motor coasts).
 * RopeBreak: the loop is gone: the external load and the exposed rope's air drag vanish
-  (``external_rope_load_n`` = 0, ``rope_exposed_length_m`` = 0, re-applied every tick). The rope's
-  inertia (m_rope r^2 in the plant's total inertia) has no settable input, so it stays (reported).
+  (``external_rope_load_n`` = 0, ``rope_exposed_length_m`` = 0, re-applied every tick), and a grasped
+  object is no longer held (the spindle plant's ``object_circumference_m`` = None: no rope tension). The
+  rope's inertia (m_rope r^2 in the plant's total inertia) has no settable input, so it stays (reported).
 * BatterySag: the pack's terminal voltage sinks linearly to target_v over ramp_s by a growing auxiliary
   load (``battery_aux_current_a``), so the motors see the sag as well as the ADC.
 * SpindleStall: the lead screw jams for the window (the spindle plant's ``stalled`` input): the guide stops
@@ -95,7 +96,8 @@ class EscNotResponding(_WindowedFault):
 
 
 class RopeBreak(_WindowedFault):
-    """From start_s the rope loop is broken: external load 0 N and no exposed rope (its air drag vanishes).
+    """From start_s the rope loop is broken: external load 0 N, no exposed rope (its air drag vanishes), and no
+    grasped object on the spindle (its rope tension vanishes).
 
     Re-applied before every tick while active (the session may set the exposed length from the spindle's
     loop length each tick). Known gap: the rope's inertia stays in the plant (no settable input for it).
@@ -113,6 +115,9 @@ class RopeBreak(_WindowedFault):
                 self.drag_before_n = plant.rope_drag_n
             plant.external_rope_load_n = 0.0
             plant.rope_exposed_length_m = 0.0
+            spindle = getattr(self._sil, "spindle", None)
+            if spindle is not None:
+                spindle.object_circumference_m = None
         return sensors
 
     def install(self, sil: SilSession) -> RopeBreak:

@@ -13,6 +13,7 @@ from collections.abc import Callable, Mapping
 
 from robowrangler.errors import CommandRefused, LinkTimeout
 from robowrangler.protocol import generated as gen
+from robowrangler.session_epoch import new_session_epoch
 from robowrangler.telemetry import ProvisionStatus
 from robowrangler.transport import Transport
 
@@ -70,8 +71,12 @@ class Provisioner:
         return ProvisionStatus.from_wire(self._wait(lambda m: isinstance(m, gen.ProvisionStatus)))
 
     def provision(self, *, key: bytes | None = None, wifi_ssid: str | None = None, wifi_password: str | None = None,
-                  params: Mapping[str, float] | None = None) -> ProvisionStatus:
-        """Stage what is given, commit it to flash, and return the stored status."""
+                  params: Mapping[str, float] | None = None, session_epoch: int | None = None) -> ProvisionStatus:
+        """Stage what is given, commit it to flash, and return the stored status.
+
+        session_epoch: the base of the session ids from this commit on (0 <= epoch < 2^31); None draws a fresh
+        one from the OS CSPRNG, as a host does at every provisioning.
+        """
         if key is not None:
             self.command(gen.ProvisionSetKey(bytes(key)))
         if wifi_ssid is not None:
@@ -81,5 +86,5 @@ class Provisioner:
         for name, value in (params or {}).items():
             spec = gen.PARAMS_BY_NAME[name]
             self.command(gen.ParamSet(spec.id, float(value)))
-        self.command(gen.ProvisionCommit())
+        self.command(gen.ProvisionCommit(new_session_epoch() if session_epoch is None else session_epoch))
         return self.status()

@@ -2,7 +2,9 @@
  * Unity tests of rw_config (the configuration record kept in flash): defaults are valid, carry the
  * parameter defaults, no key and boot counter 0; the CRC-32 is the IEEE one (check value of "123456789");
  * a flipped bit anywhere in the record, another magic, version or size invalidates it; set_key and
- * set_params store and reseal; a change without seal is caught. Run with `pio test -e native`.
+ * set_params store and reseal; a change without seal is caught; session ids are epoch + boot counter, a new
+ * epoch restarts the counter, out-of-range epochs are refused, the counter never wraps the session id.
+ * Run with `pio test -e native`.
  */
 #include <stddef.h>
 #include <stdint.h>
@@ -108,6 +110,50 @@ static void test_set_params_stores_and_reseals(void)
     TEST_ASSERT_FALSE(rw_config_valid(&cfg));
 }
 
+static void test_a_new_epoch_restarts_the_session_range(void)
+{
+    cfg.boot_counter = 7u;
+    rw_config_seal(&cfg);
+    rw_config before = cfg;
+    TEST_ASSERT_FALSE(rw_config_new_epoch(&cfg, RW_CONFIG_EPOCH_LIMIT));
+    TEST_ASSERT_FALSE(rw_config_new_epoch(&cfg, 0xFFFFFFFFu));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &cfg, sizeof cfg); /* refused: unchanged */
+    TEST_ASSERT_TRUE(rw_config_new_epoch(&cfg, 0x2BADCAFEu));
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+    TEST_ASSERT_EQUAL_UINT32(0u, cfg.boot_counter);
+    TEST_ASSERT_EQUAL_UINT32(1u, cfg.commits);
+    TEST_ASSERT_EQUAL_HEX32(0x2BADCAFEu, rw_config_session_id(&cfg));
+    TEST_ASSERT_TRUE(rw_config_next_boot(&cfg));
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+    TEST_ASSERT_EQUAL_HEX32(0x2BADCAFFu, rw_config_session_id(&cfg));
+}
+
+static void test_the_boot_counter_never_wraps_the_session_id(void)
+{
+    TEST_ASSERT_TRUE(rw_config_new_epoch(&cfg, RW_CONFIG_EPOCH_LIMIT - 1u));
+    cfg.boot_counter = RW_CONFIG_BOOT_COUNTER_MAX - 1u;
+    rw_config_seal(&cfg);
+    TEST_ASSERT_TRUE(rw_config_next_boot(&cfg));
+    TEST_ASSERT_EQUAL_HEX32(0xFFFFFFFEu, rw_config_session_id(&cfg));
+    rw_config before = cfg;
+    TEST_ASSERT_FALSE(rw_config_next_boot(&cfg)); /* used up: refused */
+    TEST_ASSERT_EQUAL_MEMORY(&before, &cfg, sizeof cfg);
+    cfg.boot_counter = RW_CONFIG_BOOT_COUNTER_MAX + 1u; /* out of range even when sealed */
+    rw_config_seal(&cfg);
+    TEST_ASSERT_FALSE(rw_config_valid(&cfg));
+}
+
+static void test_clear_key_forgets_the_key(void)
+{
+    const uint8_t key[RW_KEY_LEN] = { 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u, 9u };
+    const uint8_t zero[RW_KEY_LEN] = { 0u };
+    rw_config_set_key(&cfg, key);
+    rw_config_clear_key(&cfg);
+    TEST_ASSERT_TRUE(rw_config_valid(&cfg));
+    TEST_ASSERT_EQUAL_UINT8(0u, cfg.key_set);
+    TEST_ASSERT_EQUAL_UINT8_ARRAY(zero, cfg.key, RW_KEY_LEN);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -117,5 +163,8 @@ int main(void)
     RUN_TEST(test_other_magic_version_or_size_is_refused_even_when_sealed);
     RUN_TEST(test_set_key_stores_and_reseals);
     RUN_TEST(test_set_params_stores_and_reseals);
+    RUN_TEST(test_a_new_epoch_restarts_the_session_range);
+    RUN_TEST(test_the_boot_counter_never_wraps_the_session_id);
+    RUN_TEST(test_clear_key_forgets_the_key);
     return UNITY_END();
 }
