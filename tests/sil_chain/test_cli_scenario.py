@@ -62,3 +62,22 @@ def test_scenario_renders_png_frames_and_an_mp4(native_build_dir: Path, tmp_path
     assert len(pngs) > 20 and any(name.endswith("_pull.png") for name in pngs)
     assert (tmp_path / "golf_ball.mp4").stat().st_size > 10_000
     assert "slipped" in proc.stdout
+
+
+def test_divergence_exits_1_with_the_outcome_on_stdout(native_build_dir: Path, monkeypatch) -> None:
+    from robowrangler_sim.chain.errors import ChainDivergenceError
+    from robowrangler_sim.chain.plant import ChainPlant
+
+    step = ChainPlant.step
+
+    def diverging_step(self, inputs=None):
+        step(self, inputs)
+        if self.time_s >= 3.0:
+            raise ChainDivergenceError(time_s=self.time_s, reason="nonfinite", detail="injected by the test")
+
+    monkeypatch.setattr(ChainPlant, "step", diverging_step)
+    status, out, err = _run("--json", "sil", "--scenario", "mug", "--links", "10")
+    assert status == ExitStatus.ERROR
+    lines = [json.loads(line) for line in out.strip().splitlines()]
+    assert lines[0]["verdict"] == "diverged" and "nonfinite" in lines[0]["diverged"]
+    assert "scenario mug: diverged" in err

@@ -108,3 +108,26 @@ def test_door_handle_is_threaded_held_and_perturbed_runs_are_reported(native_bui
     missed = run_scenario("door_handle", seed=1, n_links=20, chain_noise_rad=0.05)
     assert missed.verdict in ("lost", "diverged")
     assert missed.secured is False or missed.diverged is not None
+
+
+def test_a_diverging_chain_is_reported_not_hidden(native_build_dir: Path, monkeypatch) -> None:
+    # force the failure the door handle is known for (ChainDivergenceError) at t = 9 s, in the GRASP phase
+    from robowrangler_sim.chain.errors import ChainDivergenceError
+    from robowrangler_sim.chain.plant import ChainPlant
+
+    step = ChainPlant.step
+
+    def diverging_step(self, inputs=None):
+        step(self, inputs)
+        if self.time_s >= 9.0:
+            raise ChainDivergenceError(time_s=self.time_s, reason="badqacc", detail="injected by the test")
+
+    monkeypatch.setattr(ChainPlant, "step", diverging_step)
+    messages: list[str] = []
+    out = run_scenario("mug", seed=0, n_links=FAST_LINKS, progress=messages.append)
+    assert out.verdict == "diverged" and out.secured is None
+    assert "diverged at t=9.0" in out.diverged and "badqacc" in out.diverged
+    assert 9.0 <= out.simulated_s < 9.1
+    assert any("diverged" in m for m in messages)
+    assert ("AIRBORNE", "RELAX", "COMMAND") in out.firmware_path  # the firmware had begun the grasp
+    assert out.grasp_end is None  # ... and the run stopped before RETRACT ended
