@@ -395,6 +395,10 @@ static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame
         rw_msg_provision_commit msg;
         rw_msg_provision_commit_unpack(&msg, frame->payload);
         rw_config next = *c;
+        if (c->commits != 0u && msg.session_epoch == c->session_epoch) {
+            /* the same epoch again would restart the same session ids, whose frames could then be replayed */
+            return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)msg.session_epoch);
+        }
         if (!rw_config_new_epoch(&next, msg.session_epoch)) {
             return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)(RW_CONFIG_EPOCH_LIMIT - 1u));
         }
@@ -412,6 +416,10 @@ static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame
         /* a new session at once (epoch + 0): no frame signed for an earlier session or provisioning counts */
         core->state.session_id = rw_config_session_id(&next);
         core->state.host_counter = 0u;
+        if (rw_signer_busy(&core->state.signer)) { /* signed for the old session (and key): it would be refused */
+            rw_signer_reset(&core->state.signer);
+            rw_outbox_count_drop(&core->state.outbox);
+        }
         *c = next;
         core->state.config_dirty = false;
         return ACCEPT;

@@ -101,3 +101,8 @@ uint16_t rw_outbox_dropped(const rw_outbox *o)
 {
     return o->state.dropped;
 }
+
+void rw_outbox_count_drop(rw_outbox *o)
+{
+    ++o->state.dropped;
+}

@@ -51,5 +51,7 @@ bool rw_outbox_commit(rw_outbox *o, rw_outbox_slot *slot, rw_outbox_class cls, s
 const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o);
 void rw_outbox_pop(rw_outbox *o, const rw_outbox_slot *slot);
 uint16_t rw_outbox_dropped(const rw_outbox *o);
+/* Count a frame lost after it left the outbox (taken for signing, then void: a new session began). */
+void rw_outbox_count_drop(rw_outbox *o);
 
 #endif /* RW_OUTBOX_H */

@@ -159,6 +159,16 @@ def core_programs(vectors: list[dict], test_key: bytes) -> dict[str, bytes]:
                                                 + chunk(SERIAL, frame(gen.ProvisionSetKey(key=test_key), 3))
                                                 + chunk(SERIAL, frame(COMMIT, 4), ticks=2)
                                                 + chunk(NOTHING, b"\x01", ticks=2))
+    # regression seed: a provisioning commit (a new session) while a queued frame is being signed over idle
+    # ticks; that frame was finished for the old session and sent (found by the bounded fuzz run)
+    programs["commit_while_signing"] = (bytes([OPT_SIGN_WIFI | OPT_PREROLL])
+                                        + chunk(SERIAL, frame(gen.ProvisionSetKey(key=test_key), 1))
+                                        + chunk(SERIAL, frame(COMMIT, 2), ticks=2)
+                                        + b"".join(chunk(WIFI, frame(gen.Heartbeat(host_time_ms=i), 3 + 2 * i),
+                                                         ticks=1 + i % 7)
+                                                   + chunk(SERIAL, frame(gen.ProvisionCommit(session_epoch=0x2000 + i),
+                                                                         4 + 2 * i)) for i in range(40))
+                                        + chunk(NOTHING, b"\x01", ticks=10))
     programs["provision_store_fails"] = (bytes([OPT_SAVE_FAILS])
                                          + chunk(SERIAL, frame(gen.ProvisionSetKey(key=new_key), 1))
                                          + chunk(SERIAL, frame(COMMIT, 2), ticks=3))

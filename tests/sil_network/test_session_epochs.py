@@ -88,3 +88,23 @@ def test_an_epoch_out_of_range_is_refused_and_changes_nothing(native_build_dir: 
         host.run_for(0.6)
         assert isinstance(host.command(gen.Arm()), gen.Ack)
         host.close()
+
+
+def test_the_stored_epoch_again_is_refused_and_a_captured_frame_stays_a_replay(native_build_dir: Path) -> None:
+    with SilSession(speedup=None, key=KEY, provision=False) as sil:
+        sil.provision(key=KEY, session_epoch=0x1234)
+        host = ScriptedHost(sil)
+        assert host.session_id == 0x1234
+        host.run_for(0.6)
+        captured = host.frame(gen.Arm(), 7)
+        host.send_raw(captured)
+        assert host.run_until(lambda h: h.last_telemetry.state == State.ARMED, timeout_s=0.1)
+        assert isinstance(host.command(gen.Disarm()), gen.Ack)
+        with pytest.raises(CommandRefused) as refused:  # would restart session 0x1234 with its counter at 0
+            sil.provision(session_epoch=0x1234)
+        assert refused.value.reason == gen.NackReason.OUT_OF_RANGE and refused.value.detail == 0x1234
+        sent_ms = host.last_telemetry.time_ms
+        host.send_raw(captured)
+        assert host.run_until(lambda h: h.last_telemetry.time_ms > sent_ms + 30, timeout_s=0.2)
+        assert host.last_telemetry.rx_replayed == 1 and host.last_telemetry.state == State.DISARMED
+        host.close()

@@ -459,7 +459,7 @@ size_t rw_msg_provision_set_wifi_password_encode(const rw_msg_provision_set_wifi
 #define RW_MSG_PROVISION_COMMIT_LEN 4u
 #define RW_MSG_PROVISION_COMMIT_CRC_EXTRA 0x606Bu
 typedef struct {
-    uint32_t session_epoch; /* Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids. */
+    uint32_t session_epoch; /* Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids. The epoch of the stored record again is refused (OUT_OF_RANGE, detail = that epoch): it would restart the same session ids. */
 } rw_msg_provision_commit;
 void rw_msg_provision_commit_pack(const rw_msg_provision_commit *msg, uint8_t *payload);
 void rw_msg_provision_commit_unpack(rw_msg_provision_commit *msg, const uint8_t *payload);

@@ -917,7 +917,7 @@ class ProvisionCommit(Message):
     """PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again).
 
     Fields:
-        session_epoch: uint32 Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids.
+        session_epoch: uint32 Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids. The epoch of the stored record again is refused (OUT_OF_RANGE, detail = that epoch): it would restart the same session ids.
     """
 
     MSG_ID: ClassVar[int] = 33
@@ -928,7 +928,7 @@ class ProvisionCommit(Message):
     _STRUCT: ClassVar[struct.Struct] = struct.Struct("<I")
     _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295),)
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
-        FieldSpec('session_epoch', 'uint32', '', '', "Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids."),
+        FieldSpec('session_epoch', 'uint32', '', '', "Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids. The epoch of the stored record again is refused (OUT_OF_RANGE, detail = that epoch): it would restart the same session ids."),
     )
 
     session_epoch: int
