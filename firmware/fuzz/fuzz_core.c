@@ -112,9 +112,19 @@ static struct {
 
 /* ---- output checks --------------------------------------------------------------------------------- */
 
-static bool key_is_distinctive(const uint8_t *key)
+/* The key-leak oracle is kept out of the fuzzer's comparison tracing (no_sanitize("coverage")): traced, its
+ * memcmp handed libFuzzer the bytes of the device's own frames, which it then provisioned as the key, so
+ * that an ACK "contained" the key (a crafted key equal to 16 bytes of a NACK: a false alarm, not a leak). */
+#if defined(__clang__)
+#define RW_FUZZ_ORACLE __attribute__((no_sanitize("coverage")))
+#else
+#define RW_FUZZ_ORACLE
+#endif
+
+RW_FUZZ_ORACLE static bool key_is_distinctive(const uint8_t *key)
 {
-    /* a key like all zeros would "appear" in any frame with 16 zero bytes: check only varied keys */
+    /* a key like all zeros would "appear" in any frame with 16 zero bytes: check only varied keys (a random
+     * 128-bit key has 12 or more distinct bytes but with probability about 1e-4) */
     unsigned distinct = 0u;
     bool seen[256] = { false };
     for (unsigned i = 0u; i < RW_KEY_LEN; ++i) {
@@ -123,13 +133,17 @@ static bool key_is_distinctive(const uint8_t *key)
             ++distinct;
         }
     }
-    return distinct >= 8u;
+    return distinct >= 12u;
 }
 
-static bool contains(const uint8_t *hay, size_t n, const uint8_t *needle, size_t m)
+RW_FUZZ_ORACLE static bool contains(const uint8_t *hay, size_t n, const uint8_t *needle, size_t m)
 {
     for (size_t i = 0u; i + m <= n; ++i) {
-        if (memcmp(hay + i, needle, m) == 0) {
+        uint8_t diff = 0u;
+        for (size_t j = 0u; j < m; ++j) { /* not memcmp: libFuzzer intercepts memcmp whatever the attribute */
+            diff |= (uint8_t)(hay[i + j] ^ needle[j]);
+        }
+        if (diff == 0u) {
             return true;
         }
     }
@@ -409,13 +423,14 @@ static void tick(const rw_hal *hal)
                 RW_FUZZ_REQUIRE(h.core.params.value[i] == rw_param_table[i].default_value ||
                                 h.serial.delivered || h.wifi.delivered);
             }
-            RW_FUZZ_REQUIRE(rw_core_session_id(&h.core) == 1u);
+            RW_FUZZ_REQUIRE(rw_core_session_id(&h.core) == 1u || h.serial.delivered); /* or a commit came */
         } else {
             /* session = epoch + boot counter + 1; a used-up counter stays and the key is forgotten */
             bool used_up = h.record_boot_counter == RW_CONFIG_BOOT_COUNTER_MAX;
             RW_FUZZ_REQUIRE(rw_core_session_id(&h.core) ==
-                            h.record_session_epoch + h.record_boot_counter + (used_up ? 0u : 1u));
-            RW_FUZZ_REQUIRE(!used_up || h.core.state.config.key_set == 0u);
+                                h.record_session_epoch + h.record_boot_counter + (used_up ? 0u : 1u) ||
+                            h.serial.delivered); /* or a commit came in the first tick */
+            RW_FUZZ_REQUIRE(!used_up || h.core.state.config.key_set == 0u || h.serial.delivered);
         }
     }
     RW_FUZZ_REQUIRE(h.core.state.state < RW_STATE_COUNT);
