@@ -148,4 +148,40 @@ RW_F32_INLINE uint32_t rw_f32_mul_small(float x, uint32_t k_odd, int32_t k_shift
     return p;
 }
 
+/* (float)elapsed_ms > threshold_s * 1000.0f (or_equal: >=), the answer of that float expression without
+ * a soft-float call: the product is rounded as the float multiply rounds it (rw_f32_mul_small) and compared
+ * with the integer exactly. NaN gives false, a negative threshold true, +inf false. Thresholds of 2^24 ms
+ * (4.6 hours) and more fall back to the float expression. */
+static inline bool rw_f32_ms_past(uint32_t elapsed_ms, float threshold_s, bool or_equal)
+{
+    const uint32_t bits = rw_f32_bits(threshold_s);
+    if (rw_f32_isnan(threshold_s)) {
+        return false;
+    }
+    if ((bits & RW_F32_ABS_MASK) == 0u) { /* +-0 */
+        return or_equal || elapsed_ms > 0u;
+    }
+    if ((bits & 0x80000000u) != 0u) { /* negative, -inf included */
+        return true;
+    }
+    if (!rw_f32_finite(threshold_s)) {
+        return false;
+    }
+    int32_t exp2;
+    const uint32_t p = rw_f32_mul_small(threshold_s, 125u, 3, &exp2); /* threshold_s 1000 = p 2^exp2 */
+    if (p == 0u) { /* subnormal threshold: 0 < product < 1 */
+        return elapsed_ms > 0u;
+    }
+    if (exp2 > 0 || (exp2 == 0 && p >= 0x01000000u)) { /* >= 2^24 ms: (float)elapsed_ms may round */
+        const float elapsed = (float)elapsed_ms;
+        const float limit = threshold_s * 1000.0f;
+        return or_equal ? elapsed >= limit : elapsed > limit;
+    }
+    /* product < 2^24 <= (float)elapsed_ms whenever elapsed_ms >= 2^24, so the integer compare is exact */
+    const uint32_t shift = (uint32_t)-exp2;
+    const uint32_t whole = shift >= 32u ? 0u : p >> shift;
+    const bool fraction = shift >= 32u ? true : (p & ((1u << shift) - 1u)) != 0u;
+    return (or_equal && !fraction) ? elapsed_ms >= whole : elapsed_ms > whole;
+}
+
 #endif /* RW_FLOAT_BITS_H */

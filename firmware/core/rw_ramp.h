@@ -22,11 +22,12 @@ typedef struct rw_ramp {
     rw_ramp_config cfg; /**< public, may be changed between steps */
     struct {
         float y;            /**< last output, units */
-        float step_up;      /**< rate_up_per_s * dt_s for the rates and dt_s below (computed once) */
-        float step_down;    /**< rate_down_per_s * dt_s */
-        float step_rate_up_per_s;   /**< the rates and dt_s the steps belong to (dt 0: none yet) */
-        float step_rate_down_per_s;
-        float step_dt_s;
+        float step_up;      /**< rate_up_per_s * dt_s for the rate and dt_s below (computed once) */
+        float step_up_rate_per_s; /**< the rate step_up belongs to */
+        float step_up_dt_s;       /**< the dt_s step_up belongs to (0: none yet) */
+        float step_down;    /**< rate_down_per_s * dt_s for the rate and dt_s below (computed once) */
+        float step_down_rate_per_s;
+        float step_down_dt_s;
     } state;                /**< private history */
 } rw_ramp;
 

@@ -35,8 +35,8 @@ class RampConfig(ctypes.Structure):
 
 
 class _RampState(ctypes.Structure):
-    _fields_ = [("y", c_float), ("step_up", c_float), ("step_down", c_float), ("step_rate_up_per_s", c_float),
-                ("step_rate_down_per_s", c_float), ("step_dt_s", c_float)]
+    _fields_ = [("y", c_float), ("step_up", c_float), ("step_up_rate_per_s", c_float), ("step_up_dt_s", c_float),
+                ("step_down", c_float), ("step_down_rate_per_s", c_float), ("step_down_dt_s", c_float)]
 
 
 class Ramp(ctypes.Structure):

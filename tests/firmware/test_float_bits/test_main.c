@@ -96,6 +96,42 @@ static void test_mul_small_equals_the_float_multiply(void)
     TEST_ASSERT_EQUAL_UINT32(0u, rw_f32_mul_small(1.0e-40f, 125u, 3, &e2));
 }
 
+/* rw_f32_ms_past answers what (float)elapsed_ms > / >= threshold_s * 1000.0f answers, for the special
+ * thresholds and a sweep of timeouts around every elapsed value that could straddle them. */
+static void test_ms_past_equals_the_float_comparison(void)
+{
+    const float thresholds[] = {0.0f, -0.0f, -1.0f, 1.0e-40f, 1.0e-4f, 0.0005f, 0.001f, 0.2f, 0.3f, 0.5f,
+                                1.0f, 1.5f, 2.0f, 3.0f, 5.0f, 0.123456f, 16777.215f, 16777.216f, 20000.0f,
+                                4.0e6f, FLT_MAX, INFINITY, -INFINITY, NAN};
+    const uint32_t extra[] = {0u, 1u, 16777215u, 16777216u, 16777217u, 20000001u, 0xFFFFFFFFu};
+    for (unsigned i = 0u; i < sizeof thresholds / sizeof thresholds[0]; ++i) {
+        const float t = thresholds[i];
+        volatile float k1000 = 1000.0f;
+        const float limit = t * k1000;
+        const double centre = isfinite(limit) && limit > 0.0f && limit < 4.0e9f ? floor((double)limit) : 0.0;
+        for (int32_t d = -3; d <= 3; ++d) {
+            const double e = centre + (double)d;
+            const uint32_t elapsed = e < 0.0 ? 0u : (uint32_t)e;
+            TEST_ASSERT_EQUAL_INT((float)elapsed > limit, rw_f32_ms_past(elapsed, t, false));
+            TEST_ASSERT_EQUAL_INT((float)elapsed >= limit, rw_f32_ms_past(elapsed, t, true));
+        }
+        for (unsigned j = 0u; j < sizeof extra / sizeof extra[0]; ++j) {
+            TEST_ASSERT_EQUAL_INT((float)extra[j] > limit, rw_f32_ms_past(extra[j], t, false));
+            TEST_ASSERT_EQUAL_INT((float)extra[j] >= limit, rw_f32_ms_past(extra[j], t, true));
+        }
+    }
+    uint32_t state = 777u;
+    for (unsigned i = 0u; i < 100000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const float t = (float)(state >> 8) * (1.0f / 16777216.0f) * 100.0f;
+        volatile float k1000 = 1000.0f;
+        const float limit = t * k1000;
+        const uint32_t elapsed = (uint32_t)limit + (state & 3u) - 1u;
+        TEST_ASSERT_EQUAL_INT((float)elapsed > limit, rw_f32_ms_past(elapsed, t, false));
+        TEST_ASSERT_EQUAL_INT((float)elapsed >= limit, rw_f32_ms_past(elapsed, t, true));
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -104,5 +140,6 @@ int main(void)
     RUN_TEST(test_same_is_bit_equality);
     RUN_TEST(test_round_half_up_is_floor_of_x_plus_half);
     RUN_TEST(test_mul_small_equals_the_float_multiply);
+    RUN_TEST(test_ms_past_equals_the_float_comparison);
     return UNITY_END();
 }
