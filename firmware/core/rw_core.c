@@ -317,7 +317,8 @@ static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
     bool answered = hal->spindle->read(hal->spindle->ctx, &reading);
     rw_spindle *sp = &core->state.spindle;
     uint8_t st = core->state.state;
-    switch (rw_spindle_step(sp, answered ? &reading : NULL, dt_s)) {
+    /* dt_s is a whole number of milliseconds (the spindle period, or the real elapsed time after a gap) */
+    switch (rw_spindle_step(sp, answered ? &reading : NULL, sat_u16_times(dt_s, 125u, 3))) {
     case RW_SPINDLE_HOMED_BY_STALL:
         rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_HOMED, st, st, 1);
         break;
@@ -326,7 +327,7 @@ static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
         break;
     case RW_SPINDLE_TARGET_REACHED:
         rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_TARGET_REACHED, st, st,
-                           (int32_t)(sp->state.position_mm * 1000.0f));
+                           sp->state.position_um);
         break;
     case RW_SPINDLE_SECURED:
         if (st == RW_STATE_RETRACT) {
