@@ -13,6 +13,8 @@
 
 /* The encoder-hold threshold of control() is never under this many microseconds (3000.0f there). */
 #define RW_CORE_ENCODER_STALE_MIN_US 3000u
+/* RW_CORE_ENCODER_HOLD_MIN_MPS in Q16.16 */
+#define RW_CORE_ENCODER_HOLD_MIN_Q16 ((int32_t)(RW_CORE_ENCODER_HOLD_MIN_MPS * 65536.0f))
 
 /* x k rounded half up and saturated to 0..65535 (NaN and x <= 0 -> 0) for k = k_odd 2^k_shift (1000 =
  * 125 2^3, 60 = 15 2^2): the same product, rounded as the float multiply rounds it (rw_f32_mul_small), with
@@ -377,13 +379,14 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     if (!speed_tick) {
         return;
     }
-    float target = rope_landing(st) ? 0.0f : core->state.target_mps;
+    /* Q16.16 m/s from here on (rw_float_bits.h): the ramp, the feed-forward and the PI run in integers */
+    const int32_t target_q16 = rope_landing(st) ? 0 : rw_f32_to_q16(core->state.target_mps);
     /* While airborne the setpoint comes down onto the guard exponentially (time constant
      * RW_CORE_GUARD_APPROACH_S), not at the full ramp rate, so that the speed loop lands on it without
      * undershooting into the band under ToV x margin. */
     float rate_down = rw_params_get(&core->params, RW_PARAM_RAMP_DOWN_MPS2);
     /* the ramp uses its fall rate only when the target is under its output: the approach is computed then */
-    if (st == RW_STATE_AIRBORNE && rw_f32_lt(target, rw_ramp_output(&core->state.ramp))) {
+    if (st == RW_STATE_AIRBORNE && target_q16 < rw_ramp_output_q16(&core->state.ramp)) {
         float room = rw_ramp_output(&core->state.ramp) - rw_tov_guard_min_airborne_mps(&core->state.guard);
         float approach = room * (1.0f / RW_CORE_GUARD_APPROACH_S) + RW_CORE_GUARD_APPROACH_MIN_MPS2;
         if (rw_f32_lt(approach, rate_down)) {
@@ -391,9 +394,9 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
         }
     }
     core->state.ramp.cfg.rate_down_per_s = rate_down;
-    float setpoint = rw_ramp_step(&core->state.ramp, target, dt_s);
-    core->state.setpoint_mps = setpoint;
-    if (rope_landing(st) && rw_f32_le(setpoint, 0.0f)) {
+    const int32_t setpoint_q16 = rw_ramp_step(&core->state.ramp, target_q16, dt_s);
+    core->state.setpoint_mps = rw_f32_from_q16(setpoint_q16);
+    if (rope_landing(st) && setpoint_q16 <= 0) {
         rw_pi_controller_reset(&core->state.pi);
         core->state.pulse_us = esc_min;
         return;
@@ -405,24 +408,28 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     /* stale_us is at least RW_CORE_ENCODER_STALE_MIN_US: a shorter silence (every tick of a turning wheel)
      * needs no division */
     if (silence_us > RW_CORE_ENCODER_STALE_MIN_US && silence_us < 0x80000000u &&
-        rw_f32_ge(setpoint, RW_CORE_ENCODER_HOLD_MIN_MPS) && core->state.speed.state.primed) {
+        setpoint_q16 >= RW_CORE_ENCODER_HOLD_MIN_Q16 && core->state.speed.state.primed) {
         const rw_mt_speed_estimator_config *enc = &core->state.speed.cfg;
+        const float setpoint = core->state.setpoint_mps;
         float edge_period_us = 6.2831853f * 1.0e6f * enc->wheel_radius_m / (setpoint * (float)enc->counts_per_rev);
         float stale_us = 4.0f * edge_period_us < 3000.0f ? 3000.0f : 4.0f * edge_period_us;
         if ((float)silence_us > stale_us) {
             return; /* pulse and PI state unchanged */
         }
     }
-    float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.ff_battery_v);
+    const int32_t ff_q16 = rw_throttle_map_feed_forward(&core->state.throttle, setpoint_q16, core->state.ff_battery_v);
     /* ToV guard on the output too: while airborne the throttle never goes under what holds the guard speed
      * without load, so a step down to the guard cannot brake the rope through it (the PI's anti-windup
      * knows the floor). */
-    core->state.pi.cfg.out_min = st == RW_STATE_AIRBORNE
-        ? rw_throttle_map_feed_forward(&core->state.throttle, rw_tov_guard_min_airborne_mps(&core->state.guard),
-                                       core->state.ff_battery_v)
-        : 0.0f;
-    float u = rw_pi_controller_step(&core->state.pi, setpoint, core->state.measured_mps, ff, dt_s);
-    uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u);
+    core->state.pi.cfg.out_min =
+        st == RW_STATE_AIRBORNE
+            ? rw_f32_from_q16(rw_throttle_map_feed_forward(
+                  &core->state.throttle, rw_f32_to_q16(rw_tov_guard_min_airborne_mps(&core->state.guard)),
+                  core->state.ff_battery_v))
+            : 0.0f;
+    int32_t u_q16 = rw_pi_controller_step(&core->state.pi, setpoint_q16, rw_f32_to_q16(core->state.measured_mps),
+                                          ff_q16, dt_s);
+    uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u_q16);
     core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
 }
 

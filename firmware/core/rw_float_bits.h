@@ -184,4 +184,82 @@ static inline bool rw_f32_ms_past(uint32_t elapsed_ms, float threshold_s, bool o
     return (or_equal && !fraction) ? elapsed_ms >= whole : elapsed_ms > whole;
 }
 
+/* Q16.16 fixed point: x 65536 in an int32 (resolution 1.5e-5, range +-32768). */
+#define RW_Q16_ONE 65536
+#define RW_Q16_MAX INT32_MAX
+
+/* round(x 65536) to nearest (halves away from zero), saturated to +-INT32_MAX; NaN -> 0. Bit operations
+ * only (no soft-float call). */
+RW_F32_INLINE int32_t rw_f32_to_q16(float x)
+{
+    const uint32_t bits = rw_f32_bits(x);
+    const uint32_t biased = (bits >> 23) & 0xFFu;
+    if (biased == 0xFFu && (bits & 0x007FFFFFu) != 0u) {
+        return 0; /* NaN */
+    }
+    if (biased < 126u - 17u) {
+        return 0; /* |x| < 2^-18: rounds to 0 (subnormals and zeros too) */
+    }
+    uint32_t magnitude;
+    if (biased >= 127u + 15u) {
+        magnitude = (uint32_t)INT32_MAX; /* |x| >= 32768 (infinities too) */
+    } else {
+        const uint32_t mantissa = (bits & 0x007FFFFFu) | 0x00800000u; /* |x| = mantissa 2^(biased - 150) */
+        const int32_t shift = (int32_t)biased - 150 + 16;             /* x 65536 = mantissa 2^shift */
+        if (shift >= 0) {
+            magnitude = mantissa << (uint32_t)shift; /* < 2^31 */
+        } else {
+            const uint32_t right = (uint32_t)-shift; /* 1..24 */
+            magnitude = (mantissa + (1u << (right - 1u))) >> right;
+        }
+    }
+    return (bits & 0x80000000u) != 0u ? -(int32_t)magnitude : (int32_t)magnitude;
+}
+
+/* q / 65536 as a float, rounded to nearest even as a conversion rounds (exact for |q| < 2^24). Bit
+ * operations only. */
+RW_F32_INLINE float rw_f32_from_q16(int32_t q)
+{
+    if (q == 0) {
+        return 0.0f;
+    }
+    const uint32_t sign = q < 0 ? 0x80000000u : 0u;
+    uint32_t m = q < 0 ? 0u - (uint32_t)q : (uint32_t)q;
+    uint32_t top = 31u; /* the highest set bit of m, found in five steps */
+    if ((m >> 16) == 0u) {
+        m <<= 16;
+        top -= 16u;
+    }
+    if ((m >> 24) == 0u) {
+        m <<= 8;
+        top -= 8u;
+    }
+    if ((m >> 28) == 0u) {
+        m <<= 4;
+        top -= 4u;
+    }
+    if ((m >> 30) == 0u) {
+        m <<= 2;
+        top -= 2u;
+    }
+    if ((m >> 31) == 0u) {
+        m <<= 1;
+        top -= 1u;
+    }
+    /* m normalised: bit 31 set; keep 24 bits, round the 8 below to nearest even */
+    uint32_t mantissa = m >> 8;
+    const uint32_t rest = m & 0xFFu;
+    if (rest > 0x80u || (rest == 0x80u && (mantissa & 1u) != 0u)) {
+        ++mantissa;
+        if (mantissa == 0x01000000u) {
+            mantissa >>= 1;
+            ++top;
+        }
+    }
+    const uint32_t bits = sign | ((top - 16u + 127u) << 23) | (mantissa & 0x007FFFFFu);
+    float x;
+    memcpy(&x, &bits, sizeof x);
+    return x;
+}
+
 #endif /* RW_FLOAT_BITS_H */

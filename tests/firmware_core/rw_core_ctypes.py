@@ -11,7 +11,8 @@ The wrappers take and return Python floats/ints in the units of the C API (secon
 from __future__ import annotations
 
 import ctypes
-from ctypes import c_bool, c_float, c_int8, c_uint16, c_uint32
+import math
+from ctypes import c_bool, c_float, c_int8, c_int32, c_int64, c_uint16, c_uint32
 from pathlib import Path
 
 CANARY = 0xA5A5A5A5A5A5A5A5
@@ -35,8 +36,9 @@ class RampConfig(ctypes.Structure):
 
 
 class _RampState(ctypes.Structure):
-    _fields_ = [("y", c_float), ("step_up", c_float), ("step_up_rate_per_s", c_float), ("step_up_dt_s", c_float),
-                ("step_down", c_float), ("step_down_rate_per_s", c_float), ("step_down_dt_s", c_float)]
+    _fields_ = [("y_q32", c_int64), ("step_up_q32", c_int64), ("step_up_rate_per_s", c_float),
+                ("step_up_dt_s", c_float), ("step_down_q32", c_int64), ("step_down_rate_per_s", c_float),
+                ("step_down_dt_s", c_float)]
 
 
 class Ramp(ctypes.Structure):
@@ -48,8 +50,8 @@ class PiConfig(ctypes.Structure):
 
 
 class _PiState(ctypes.Structure):
-    _fields_ = [("integral", c_float), ("output", c_float), ("saturation", c_int8), ("ki_dt", c_float),
-                ("ki_dt_ki_per_s", c_float), ("ki_dt_dt_s", c_float)]
+    _fields_ = [("integral_q32", c_int64), ("output_q16", c_int32), ("saturation", c_int8), ("kp_q24", c_int32),
+                ("ki_dt_q32", c_int64), ("memo_kp", c_float), ("memo_ki_per_s", c_float), ("memo_dt_s", c_float)]
 
 
 class Pi(ctypes.Structure):
@@ -78,7 +80,7 @@ class ThrottleConfig(ctypes.Structure):
 
 class _ThrottleState(ctypes.Structure):
     _fields_ = [("two_pi_r_kv", c_float), ("memo_kv_rpm_per_v", c_float), ("memo_wheel_radius_m", c_float),
-                ("memo_battery_v", c_float), ("throttle_per_mps", c_float)]
+                ("memo_battery_v", c_float), ("throttle_per_mps", c_float), ("throttle_per_mps_q24", c_int32)]
 
 
 class Throttle(ctypes.Structure):
@@ -110,15 +112,16 @@ _SIGNATURES = {
     "rw_ramp_config_defaults": (None, ["RampConfig*"]),
     "rw_ramp_reset": (None, ["Ramp*"]),
     "rw_ramp_reset_to": (None, ["Ramp*", c_float]),
-    "rw_ramp_step": (c_float, ["Ramp*", c_float, c_float]),
+    "rw_ramp_step": (c_int32, ["Ramp*", c_int32, c_float]),
+    "rw_ramp_output_q16": (c_int32, ["Ramp*"]),
     "rw_ramp_output": (c_float, ["Ramp*"]),
     "rw_ramp_at_target": (c_bool, ["Ramp*", c_float]),
     "rw_ramp_config_is_valid": (c_bool, ["RampConfig*"]),
     "rw_pi_controller_init": (None, ["Pi*", "PiConfig*"]),
     "rw_pi_controller_config_defaults": (None, ["PiConfig*"]),
     "rw_pi_controller_reset": (None, ["Pi*"]),
-    "rw_pi_controller_step": (c_float, ["Pi*", c_float, c_float, c_float, c_float]),
-    "rw_pi_controller_output": (c_float, ["Pi*"]),
+    "rw_pi_controller_step": (c_int32, ["Pi*", c_int32, c_int32, c_int32, c_float]),
+    "rw_pi_controller_output_q16": (c_int32, ["Pi*"]),
     "rw_pi_controller_config_is_valid": (c_bool, ["PiConfig*"]),
     "rw_mt_speed_estimator_init": (None, ["Mt*", "MtConfig*"]),
     "rw_mt_speed_estimator_config_defaults": (None, ["MtConfig*"]),
@@ -132,9 +135,9 @@ _SIGNATURES = {
     "rw_mt_speed_estimator_config_is_valid": (c_bool, ["MtConfig*"]),
     "rw_throttle_map_init": (None, ["Throttle*", "ThrottleConfig*"]),
     "rw_throttle_map_config_defaults": (None, ["ThrottleConfig*"]),
-    "rw_throttle_map_feed_forward": (c_float, ["Throttle*", c_float, c_float]),
+    "rw_throttle_map_feed_forward": (c_int32, ["Throttle*", c_int32, c_float]),
     "rw_throttle_map_no_load_rope_mps": (c_float, ["Throttle*", c_float, c_float]),
-    "rw_throttle_map_pulse_us": (c_uint16, ["Throttle*", c_float]),
+    "rw_throttle_map_pulse_us": (c_uint16, ["Throttle*", c_int32]),
     "rw_throttle_map_throttle_from_pulse": (c_float, ["Throttle*", c_uint16]),
     "rw_throttle_map_config_is_valid": (c_bool, ["ThrottleConfig*"]),
     "rw_tov_guard_init": (None, ["Tov*", "TovConfig*"]),
@@ -168,6 +171,23 @@ def load(build_dir: Path) -> ctypes.CDLL:
 def f32(x: float) -> float:
     """x rounded to single precision (what the C core sees)."""
     return ctypes.c_float(x).value
+
+
+Q16_ONE = 65536
+
+
+def to_q16(x: float, *, name: str = "value") -> int:
+    """x in Q16.16 (x 65536, rounded, saturated at +-(2^31 - 1)) as the fixed-point steps take it; a
+    non-finite x is refused (ValueError naming the argument)."""
+    if not math.isfinite(x):
+        raise ValueError(f"{name}: expected a finite number for a Q16.16 input, got {x!r}")
+    q = min(abs(x) * Q16_ONE, 2.0**31 - 1)
+    return int(math.copysign(math.floor(q + 0.5) if q < 2**31 - 1 else 2**31 - 1, x))
+
+
+def from_q16(q: int) -> float:
+    """A Q16.16 value as a float."""
+    return q / Q16_ONE
 
 
 class _Guarded:
@@ -225,7 +245,8 @@ class RampLimiter(_Guarded):
         self._call("rw_ramp_init", ctypes.byref(RampConfig(rate_up_per_s, rate_down_per_s)))
 
     def step(self, target: float, dt_s: float) -> float:
-        return self._call("rw_ramp_step", target, dt_s)
+        """One step; target in Q16.16 (to_q16: a non-finite one raises ValueError), the output as a float."""
+        return from_q16(self._call("rw_ramp_step", to_q16(target, name="target"), dt_s))
 
     def reset(self) -> None:
         self._call("rw_ramp_reset")
@@ -249,19 +270,23 @@ class PiController(_Guarded):
         self._call("rw_pi_controller_init", ctypes.byref(PiConfig(kp, ki_per_s, out_min, out_max)))
 
     def step(self, setpoint: float, measurement: float, feed_forward: float, dt_s: float) -> float:
-        return self._call("rw_pi_controller_step", setpoint, measurement, feed_forward, dt_s)
+        """One step; the inputs in Q16.16 (to_q16: non-finite ones raise ValueError), the output as a float."""
+        return from_q16(self._call("rw_pi_controller_step", to_q16(setpoint, name="setpoint"),
+                                   to_q16(measurement, name="measurement"),
+                                   to_q16(feed_forward, name="feed_forward"), dt_s))
 
     def reset(self) -> None:
         self._call("rw_pi_controller_reset")
 
     @property
     def output(self) -> float:
-        return self._call("rw_pi_controller_output")
+        return from_q16(self._call("rw_pi_controller_output_q16"))
 
     @property
     def integral(self) -> float:
+        """The integral term, output units (Q32 in the C state)."""
         self._check()
-        return self.obj.state.integral
+        return self.obj.state.integral_q32 / 2**32
 
     @property
     def saturation(self) -> int:
@@ -317,13 +342,18 @@ class ThrottleMap(_Guarded):
         self._call("rw_throttle_map_init", ctypes.byref(cfg))
 
     def feed_forward(self, rope_mps: float, battery_v: float) -> float:
-        return self._call("rw_throttle_map_feed_forward", rope_mps, battery_v)
+        """Feed-forward throttle; rope_mps in Q16.16 (to_q16: a non-finite one raises ValueError)."""
+        return from_q16(self._call("rw_throttle_map_feed_forward", to_q16(rope_mps, name="rope_mps"), battery_v))
 
     def no_load_rope_mps(self, throttle: float, battery_v: float) -> float:
         return self._call("rw_throttle_map_no_load_rope_mps", throttle, battery_v)
 
     def pulse_us(self, throttle: float) -> int:
-        return self._call("rw_throttle_map_pulse_us", throttle)
+        """ESC pulse for a throttle fraction, in Q16.16 (to_q16: a non-finite one raises ValueError)."""
+        return self.pulse_us_q16(to_q16(throttle, name="throttle"))
+
+    def pulse_us_q16(self, throttle_q16: int) -> int:
+        return self._call("rw_throttle_map_pulse_us", throttle_q16)
 
     def throttle_from_pulse(self, pulse_us: int) -> float:
         return self._call("rw_throttle_map_throttle_from_pulse", pulse_us)

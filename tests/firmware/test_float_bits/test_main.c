@@ -132,6 +132,38 @@ static void test_ms_past_equals_the_float_comparison(void)
     }
 }
 
+/* Q16.16 conversions: to_q16 rounds x 65536 to nearest and saturates, from_q16 equals the C conversion
+ * (float)q / 65536 (exact under 2^24, rounded to nearest even above), over specials and a sweep. */
+static void test_q16_conversions(void)
+{
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(NAN));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_q16(INFINITY));
+    TEST_ASSERT_EQUAL_INT32(-INT32_MAX, rw_f32_to_q16(-INFINITY));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_q16(32768.0f));
+    TEST_ASSERT_EQUAL_INT32(0x7FFFFF80, rw_f32_to_q16(32767.998f));
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(-0.0f));
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(1.0e-40f));
+    TEST_ASSERT_EQUAL_INT32(1, rw_f32_to_q16(1.0f / 65536.0f));
+    TEST_ASSERT_EQUAL_INT32(1, rw_f32_to_q16(0.5f / 65536.0f)); /* half: away from zero */
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(0.49f / 65536.0f));
+    TEST_ASSERT_EQUAL_INT32(-65536 * 5 - 32768, rw_f32_to_q16(-5.5f));
+    uint32_t state = 99u;
+    for (unsigned i = 0u; i < 200000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const float x = ((float)(state >> 8) * (1.0f / 16777216.0f) - 0.5f) * (i % 3u == 0u ? 60000.0f : 40.0f);
+        const double exact = (double)x * 65536.0;
+        const double rounded = exact < 0.0 ? -floor(-exact + 0.5) : floor(exact + 0.5);
+        TEST_ASSERT_EQUAL_INT32((int32_t)rounded, rw_f32_to_q16(x));
+        const int32_t q = (int32_t)(state ^ (state << 7));
+        TEST_ASSERT_TRUE((float)q / 65536.0f == rw_f32_from_q16(q));
+        const int32_t small = (int32_t)(state >> 9) - (1 << 22);
+        TEST_ASSERT_TRUE((float)small / 65536.0f == rw_f32_from_q16(small));
+    }
+    TEST_ASSERT_TRUE(rw_f32_from_q16(INT32_MIN) == -32768.0f);
+    TEST_ASSERT_TRUE(rw_f32_from_q16(INT32_MAX) == 32768.0f);
+    TEST_ASSERT_TRUE(rw_f32_from_q16(0) == 0.0f);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -141,5 +173,6 @@ int main(void)
     RUN_TEST(test_round_half_up_is_floor_of_x_plus_half);
     RUN_TEST(test_mul_small_equals_the_float_multiply);
     RUN_TEST(test_ms_past_equals_the_float_comparison);
+    RUN_TEST(test_q16_conversions);
     return UNITY_END();
 }
