@@ -427,8 +427,9 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
                   &core->state.throttle, rw_f32_to_q16(rw_tov_guard_min_airborne_mps(&core->state.guard)),
                   core->state.ff_battery_v))
             : 0.0f;
-    int32_t u_q16 = rw_pi_controller_step(&core->state.pi, setpoint_q16, rw_f32_to_q16(core->state.measured_mps),
-                                          ff_q16, dt_s);
+    /* measured_mps is this speed, as a float (the estimator step's return) */
+    int32_t u_q16 = rw_pi_controller_step(&core->state.pi, setpoint_q16,
+                                          rw_mt_speed_estimator_rope_mps_q16(&core->state.speed), ff_q16, dt_s);
     uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u_q16);
     core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
 }

@@ -6,6 +6,8 @@
  * same answers as the C operators (NaN compares false, -0 == +0, infinities ordered) in a few integer
  * instructions. Bit-pattern equality (rw_f32_same) is what the controllers use to know whether a
  * precomputed constant still belongs to the current configuration and dt.
+ * Also the fixed-point helpers of the tick path: Q16.16 conversions from and to float on the bit pattern,
+ * and a 32 x 32 -> 64-bit multiply without the libgcc call.
  * Portable core header: no Arduino header, no heap.
  */
 #ifndef RW_FLOAT_BITS_H
@@ -260,6 +262,34 @@ RW_F32_INLINE float rw_f32_from_q16(int32_t q)
     float x;
     memcpy(&x, &bits, sizeof x);
     return x;
+}
+
+/* a b as a 64-bit product of two 32-bit unsigned values, inline: the Cortex-M0+ multiplies 32 x 32 -> 32 bits
+ * in one cycle but has no long multiply, and gcc calls __aeabi_lmul (a 64 x 64 product, ~40 instructions
+ * with the call) for (uint64_t)a * b. Four 16 x 16 products instead. */
+RW_F32_INLINE uint64_t rw_mul_u32_u64(uint32_t a, uint32_t b)
+{
+    const uint32_t a_lo = a & 0xFFFFu;
+    const uint32_t a_hi = a >> 16;
+    const uint32_t b_lo = b & 0xFFFFu;
+    const uint32_t b_hi = b >> 16;
+    const uint32_t lo = a_lo * b_lo;
+    const uint32_t mid_a = a_hi * b_lo;
+    const uint32_t mid_b = a_lo * b_hi;
+    const uint32_t hi = a_hi * b_hi;
+    const uint32_t mid = mid_a + (lo >> 16) + (mid_b & 0xFFFFu); /* < 2^32: no carry lost */
+    const uint32_t low_word = (mid << 16) | (lo & 0xFFFFu);
+    const uint32_t high_word = hi + (mid >> 16) + (mid_b >> 16);
+    return ((uint64_t)high_word << 32) | low_word;
+}
+
+/* a b for signed 32-bit values, as a 64-bit product (see rw_mul_u32_u64). */
+RW_F32_INLINE int64_t rw_mul_s32_s64(int32_t a, int32_t b)
+{
+    const uint32_t ma = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+    const uint32_t mb = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+    const uint64_t m = rw_mul_u32_u64(ma, mb);
+    return (a < 0) != (b < 0) ? -(int64_t)m : (int64_t)m;
 }
 
 #endif /* RW_FLOAT_BITS_H */

@@ -22,6 +22,10 @@ void rw_pi_controller_init(rw_pi_controller *c, const rw_pi_controller_config *c
     c->state.memo_kp = 0.0f;
     c->state.memo_ki_per_s = 0.0f;
     c->state.memo_dt_s = 0.0f;
+    c->state.out_min_q16 = rw_f32_to_q16(cfg->out_min);
+    c->state.out_max_q16 = rw_f32_to_q16(cfg->out_max);
+    c->state.memo_out_min = cfg->out_min;
+    c->state.memo_out_max = cfg->out_max;
     rw_pi_controller_reset(c);
 }
 
@@ -113,13 +117,22 @@ int32_t rw_pi_controller_step(rw_pi_controller *c, int32_t setpoint_q16, int32_t
         c->state.memo_ki_per_s = cfg->ki_per_s;
         c->state.memo_dt_s = dt_s;
     }
-    const int32_t out_min = rw_f32_to_q16(cfg->out_min);
-    const int32_t out_max = rw_f32_to_q16(cfg->out_max);
-    int64_t error = (int64_t)setpoint_q16 - measurement_q16;
-    error = error > RW_PI_MAX_ERROR_Q16 ? RW_PI_MAX_ERROR_Q16 : (error < -RW_PI_MAX_ERROR_Q16 ? -RW_PI_MAX_ERROR_Q16 : error);
-    const int64_t p = ((int64_t)c->state.kp_q24 * error + (1 << 23)) >> 24; /* |p| < 2^38 */
+    if (!rw_f32_same(cfg->out_min, c->state.memo_out_min) || !rw_f32_same(cfg->out_max, c->state.memo_out_max)) {
+        c->state.out_min_q16 = rw_f32_to_q16(cfg->out_min);
+        c->state.out_max_q16 = rw_f32_to_q16(cfg->out_max);
+        c->state.memo_out_min = cfg->out_min;
+        c->state.memo_out_max = cfg->out_max;
+    }
+    const int32_t out_min = c->state.out_min_q16;
+    const int32_t out_max = c->state.out_max_q16;
+    const int64_t wide_error = (int64_t)setpoint_q16 - measurement_q16;
+    const int32_t error = wide_error > RW_PI_MAX_ERROR_Q16
+                              ? RW_PI_MAX_ERROR_Q16
+                              : (wide_error < -RW_PI_MAX_ERROR_Q16 ? -RW_PI_MAX_ERROR_Q16 : (int32_t)wide_error);
+    /* 32 x 32 -> 64-bit products inline (rw_mul_s32_s64): kp_q24 and ki_dt_q32 are under 2^31 */
+    const int64_t p = (rw_mul_s32_s64(c->state.kp_q24, error) + (1 << 23)) >> 24; /* |p| < 2^38 */
     const int64_t ff = feed_forward_q16;
-    int64_t integral = c->state.integral_q32 + ((c->state.ki_dt_q32 * error) >> 16);
+    int64_t integral = c->state.integral_q32 + (rw_mul_s32_s64((int32_t)c->state.ki_dt_q32, error) >> 16);
     const int64_t unsaturated = ff + p + ((integral + 32768) >> 16);
     if (unsaturated > out_max && error > 0) {
         /* conditional integration: only up to the limit, never backwards */

@@ -36,6 +36,10 @@ typedef struct rw_pi_controller {
         float memo_kp;        /**< the kp kp_q24 belongs to */
         float memo_ki_per_s;  /**< the gain ki_dt_q32 belongs to */
         float memo_dt_s;      /**< the dt_s ki_dt_q32 belongs to (0: none yet) */
+        int32_t out_min_q16;  /**< out_min, Q16 (computed once per limit, not per step) */
+        int32_t out_max_q16;  /**< out_max, Q16 */
+        float memo_out_min;   /**< the limits the two above belong to */
+        float memo_out_max;
     } state;                  /**< private history */
 } rw_pi_controller;
 

@@ -85,7 +85,7 @@ int32_t rw_throttle_map_feed_forward(rw_throttle_map *m, int32_t rope_mps_q16, f
     if (rope_mps_q16 <= 0 || per_mps_q24 <= 0) {
         return 0;
     }
-    const int64_t throttle_q16 = ((int64_t)rope_mps_q16 * per_mps_q24 + (1 << 23)) >> 24;
+    const uint64_t throttle_q16 = (rw_mul_u32_u64((uint32_t)rope_mps_q16, (uint32_t)per_mps_q24) + (1u << 23)) >> 24;
     return throttle_q16 > RW_Q16_ONE ? RW_Q16_ONE : (int32_t)throttle_q16;
 }
 

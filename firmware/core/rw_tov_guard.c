@@ -7,13 +7,16 @@
 
 #include "rw_float_bits.h"
 
-/* Keep tov_mps * margin for the current config (the same product, computed once). */
+/* Keep tov_mps * margin and the validity for the current config (computed once per config). */
 static void refresh_min_airborne(rw_tov_guard *g)
 {
-    if (!rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) || !rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
+    if (!rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) || !rw_f32_same(g->cfg.margin, g->state.memo_margin) ||
+        !rw_f32_same(g->cfg.collapse_time_s, g->state.memo_collapse_time_s)) {
         g->state.min_airborne_mps = g->cfg.tov_mps * g->cfg.margin;
         g->state.memo_tov_mps = g->cfg.tov_mps;
         g->state.memo_margin = g->cfg.margin;
+        g->state.memo_collapse_time_s = g->cfg.collapse_time_s;
+        g->state.config_valid = rw_tov_guard_config_is_valid(&g->cfg);
     }
 }
 
@@ -22,6 +25,8 @@ void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg)
     g->cfg = *cfg;
     g->state.memo_tov_mps = 0.0f;
     g->state.memo_margin = 0.0f;
+    g->state.memo_collapse_time_s = 0.0f;
+    g->state.config_valid = false;
     g->state.min_airborne_mps = 0.0f;
     refresh_min_airborne(g);
     rw_tov_guard_reset(g);
@@ -78,10 +83,10 @@ bool rw_tov_guard_is_collapsed(const rw_tov_guard *g)
  */
 bool rw_tov_guard_step(rw_tov_guard *g, float measured_mps, float dt_s)
 {
-    if (!rw_f32_finite(measured_mps) || !rw_tov_guard_config_is_valid(&g->cfg)) {
+    refresh_min_airborne(g);
+    if (!rw_f32_finite(measured_mps) || !g->state.config_valid) {
         return false;
     }
-    refresh_min_airborne(g);
     if (rw_f32_ge(measured_mps, g->cfg.tov_mps)) {
         g->state.below_s = 0.0f;
         g->state.collapsed = false;

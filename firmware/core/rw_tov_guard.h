@@ -33,6 +33,8 @@ typedef struct rw_tov_guard {
         float min_airborne_mps; /**< tov_mps * margin for the two below (kept by init and step) */
         float memo_tov_mps;     /**< the tov_mps min_airborne_mps belongs to (0: none yet) */
         float memo_margin;      /**< the margin it belongs to */
+        float memo_collapse_time_s; /**< the collapse time config_valid belongs to (with the two above) */
+        bool config_valid;      /**< rw_tov_guard_config_is_valid of that config */
     } state;            /**< private history */
 } rw_tov_guard;
 

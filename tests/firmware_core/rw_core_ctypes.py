@@ -24,7 +24,7 @@ class LowpassConfig(ctypes.Structure):
 
 
 class _LowpassState(ctypes.Structure):
-    _fields_ = [("y", c_float), ("alpha", c_float), ("alpha_tau_s", c_float), ("alpha_dt_s", c_float)]
+    _fields_ = [("y_q32", c_int64), ("alpha_q20", c_int32), ("alpha_tau_s", c_float), ("alpha_dt_s", c_float)]
 
 
 class Lowpass(ctypes.Structure):
@@ -51,7 +51,8 @@ class PiConfig(ctypes.Structure):
 
 class _PiState(ctypes.Structure):
     _fields_ = [("integral_q32", c_int64), ("output_q16", c_int32), ("saturation", c_int8), ("kp_q24", c_int32),
-                ("ki_dt_q32", c_int64), ("memo_kp", c_float), ("memo_ki_per_s", c_float), ("memo_dt_s", c_float)]
+                ("ki_dt_q32", c_int64), ("memo_kp", c_float), ("memo_ki_per_s", c_float), ("memo_dt_s", c_float),
+                ("out_min_q16", c_int32), ("out_max_q16", c_int32), ("memo_out_min", c_float), ("memo_out_max", c_float)]
 
 
 class Pi(ctypes.Structure):
@@ -64,9 +65,9 @@ class MtConfig(ctypes.Structure):
 
 
 class _MtState(ctypes.Structure):
-    _fields_ = [("last_count", c_uint32), ("last_edge_us", c_uint32), ("raw_rev_per_s", c_float),
-                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("two_pi_r_m", c_float),
-                ("two_pi_r_radius_m", c_float)]
+    _fields_ = [("last_count", c_uint32), ("last_edge_us", c_uint32), ("raw_rev_per_s_q16", c_int32),
+                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("two_pi_r_q32", c_uint32),
+                ("two_pi_r_radius_m", c_float), ("rope_mps_q16", c_int32)]
 
 
 class Mt(ctypes.Structure):
@@ -93,7 +94,8 @@ class TovConfig(ctypes.Structure):
 
 class _TovState(ctypes.Structure):
     _fields_ = [("below_s", c_float), ("collapsed", c_bool), ("min_airborne_mps", c_float),
-                ("memo_tov_mps", c_float), ("memo_margin", c_float)]
+                ("memo_tov_mps", c_float), ("memo_margin", c_float), ("memo_collapse_time_s", c_float),
+                ("config_valid", c_bool)]
 
 
 class Tov(ctypes.Structure):
@@ -104,9 +106,9 @@ class Tov(ctypes.Structure):
 _SIGNATURES = {
     "rw_lowpass_init": (None, ["Lowpass*", "LowpassConfig*"]),
     "rw_lowpass_reset": (None, ["Lowpass*"]),
-    "rw_lowpass_reset_to": (None, ["Lowpass*", c_float]),
-    "rw_lowpass_step": (c_float, ["Lowpass*", c_float, c_float]),
-    "rw_lowpass_output": (c_float, ["Lowpass*"]),
+    "rw_lowpass_reset_to": (None, ["Lowpass*", c_int32]),
+    "rw_lowpass_step": (c_int32, ["Lowpass*", c_int32, c_float]),
+    "rw_lowpass_output_q16": (c_int32, ["Lowpass*"]),
     "rw_lowpass_config_is_valid": (c_bool, ["LowpassConfig*"]),
     "rw_ramp_init": (None, ["Ramp*", "RampConfig*"]),
     "rw_ramp_config_defaults": (None, ["RampConfig*"]),
@@ -130,6 +132,7 @@ _SIGNATURES = {
     "rw_mt_speed_estimator_rev_per_s": (c_float, ["Mt*"]),
     "rw_mt_speed_estimator_rpm": (c_float, ["Mt*"]),
     "rw_mt_speed_estimator_rope_mps": (c_float, ["Mt*"]),
+    "rw_mt_speed_estimator_rope_mps_q16": (c_int32, ["Mt*"]),
     "rw_mt_speed_estimator_raw_rev_per_s": (c_float, ["Mt*"]),
     "rw_mt_speed_estimator_is_stale": (c_bool, ["Mt*"]),
     "rw_mt_speed_estimator_config_is_valid": (c_bool, ["MtConfig*"]),
@@ -224,17 +227,18 @@ class LowpassFilter(_Guarded):
         self._call("rw_lowpass_init", ctypes.byref(LowpassConfig(tau_s)))
 
     def step(self, x: float, dt_s: float) -> float:
-        return self._call("rw_lowpass_step", x, dt_s)
+        """One sample; x in Q16.16 (to_q16: a non-finite one raises ValueError), the output as a float."""
+        return from_q16(self._call("rw_lowpass_step", to_q16(x, name="x"), dt_s))
 
     def reset(self) -> None:
         self._call("rw_lowpass_reset")
 
     def reset_to(self, y: float) -> None:
-        self._call("rw_lowpass_reset_to", y)
+        self._call("rw_lowpass_reset_to", to_q16(y, name="y"))
 
     @property
     def output(self) -> float:
-        return self._call("rw_lowpass_output")
+        return from_q16(self._call("rw_lowpass_output_q16"))
 
 
 class RampLimiter(_Guarded):

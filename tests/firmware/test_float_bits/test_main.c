@@ -164,6 +164,28 @@ static void test_q16_conversions(void)
     TEST_ASSERT_TRUE(rw_f32_from_q16(0) == 0.0f);
 }
 
+/* The inline long multiplies equal the 64-bit products, over the extremes and a sweep. */
+static void test_long_multiply(void)
+{
+    const uint32_t edges[] = {0u, 1u, 0xFFFFu, 0x10000u, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFFu, 123456789u};
+    for (unsigned i = 0u; i < sizeof edges / sizeof edges[0]; ++i) {
+        for (unsigned j = 0u; j < sizeof edges / sizeof edges[0]; ++j) {
+            TEST_ASSERT_TRUE((uint64_t)edges[i] * edges[j] == rw_mul_u32_u64(edges[i], edges[j]));
+            const int32_t a = (int32_t)edges[i];
+            const int32_t b = (int32_t)edges[j];
+            TEST_ASSERT_TRUE((int64_t)a * b == rw_mul_s32_s64(a, b));
+        }
+    }
+    uint32_t state = 4242u;
+    for (unsigned i = 0u; i < 200000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const uint32_t a = state;
+        const uint32_t b = state * 2654435761u;
+        TEST_ASSERT_TRUE((uint64_t)a * b == rw_mul_u32_u64(a, b));
+        TEST_ASSERT_TRUE((int64_t)(int32_t)a * (int32_t)b == rw_mul_s32_s64((int32_t)a, (int32_t)b));
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -174,5 +196,6 @@ int main(void)
     RUN_TEST(test_mul_small_equals_the_float_multiply);
     RUN_TEST(test_ms_past_equals_the_float_comparison);
     RUN_TEST(test_q16_conversions);
+    RUN_TEST(test_long_multiply);
     return UNITY_END();
 }
