@@ -13,6 +13,9 @@
 
 /* The encoder-hold threshold of control() is never under this many microseconds (3000.0f there). */
 #define RW_CORE_ENCODER_STALE_MIN_US 3000u
+/* 1 / RW_CORE_GUARD_APPROACH_S and RW_CORE_GUARD_APPROACH_MIN_MPS2 in Q16.16 */
+#define RW_CORE_GUARD_APPROACH_PER_S_Q16 ((int32_t)(65536.0f / RW_CORE_GUARD_APPROACH_S))
+#define RW_CORE_GUARD_APPROACH_MIN_Q16 ((int32_t)(RW_CORE_GUARD_APPROACH_MIN_MPS2 * 65536.0f))
 /* RW_CORE_ENCODER_HOLD_MIN_MPS in Q16.16 */
 #define RW_CORE_ENCODER_HOLD_MIN_Q16 ((int32_t)(RW_CORE_ENCODER_HOLD_MIN_MPS * 65536.0f))
 
@@ -383,18 +386,25 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     const int32_t target_q16 = rope_landing(st) ? 0 : rw_f32_to_q16(core->state.target_mps);
     /* While airborne the setpoint comes down onto the guard exponentially (time constant
      * RW_CORE_GUARD_APPROACH_S), not at the full ramp rate, so that the speed loop lands on it without
-     * undershooting into the band under ToV x margin. */
-    float rate_down = rw_params_get(&core->params, RW_PARAM_RAMP_DOWN_MPS2);
-    /* the ramp uses its fall rate only when the target is under its output: the approach is computed then */
-    if (st == RW_STATE_AIRBORNE && target_q16 < rw_ramp_output_q16(&core->state.ramp)) {
-        float room = rw_ramp_output(&core->state.ramp) - rw_tov_guard_min_airborne_mps(&core->state.guard);
-        float approach = room * (1.0f / RW_CORE_GUARD_APPROACH_S) + RW_CORE_GUARD_APPROACH_MIN_MPS2;
-        if (rw_f32_lt(approach, rate_down)) {
-            rate_down = approach;
+     * undershooting into the band under ToV x margin: the fall rate is min(ramp_down_mps2, room /
+     * RW_CORE_GUARD_APPROACH_S + RW_CORE_GUARD_APPROACH_MIN_MPS2), room = setpoint - guard. In fixed point:
+     * the approach step (rate x dt) bounds the target the ramp steps towards, and the ramp's own fall rate
+     * bounds it further (the same min). A setpoint already under the guard (the guard raised in flight) falls
+     * at the minimum approach rate. */
+    core->state.ramp.cfg.rate_down_per_s = rw_params_get(&core->params, RW_PARAM_RAMP_DOWN_MPS2);
+    int32_t bounded_target_q16 = target_q16;
+    const int32_t ramp_q16 = rw_ramp_output_q16(&core->state.ramp);
+    if (st == RW_STATE_AIRBORNE && target_q16 < ramp_q16) {
+        const int64_t room_q16 = (int64_t)ramp_q16 - rw_f32_to_q16(rw_tov_guard_min_airborne_mps(&core->state.guard));
+        const int32_t room_clamped_q16 = room_q16 > INT32_MAX / 4 ? INT32_MAX / 4 : (room_q16 < 0 ? 0 : (int32_t)room_q16);
+        const int64_t approach_q16 =
+            (rw_mul_s32_s64(room_clamped_q16, RW_CORE_GUARD_APPROACH_PER_S_Q16) >> 16) + RW_CORE_GUARD_APPROACH_MIN_Q16;
+        const int64_t step_q16 = (rw_mul_s32_s64((int32_t)approach_q16, rw_f32_to_fixed(dt_s, 32u)) + 0x80000000) >> 32;
+        if ((int64_t)ramp_q16 - step_q16 > target_q16) {
+            bounded_target_q16 = (int32_t)(ramp_q16 - step_q16);
         }
     }
-    core->state.ramp.cfg.rate_down_per_s = rate_down;
-    const int32_t setpoint_q16 = rw_ramp_step(&core->state.ramp, target_q16, dt_s);
+    const int32_t setpoint_q16 = rw_ramp_step(&core->state.ramp, bounded_target_q16, dt_s);
     core->state.setpoint_mps = rw_f32_from_q16(setpoint_q16);
     if (rope_landing(st) && setpoint_q16 <= 0) {
         rw_pi_controller_reset(&core->state.pi);

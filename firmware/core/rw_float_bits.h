@@ -154,7 +154,7 @@ RW_F32_INLINE uint32_t rw_f32_mul_small(float x, uint32_t k_odd, int32_t k_shift
  * a soft-float call: the product is rounded as the float multiply rounds it (rw_f32_mul_small) and compared
  * with the integer exactly. NaN gives false, a negative threshold true, +inf false. Thresholds of 2^24 ms
  * (4.6 hours) and more fall back to the float expression. */
-static inline bool rw_f32_ms_past(uint32_t elapsed_ms, float threshold_s, bool or_equal)
+RW_F32_INLINE bool rw_f32_ms_past(uint32_t elapsed_ms, float threshold_s, bool or_equal)
 {
     const uint32_t bits = rw_f32_bits(threshold_s);
     if (rw_f32_isnan(threshold_s)) {
@@ -190,32 +190,38 @@ static inline bool rw_f32_ms_past(uint32_t elapsed_ms, float threshold_s, bool o
 #define RW_Q16_ONE 65536
 #define RW_Q16_MAX INT32_MAX
 
-/* round(x 65536) to nearest (halves away from zero), saturated to +-INT32_MAX; NaN -> 0. Bit operations
- * only (no soft-float call). */
-RW_F32_INLINE int32_t rw_f32_to_q16(float x)
+/* round(x 2^frac_bits) to nearest (halves away from zero), saturated to +-INT32_MAX; NaN -> 0 (frac_bits
+ * 0..31). Bit operations only (no soft-float call). */
+RW_F32_INLINE int32_t rw_f32_to_fixed(float x, uint32_t frac_bits)
 {
     const uint32_t bits = rw_f32_bits(x);
     const uint32_t biased = (bits >> 23) & 0xFFu;
     if (biased == 0xFFu && (bits & 0x007FFFFFu) != 0u) {
         return 0; /* NaN */
     }
-    if (biased < 126u - 17u) {
-        return 0; /* |x| < 2^-18: rounds to 0 (subnormals and zeros too) */
+    if (biased + frac_bits < 125u) {
+        return 0; /* |x| 2^frac_bits < 1/4: rounds to 0 (subnormals and zeros too) */
     }
     uint32_t magnitude;
-    if (biased >= 127u + 15u) {
-        magnitude = (uint32_t)INT32_MAX; /* |x| >= 32768 (infinities too) */
+    if (biased + frac_bits >= 158u) {
+        magnitude = (uint32_t)INT32_MAX; /* |x| 2^frac_bits >= 2^31 (infinities too) */
     } else {
         const uint32_t mantissa = (bits & 0x007FFFFFu) | 0x00800000u; /* |x| = mantissa 2^(biased - 150) */
-        const int32_t shift = (int32_t)biased - 150 + 16;             /* x 65536 = mantissa 2^shift */
+        const int32_t shift = (int32_t)(biased + frac_bits) - 150;    /* x 2^frac_bits = mantissa 2^shift */
         if (shift >= 0) {
             magnitude = mantissa << (uint32_t)shift; /* < 2^31 */
         } else {
-            const uint32_t right = (uint32_t)-shift; /* 1..24 */
+            const uint32_t right = (uint32_t)-shift; /* 1..25 */
             magnitude = (mantissa + (1u << (right - 1u))) >> right;
         }
     }
     return (bits & 0x80000000u) != 0u ? -(int32_t)magnitude : (int32_t)magnitude;
+}
+
+/* round(x 65536) to nearest (halves away from zero), saturated to +-INT32_MAX; NaN -> 0: Q16.16. */
+RW_F32_INLINE int32_t rw_f32_to_q16(float x)
+{
+    return rw_f32_to_fixed(x, 16u);
 }
 
 /* q / 65536 as a float, rounded to nearest even as a conversion rounds (exact for |q| < 2^24). Bit

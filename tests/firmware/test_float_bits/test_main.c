@@ -159,6 +159,18 @@ static void test_q16_conversions(void)
         const int32_t small = (int32_t)(state >> 9) - (1 << 22);
         TEST_ASSERT_TRUE((float)small / 65536.0f == rw_f32_from_q16(small));
     }
+    /* other fixed points: Q32 of a tick period, Q0 */
+    TEST_ASSERT_EQUAL_INT32(8589935, rw_f32_to_fixed(0.002f, 32u)); /* 0.002 2^32 = 8589934.6 */
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_fixed(0.5f, 32u));
+    TEST_ASSERT_EQUAL_INT32(1073741824, rw_f32_to_fixed(0.25f, 32u));
+    TEST_ASSERT_EQUAL_INT32(-3, rw_f32_to_fixed(-2.5f, 0u));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_fixed(3.0e9f, 0u));
+    for (unsigned i = 0u; i < 20000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const float x = (float)(state >> 8) * (1.0f / 16777216.0f) * 0.3f;
+        const double exact = (double)x * 4294967296.0;
+        TEST_ASSERT_EQUAL_INT32((int32_t)floor(exact + 0.5), rw_f32_to_fixed(x, 32u));
+    }
     TEST_ASSERT_TRUE(rw_f32_from_q16(INT32_MIN) == -32768.0f);
     TEST_ASSERT_TRUE(rw_f32_from_q16(INT32_MAX) == 32768.0f);
     TEST_ASSERT_TRUE(rw_f32_from_q16(0) == 0.0f);
