@@ -395,7 +395,7 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     int32_t bounded_target_q16 = target_q16;
     const int32_t ramp_q16 = rw_ramp_output_q16(&core->state.ramp);
     if (st == RW_STATE_AIRBORNE && target_q16 < ramp_q16) {
-        const int64_t room_q16 = (int64_t)ramp_q16 - rw_f32_to_q16(rw_tov_guard_min_airborne_mps(&core->state.guard));
+        const int64_t room_q16 = (int64_t)ramp_q16 - rw_tov_guard_min_airborne_mps_q16(&core->state.guard);
         const int32_t room_clamped_q16 = room_q16 > INT32_MAX / 4 ? INT32_MAX / 4 : (room_q16 < 0 ? 0 : (int32_t)room_q16);
         const int64_t approach_q16 =
             (rw_mul_s32_s64(room_clamped_q16, RW_CORE_GUARD_APPROACH_PER_S_Q16) >> 16) + RW_CORE_GUARD_APPROACH_MIN_Q16;
@@ -434,7 +434,7 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     core->state.pi.cfg.out_min =
         st == RW_STATE_AIRBORNE
             ? rw_f32_from_q16(rw_throttle_map_feed_forward(
-                  &core->state.throttle, rw_f32_to_q16(rw_tov_guard_min_airborne_mps(&core->state.guard)),
+                  &core->state.throttle, rw_tov_guard_min_airborne_mps_q16(&core->state.guard),
                   core->state.ff_battery_v))
             : 0.0f;
     /* measured_mps is this speed, as a float (the estimator step's return) */

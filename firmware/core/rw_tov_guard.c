@@ -13,6 +13,7 @@ static void refresh_min_airborne(rw_tov_guard *g)
     if (!rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) || !rw_f32_same(g->cfg.margin, g->state.memo_margin) ||
         !rw_f32_same(g->cfg.collapse_time_s, g->state.memo_collapse_time_s)) {
         g->state.min_airborne_mps = g->cfg.tov_mps * g->cfg.margin;
+        g->state.min_airborne_mps_q16 = rw_f32_to_q16(g->state.min_airborne_mps);
         g->state.memo_tov_mps = g->cfg.tov_mps;
         g->state.memo_margin = g->cfg.margin;
         g->state.memo_collapse_time_s = g->cfg.collapse_time_s;
@@ -28,6 +29,7 @@ void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg)
     g->state.memo_collapse_time_s = 0.0f;
     g->state.config_valid = false;
     g->state.min_airborne_mps = 0.0f;
+    g->state.min_airborne_mps_q16 = 0;
     refresh_min_airborne(g);
     rw_tov_guard_reset(g);
 }
@@ -57,6 +59,14 @@ float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g)
         return g->state.min_airborne_mps;
     }
     return g->cfg.tov_mps * g->cfg.margin;
+}
+
+int32_t rw_tov_guard_min_airborne_mps_q16(const rw_tov_guard *g)
+{
+    if (rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) && rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
+        return g->state.min_airborne_mps_q16;
+    }
+    return rw_f32_to_q16(g->cfg.tov_mps * g->cfg.margin);
 }
 
 bool rw_tov_guard_setpoint_allowed(const rw_tov_guard *g, float setpoint_mps)

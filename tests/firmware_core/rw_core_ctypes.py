@@ -94,6 +94,7 @@ class TovConfig(ctypes.Structure):
 
 class _TovState(ctypes.Structure):
     _fields_ = [("below_s", c_float), ("collapsed", c_bool), ("min_airborne_mps", c_float),
+                ("min_airborne_mps_q16", c_int32),
                 ("memo_tov_mps", c_float), ("memo_margin", c_float), ("memo_collapse_time_s", c_float),
                 ("config_valid", c_bool)]
 
