@@ -5,7 +5,10 @@ same types); change both together. Every object is allocated with a canary block
 each wrapper call checks the canary, so a mirror that is smaller than the C struct fails loudly
 instead of corrupting memory silently.
 
-The wrappers take and return Python floats/ints in the units of the C API (seconds, m/s, us).
+The wrappers take and return Python floats/ints in the units of the C API (seconds, m/s, us). Where a C
+step runs in Q16.16 fixed point (rw_float_bits.h: the PI, ramp, low-pass, feed-forward and ESC pulse) the
+wrapper converts with to_q16 / from_q16, the one place the tests do it; a non-finite input is refused there
+with a ValueError naming the argument (a Q16.16 value cannot be NaN or infinite).
 """
 
 from __future__ import annotations
