@@ -168,6 +168,24 @@ def test_position_loop_command_is_p_law_saturated_and_zero_in_tolerance(rw_core,
         assert sp.moving_speed_raw & DIRECTION_BIT
 
 
+def test_fixed_point_resolution_of_position_and_command(rw_core):
+    """The step is integer: the angle in ticks (1/2560 register unit), the guide in um, the command in um/s.
+    Every register value near home maps to the float law (register x 300/1023 deg x lead/360) within 1 um,
+    and the P law's command is kp x the error within kp x 1 um/s (+ 1 um/s of rounding)."""
+    sp = _homed_at_zero(rw_core, guide_min_mm=-50.0)  # home at register 500
+    lead = DEFAULT_CONFIG["lead_mm_per_rev"]
+    kp = DEFAULT_CONFIG["kp_per_s"]
+    for raw in list(range(500, 571, 3)) + list(range(570, 429, -3)):  # small steps: never a rejected jump
+        sp.step(reading(position_raw=raw), DT_S)
+        expected_mm = (raw - 500) * 300.0 / 1023.0 * lead / 360.0
+        assert sp.position_mm == pytest.approx(expected_mm, abs=1e-3), f"register {raw}"
+        target_mm = expected_mm + 0.7777  # inside the speed limit: kp x 0.7777 = 3.11 mm/s
+        sp.move_to(target_mm)
+        sp.step(reading(position_raw=raw), DT_S)
+        assert sp.command_mmps == pytest.approx(kp * 0.7777, abs=(kp + 1.0) * 1e-3)
+    assert sp.rejected == 0
+
+
 def test_target_reached_once_per_target(rw_core):
     sp = _homed_at_zero(rw_core)
     sp.move_to(0.3)
