@@ -157,6 +157,12 @@ RW_F32_INLINE uint32_t rw_f32_mul_small(float x, uint32_t k_odd, int32_t k_shift
 RW_F32_INLINE bool rw_f32_ms_past(uint32_t elapsed_ms, float threshold_s, bool or_equal)
 {
     const uint32_t bits = rw_f32_bits(threshold_s);
+    const uint32_t biased = bits >> 23; /* sign bit included: negative thresholds fail the next test */
+    if (biased >= 118u && biased < 149u && elapsed_ms < (1u << (biased - 118u))) {
+        /* the usual case, decided in a few instructions: threshold_s >= 2^(biased - 127), so the product is
+         * over 2^(biased - 127) 512 = 2^(biased - 118) > elapsed_ms */
+        return false;
+    }
     if (rw_f32_isnan(threshold_s)) {
         return false;
     }
