@@ -27,7 +27,19 @@ uint16_t rw_ax12_moving_speed_raw(float speed_deg_s)
     if (!isfinite(speed_deg_s)) {
         return 0u;
     }
-    float units = fabsf(speed_deg_s) * (1023.0f / (RW_AX12_WHEEL_NO_LOAD_RPM * DEG_S_PER_RPM));
+    float units = fabsf(speed_deg_s) * RW_AX12_MOVING_UNITS_PER_DEG_S;
     uint16_t magnitude = units >= 1023.0f ? 1023u : (uint16_t)(units + 0.5f);
     return speed_deg_s < 0.0f && magnitude != 0u ? (uint16_t)(magnitude | RW_AX12_DIRECTION_BIT) : magnitude;
+}
+
+int32_t rw_ax12_position_ticks(uint16_t raw)
+{
+    const int32_t v = raw > 1023u ? 1023 : (int32_t)raw;
+    return v * RW_AX12_TICKS_PER_POSITION_UNIT;
+}
+
+int32_t rw_ax12_speed_ticks_per_ms_q10(uint16_t raw)
+{
+    const int32_t magnitude = (int32_t)(raw & RW_AX12_MAGNITUDE_MASK) * RW_AX12_SPEED_UNIT_TICKS_PER_MS_Q10;
+    return (raw & RW_AX12_DIRECTION_BIT) != 0u ? -magnitude : magnitude;
 }

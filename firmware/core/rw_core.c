@@ -11,25 +11,16 @@
  * ramp never take one giant step; the uptime still advances by the real time. */
 #define RW_CORE_MAX_CONTROL_DT_S 0.05f
 
-/* 65535.0f as a bit pattern: positive floats order like their bit patterns. */
-#define RW_CORE_F32_BITS_65535 0x477FFF00u
+/* The encoder-hold threshold of control() is never under this many microseconds (3000.0f there). */
+#define RW_CORE_ENCODER_STALE_MIN_US 3000u
+/* 1 / RW_CORE_GUARD_APPROACH_S and RW_CORE_GUARD_APPROACH_MIN_MPS2 in Q16.16 */
+#define RW_CORE_GUARD_APPROACH_PER_S_Q16 ((int32_t)(65536.0f / RW_CORE_GUARD_APPROACH_S))
+#define RW_CORE_GUARD_APPROACH_MIN_Q16 ((int32_t)(RW_CORE_GUARD_APPROACH_MIN_MPS2 * 65536.0f))
+/* RW_CORE_ENCODER_HOLD_MIN_MPS in Q16.16 */
+#define RW_CORE_ENCODER_HOLD_MIN_Q16 ((int32_t)(RW_CORE_ENCODER_HOLD_MIN_MPS * 65536.0f))
 
-/* x rounded half up to 0..65535 (NaN and x <= 0 -> 0, x >= 65535 -> 65535), on the bit pattern: no
- * soft-float call. The half-up rounding is exact (floor(x + 0.5) of the real value, where the float
- * sum x + 0.5f could round up just below a half). */
-static uint16_t sat_u16(float x)
-{
-    if (!rw_f32_positive(x)) {
-        return 0u;
-    }
-    if (rw_f32_bits(x) >= RW_CORE_F32_BITS_65535) {
-        return 65535u;
-    }
-    return (uint16_t)rw_f32_round_half_up_u24(x);
-}
-
-/* sat_u16(x k) for k = k_odd 2^k_shift (1000 = 125 2^3, 60 = 15 2^2): the same product, rounded as the
- * float multiply rounds it (rw_f32_mul_small), then rounded half up and saturated as sat_u16 does, with
+/* x k rounded half up and saturated to 0..65535 (NaN and x <= 0 -> 0) for k = k_odd 2^k_shift (1000 =
+ * 125 2^3, 60 = 15 2^2): the same product, rounded as the float multiply rounds it (rw_f32_mul_small), with
  * no soft-float call (__aeabi_fmul is ~120 instructions on the M0+). */
 static uint16_t sat_u16_times(float x, uint32_t k_odd, int32_t k_shift)
 {
@@ -257,15 +248,16 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     const rw_params *p = &core->params;
     uint8_t st = core->state.state;
 
+    /* the time thresholds are compared as (float)elapsed_ms >= threshold_s * 1000.0f, on the bit patterns */
     if (!core->state.arming_hold_done &&
-        (float)core->state.uptime_ms >= rw_params_get(p, RW_PARAM_ARM_HOLD_S) * 1000.0f) {
+        rw_f32_ms_past(core->state.uptime_ms, rw_params_get(p, RW_PARAM_ARM_HOLD_S), true)) {
         core->state.arming_hold_done = true;
         rw_core_emit_event(core, RW_EVENT_KIND_ARMING_HOLD_DONE, st, st, 0);
     }
 
     /* Heartbeat: the host must be heard from within heartbeat_timeout_s while the rope is driven. */
     uint32_t silence_ms = core->state.uptime_ms - core->state.last_host_frame_ms;
-    if ((float)silence_ms > rw_params_get(p, RW_PARAM_HEARTBEAT_TIMEOUT_S) * 1000.0f) {
+    if (rw_f32_ms_past(silence_ms, rw_params_get(p, RW_PARAM_HEARTBEAT_TIMEOUT_S), false)) {
         if (!core->state.heartbeat_lost && st != RW_STATE_DISARMED) {
             core->state.heartbeat_lost = true;
             rw_core_emit_event(core, RW_EVENT_KIND_HEARTBEAT_LOST, st, st, (int32_t)silence_ms);
@@ -283,9 +275,9 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     }
 
     /* Battery: under the cutoff for battery_cutoff_time_s (brief load sags pass) -> land the rope. */
-    if (core->state.battery_v < rw_params_get(p, RW_PARAM_BATTERY_CUTOFF_V)) {
+    if (rw_f32_lt(core->state.battery_v, rw_params_get(p, RW_PARAM_BATTERY_CUTOFF_V))) {
         core->state.battery_low_ms += dt_ms;
-        if ((float)core->state.battery_low_ms >= rw_params_get(p, RW_PARAM_BATTERY_CUTOFF_TIME_S) * 1000.0f) {
+        if (rw_f32_ms_past(core->state.battery_low_ms, rw_params_get(p, RW_PARAM_BATTERY_CUTOFF_TIME_S), true)) {
             rw_core_raise_fault(core, RW_FAULT_BATTERY_LOW);
             st = core->state.state;
             if (st == RW_STATE_SPINUP || st == RW_STATE_AIRBORNE) {
@@ -298,10 +290,10 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     }
 
     /* Encoder silent while the throttle is up: the speed loop is blind, stop driving. */
-    uint16_t esc_min = (uint16_t)rw_params_get(p, RW_PARAM_ESC_MIN_US);
+    uint16_t esc_min = core->state.throttle.cfg.pulse_min_us; /* (uint16_t)esc_min_us (rw_core_apply_params) */
     if (encoder_counts_delta == 0u && core->state.pulse_us > esc_min + RW_CORE_THROTTLE_ACTIVE_US) {
         core->state.encoder_silent_ms += dt_ms;
-        if ((float)core->state.encoder_silent_ms > rw_params_get(p, RW_PARAM_ENCODER_TIMEOUT_S) * 1000.0f) {
+        if (rw_f32_ms_past(core->state.encoder_silent_ms, rw_params_get(p, RW_PARAM_ENCODER_TIMEOUT_S), false)) {
             rw_core_raise_fault(core, RW_FAULT_ENCODER_SILENT);
         }
     } else {
@@ -313,17 +305,17 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     if (st == RW_STATE_AIRBORNE) {
         if (rw_tov_guard_step(&core->state.guard, core->state.measured_mps, dt_s)) {
             rw_core_emit_event(core, RW_EVENT_KIND_LOOP_COLLAPSED, st, st,
-                               (int32_t)sat_u16(core->state.measured_mps * 1000.0f));
+                               (int32_t)sat_u16_times(core->state.measured_mps, 125u, 3)); /* x 1000 */
             rw_core_set_state(core, RW_STATE_SPINUP, RW_CAUSE_LOOP_COLLAPSED);
         }
-    } else if (st == RW_STATE_SPINUP && core->state.target_mps >= guard_mps &&
-               core->state.measured_mps >= guard_mps) {
+    } else if (st == RW_STATE_SPINUP && rw_f32_ge(core->state.target_mps, guard_mps) &&
+               rw_f32_ge(core->state.measured_mps, guard_mps)) {
         rw_core_set_state(core, RW_STATE_AIRBORNE, RW_CAUSE_SPEED_REACHED);
-    } else if (st == RW_STATE_SPINDOWN && rw_ramp_output(&core->state.ramp) <= 0.0f &&
-               core->state.measured_mps < RW_CORE_STOPPED_MPS) {
+    } else if (st == RW_STATE_SPINDOWN && rw_f32_le(rw_ramp_output(&core->state.ramp), 0.0f) &&
+               rw_f32_lt(core->state.measured_mps, RW_CORE_STOPPED_MPS)) {
         rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_SPEED_REACHED);
-    } else if (st == RW_STATE_RELAX && core->state.grasp_pending && rw_ramp_output(&core->state.ramp) <= 0.0f &&
-               core->state.measured_mps < RW_CORE_STOPPED_MPS) {
+    } else if (st == RW_STATE_RELAX && core->state.grasp_pending && rw_f32_le(rw_ramp_output(&core->state.ramp), 0.0f) &&
+               rw_f32_lt(core->state.measured_mps, RW_CORE_STOPPED_MPS)) {
         core->state.grasp_pending = false;
         rw_spindle_retract(&core->state.spindle);
         rw_core_set_state(core, RW_STATE_RETRACT, RW_CAUSE_SPEED_REACHED);
@@ -340,7 +332,8 @@ static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
     bool answered = hal->spindle->read(hal->spindle->ctx, &reading);
     rw_spindle *sp = &core->state.spindle;
     uint8_t st = core->state.state;
-    switch (rw_spindle_step(sp, answered ? &reading : NULL, dt_s)) {
+    /* dt_s is a whole number of milliseconds (the spindle period, or the real elapsed time after a gap) */
+    switch (rw_spindle_step(sp, answered ? &reading : NULL, sat_u16_times(dt_s, 125u, 3))) {
     case RW_SPINDLE_HOMED_BY_STALL:
         rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_HOMED, st, st, 1);
         break;
@@ -349,7 +342,7 @@ static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
         break;
     case RW_SPINDLE_TARGET_REACHED:
         rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_TARGET_REACHED, st, st,
-                           (int32_t)(sp->state.position_mm * 1000.0f));
+                           sp->state.position_um);
         break;
     case RW_SPINDLE_SECURED:
         if (st == RW_STATE_RETRACT) {
@@ -399,22 +392,31 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     if (!speed_tick) {
         return;
     }
-    float target = rope_landing(st) ? 0.0f : core->state.target_mps;
+    /* Q16.16 m/s from here on (rw_float_bits.h): the ramp, the feed-forward and the PI run in integers */
+    const int32_t target_q16 = rope_landing(st) ? 0 : rw_f32_to_q16(core->state.target_mps);
     /* While airborne the setpoint comes down onto the guard exponentially (time constant
      * RW_CORE_GUARD_APPROACH_S), not at the full ramp rate, so that the speed loop lands on it without
-     * undershooting into the band under ToV x margin. */
-    float rate_down = rw_params_get(&core->params, RW_PARAM_RAMP_DOWN_MPS2);
-    if (st == RW_STATE_AIRBORNE) {
-        float room = rw_ramp_output(&core->state.ramp) - rw_tov_guard_min_airborne_mps(&core->state.guard);
-        float approach = room * (1.0f / RW_CORE_GUARD_APPROACH_S) + RW_CORE_GUARD_APPROACH_MIN_MPS2;
-        if (approach < rate_down) {
-            rate_down = approach;
+     * undershooting into the band under ToV x margin: the fall rate is min(ramp_down_mps2, room /
+     * RW_CORE_GUARD_APPROACH_S + RW_CORE_GUARD_APPROACH_MIN_MPS2), room = setpoint - guard. In fixed point:
+     * the approach step (rate x dt) bounds the target the ramp steps towards, and the ramp's own fall rate
+     * bounds it further (the same min). A setpoint already under the guard (the guard raised in flight) falls
+     * at the minimum approach rate. */
+    core->state.ramp.cfg.rate_down_per_s = rw_params_get(&core->params, RW_PARAM_RAMP_DOWN_MPS2);
+    int32_t bounded_target_q16 = target_q16;
+    const int32_t ramp_q16 = rw_ramp_output_q16(&core->state.ramp);
+    if (st == RW_STATE_AIRBORNE && target_q16 < ramp_q16) {
+        const int64_t room_q16 = (int64_t)ramp_q16 - rw_tov_guard_min_airborne_mps_q16(&core->state.guard);
+        const int32_t room_clamped_q16 = room_q16 > INT32_MAX / 4 ? INT32_MAX / 4 : (room_q16 < 0 ? 0 : (int32_t)room_q16);
+        const int64_t approach_q16 =
+            (rw_mul_s32_s64(room_clamped_q16, RW_CORE_GUARD_APPROACH_PER_S_Q16) >> 16) + RW_CORE_GUARD_APPROACH_MIN_Q16;
+        const int64_t step_q16 = (rw_mul_s32_s64((int32_t)approach_q16, rw_f32_to_fixed(dt_s, 32u)) + 0x80000000) >> 32;
+        if ((int64_t)ramp_q16 - step_q16 > target_q16) {
+            bounded_target_q16 = (int32_t)(ramp_q16 - step_q16);
         }
     }
-    core->state.ramp.cfg.rate_down_per_s = rate_down;
-    float setpoint = rw_ramp_step(&core->state.ramp, target, dt_s);
-    core->state.setpoint_mps = setpoint;
-    if (rope_landing(st) && rw_f32_le(setpoint, 0.0f)) {
+    const int32_t setpoint_q16 = rw_ramp_step(&core->state.ramp, bounded_target_q16, dt_s);
+    core->state.setpoint_mps = rw_f32_from_q16(setpoint_q16);
+    if (rope_landing(st) && setpoint_q16 <= 0) {
         rw_pi_controller_reset(&core->state.pi);
         core->state.pulse_us = esc_min;
         return;
@@ -422,25 +424,33 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     /* A blind loop must not act: with the rope meant to run at >= 1 m/s, no encoder edge for four edge
      * periods at the setpoint (3 ms at least) means the reading is stale, not that the rope stopped: hold the
      * throttle and the integrator until edges come back (or encoder_timeout_s raises ENCODER_SILENT). */
-    if (rw_f32_ge(setpoint, RW_CORE_ENCODER_HOLD_MIN_MPS) && core->state.speed.state.primed) {
+    uint32_t silence_us = core->state.last_now_us - core->state.speed.state.last_edge_us;
+    /* stale_us is at least RW_CORE_ENCODER_STALE_MIN_US: a shorter silence (every tick of a turning wheel)
+     * needs no division */
+    if (silence_us > RW_CORE_ENCODER_STALE_MIN_US && silence_us < 0x80000000u &&
+        setpoint_q16 >= RW_CORE_ENCODER_HOLD_MIN_Q16 && core->state.speed.state.primed) {
         const rw_mt_speed_estimator_config *enc = &core->state.speed.cfg;
+        const float setpoint = core->state.setpoint_mps;
         float edge_period_us = 6.2831853f * 1.0e6f * enc->wheel_radius_m / (setpoint * (float)enc->counts_per_rev);
         float stale_us = 4.0f * edge_period_us < 3000.0f ? 3000.0f : 4.0f * edge_period_us;
-        uint32_t silence_us = core->state.last_now_us - core->state.speed.state.last_edge_us;
-        if (silence_us < 0x80000000u && (float)silence_us > stale_us) {
+        if ((float)silence_us > stale_us) {
             return; /* pulse and PI state unchanged */
         }
     }
-    float ff = rw_throttle_map_feed_forward(&core->state.throttle, setpoint, core->state.ff_battery_v);
+    const int32_t ff_q16 = rw_throttle_map_feed_forward(&core->state.throttle, setpoint_q16, core->state.ff_battery_v);
     /* ToV guard on the output too: while airborne the throttle never goes under what holds the guard speed
      * without load, so a step down to the guard cannot brake the rope through it (the PI's anti-windup
      * knows the floor). */
-    core->state.pi.cfg.out_min = st == RW_STATE_AIRBORNE
-        ? rw_throttle_map_feed_forward(&core->state.throttle, rw_tov_guard_min_airborne_mps(&core->state.guard),
-                                       core->state.ff_battery_v)
-        : 0.0f;
-    float u = rw_pi_controller_step(&core->state.pi, setpoint, core->state.measured_mps, ff, dt_s);
-    uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u);
+    core->state.pi.cfg.out_min =
+        st == RW_STATE_AIRBORNE
+            ? rw_f32_from_q16(rw_throttle_map_feed_forward(
+                  &core->state.throttle, rw_tov_guard_min_airborne_mps_q16(&core->state.guard),
+                  core->state.ff_battery_v))
+            : 0.0f;
+    /* measured_mps is this speed, as a float (the estimator step's return) */
+    int32_t u_q16 = rw_pi_controller_step(&core->state.pi, setpoint_q16,
+                                          rw_mt_speed_estimator_rope_mps_q16(&core->state.speed), ff_q16, dt_s);
+    uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u_q16);
     core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
 }
 

@@ -1,14 +1,19 @@
 /*
- * rw_lowpass.c - first-order low-pass filter.
+ * rw_lowpass.c - first-order low-pass filter, fixed point.
  */
 #include "rw_lowpass.h"
 
 #include "rw_float_bits.h"
 
+#define RW_LOWPASS_ALPHA_ONE_Q20 (1 << 20)
+/* |x - y| is clamped to this many units (Q32: 2^42 = 1024 units) before the multiply by alpha (Q20): the
+ * product stays within 64 bits; a larger jump is followed in several steps. */
+#define RW_LOWPASS_MAX_STEP_Q32 ((int64_t)1 << 42)
+
 void rw_lowpass_init(rw_lowpass *f, const rw_lowpass_config *cfg)
 {
     f->cfg = *cfg;
-    f->state.alpha = 1.0f;
+    f->state.alpha_q20 = RW_LOWPASS_ALPHA_ONE_Q20;
     f->state.alpha_tau_s = 0.0f;
     f->state.alpha_dt_s = 0.0f;
     rw_lowpass_reset(f);
@@ -16,17 +21,17 @@ void rw_lowpass_init(rw_lowpass *f, const rw_lowpass_config *cfg)
 
 void rw_lowpass_reset(rw_lowpass *f)
 {
-    f->state.y = 0.0f;
+    f->state.y_q32 = 0;
 }
 
-void rw_lowpass_reset_to(rw_lowpass *f, float y)
+void rw_lowpass_reset_to(rw_lowpass *f, int32_t y_q16)
 {
-    f->state.y = rw_f32_finite(y) ? y : 0.0f;
+    f->state.y_q32 = (int64_t)y_q16 * 65536;
 }
 
-float rw_lowpass_output(const rw_lowpass *f)
+int32_t rw_lowpass_output_q16(const rw_lowpass *f)
 {
-    return f->state.y;
+    return (int32_t)((f->state.y_q32 + 32768) >> 16);
 }
 
 bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
@@ -37,33 +42,35 @@ bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
 /*
  * Continuous law:   tau * dy/dt + y = x
  * Discrete law (backward Euler, unconditionally stable for any dt_s > 0, no exp() on the M0+):
- *     alpha = dt_s / (tau_s + dt_s)          0 < alpha <= 1
- *     y[k]  = y[k-1] + alpha * (x[k] - y[k-1])
+ *     alpha = dt_s / (tau_s + dt_s)          0 < alpha <= 1   (Q20, at least 2^-20)
+ *     y[k]  = y[k-1] + alpha * (x[k] - y[k-1])                 (y kept in Q32, so no dead band)
  * tau_s <= 0 (or not finite): y[k] = x[k] (pass-through).
- * dt_s <= 0, dt_s not finite or x not finite: y[k] = y[k-1] (the sample is ignored), so no NaN or
- * infinity ever leaves the filter.
+ * dt_s <= 0 or not finite: y[k] = y[k-1] (the sample is ignored).
  * alpha is computed once per (tau_s, dt_s) pair and kept (a division is ~350 instructions on the M0+;
- * the tick has a fixed dt): the same value, bit for bit, as computing it every step.
+ * the tick has a fixed dt); the step itself is integer arithmetic.
  */
-float rw_lowpass_step(rw_lowpass *f, float x, float dt_s)
+int32_t rw_lowpass_step(rw_lowpass *f, int32_t x_q16, float dt_s)
 {
-    if (!rw_f32_finite(x) || !rw_f32_positive_finite(dt_s)) {
-        return f->state.y;
+    if (!rw_f32_positive_finite(dt_s)) {
+        return rw_lowpass_output_q16(f);
     }
     const float tau_s = f->cfg.tau_s;
     if (!rw_f32_positive_finite(tau_s)) {
-        f->state.y = x;
-        return f->state.y;
+        rw_lowpass_reset_to(f, x_q16);
+        return x_q16;
     }
     if (!rw_f32_same(tau_s, f->state.alpha_tau_s) || !rw_f32_same(dt_s, f->state.alpha_dt_s)) {
-        f->state.alpha = dt_s / (tau_s + dt_s);
+        const int32_t alpha_q20 = rw_f32_to_q16(dt_s / (tau_s + dt_s) * 16.0f); /* Q16 of 16 alpha = Q20 */
+        f->state.alpha_q20 = alpha_q20 < 1 ? 1 : (alpha_q20 > RW_LOWPASS_ALPHA_ONE_Q20 ? RW_LOWPASS_ALPHA_ONE_Q20 : alpha_q20);
         f->state.alpha_tau_s = tau_s;
         f->state.alpha_dt_s = dt_s;
     }
-    const float alpha = f->state.alpha;
-    const float y = f->state.y + alpha * (x - f->state.y);
-    if (rw_f32_finite(y)) { /* x - y may overflow for inputs near FLT_MAX */
-        f->state.y = y;
+    if (f->state.alpha_q20 == RW_LOWPASS_ALPHA_ONE_Q20) { /* dt far beyond tau */
+        rw_lowpass_reset_to(f, x_q16);
+        return x_q16;
     }
-    return f->state.y;
+    int64_t e = (int64_t)x_q16 * 65536 - f->state.y_q32;
+    e = e > RW_LOWPASS_MAX_STEP_Q32 ? RW_LOWPASS_MAX_STEP_Q32 : (e < -RW_LOWPASS_MAX_STEP_Q32 ? -RW_LOWPASS_MAX_STEP_Q32 : e);
+    f->state.y_q32 += (e * f->state.alpha_q20) >> 20;
+    return rw_lowpass_output_q16(f);
 }

@@ -8,7 +8,8 @@
  * count and edge_us must be latched together (the same edge). Step at least every 2^31 us (about
  * 35 minutes; the firmware steps every tick); edge intervals (stops) of any length are handled.
  * Outputs: wheel rev/s, rpm and rope surface speed in m/s (2 pi r rev/s), optionally low-pass
- * filtered, and a "stale" flag.
+ * filtered, and a "stale" flag. The step runs in integers (no soft-float on the Cortex-M0+): rev/s and
+ * m/s in Q16.16 (1/65536: 15 um/s of rope), one 32-bit division chain per measured interval.
  * Portable core module: no Arduino header, no heap, reads no clock (times come in).
  */
 #ifndef RW_MT_SPEED_ESTIMATOR_H
@@ -36,12 +37,13 @@ typedef struct rw_mt_speed_estimator {
     struct {
         uint32_t last_count;   /**< edge count at the last measured edge */
         uint32_t last_edge_us; /**< timestamp of that edge, microseconds */
-        float raw_rev_per_s;   /**< unfiltered estimate, rev/s (>= 0) */
-        rw_lowpass filter;     /**< low-pass on raw_rev_per_s, tau = filter_tau_s */
+        int32_t raw_rev_per_s_q16; /**< unfiltered estimate, rev/s Q16.16 (>= 0) */
+        rw_lowpass filter;     /**< low-pass on raw_rev_per_s_q16, tau = filter_tau_s */
         bool primed;           /**< a reference edge has been latched since reset */
         bool stale;            /**< no measured edge interval since reset, or silent > timeout_us */
-        float two_pi_r_m;      /**< 2 pi wheel_radius_m for two_pi_r_radius_m (computed once, not per step) */
-        float two_pi_r_radius_m; /**< the wheel_radius_m two_pi_r_m belongs to (0: none yet) */
+        uint32_t two_pi_r_q32; /**< 2 pi wheel_radius_m, metres Q32, for two_pi_r_radius_m (computed once) */
+        float two_pi_r_radius_m; /**< the wheel_radius_m two_pi_r_q32 belongs to (0: none yet) */
+        int32_t rope_mps_q16;  /**< filtered rope speed, m/s Q16.16 (2 pi r x the filtered rev/s) */
     } state;                   /**< private history */
 } rw_mt_speed_estimator;
 
@@ -63,6 +65,8 @@ float rw_mt_speed_estimator_rev_per_s(const rw_mt_speed_estimator *e);
 float rw_mt_speed_estimator_rpm(const rw_mt_speed_estimator *e);
 /** Filtered rope surface speed, m/s (>= 0): 2 pi wheel_radius_m rev/s. */
 float rw_mt_speed_estimator_rope_mps(const rw_mt_speed_estimator *e);
+/** The same, m/s Q16.16, as the last step (or reset) computed it: the speed loop's input. */
+int32_t rw_mt_speed_estimator_rope_mps_q16(const rw_mt_speed_estimator *e);
 /** Unfiltered wheel speed, rev/s (>= 0). */
 float rw_mt_speed_estimator_raw_rev_per_s(const rw_mt_speed_estimator *e);
 /** true while no edge interval has been measured since reset or the encoder was silent for

@@ -1,5 +1,5 @@
 /*
- * rw_pi_controller.c - PI controller with feed-forward and anti-windup.
+ * rw_pi_controller.c - PI controller with feed-forward and anti-windup, Q16.16 fixed point.
  */
 #include "rw_pi_controller.h"
 
@@ -7,12 +7,25 @@
 
 #include "rw_float_bits.h"
 
+/* kp is kept in Q24: gains up to this (throttle per m/s) */
+#define RW_PI_MAX_KP 127.0f
+/* ki_per_s dt_s is kept in Q32: up to this (integrating half the error per step is far beyond any loop) */
+#define RW_PI_MAX_KI_DT 0.49f
+/* the error saturates at +-this, Q16 (32768 error units): the products with the gains stay in 64 bits */
+#define RW_PI_MAX_ERROR_Q16 INT32_MAX
+
 void rw_pi_controller_init(rw_pi_controller *c, const rw_pi_controller_config *cfg)
 {
     c->cfg = *cfg;
-    c->state.ki_dt = 0.0f;
-    c->state.ki_dt_ki_per_s = 0.0f;
-    c->state.ki_dt_dt_s = 0.0f;
+    c->state.kp_q24 = 0;
+    c->state.ki_dt_q32 = 0;
+    c->state.memo_kp = 0.0f;
+    c->state.memo_ki_per_s = 0.0f;
+    c->state.memo_dt_s = 0.0f;
+    c->state.out_min_q16 = rw_f32_to_q16(cfg->out_min);
+    c->state.out_max_q16 = rw_f32_to_q16(cfg->out_max);
+    c->state.memo_out_min = cfg->out_min;
+    c->state.memo_out_max = cfg->out_max;
     rw_pi_controller_reset(c);
 }
 
@@ -24,23 +37,24 @@ void rw_pi_controller_config_defaults(rw_pi_controller_config *cfg)
     cfg->out_max = RW_DEFAULT_SPEED_OUT_MAX;
 }
 
-void rw_pi_controller_reset(rw_pi_controller *c)
+static int32_t clamp_q16(int64_t x, int32_t lo, int32_t hi)
 {
-    c->state.integral = 0.0f;
-    c->state.output = 0.0f;
-    c->state.saturation = 0;
-    /* Keep the held output inside the limits when 0 is not (e.g. out_min = 0.1). */
-    if (rw_f32_lt(c->state.output, c->cfg.out_min)) {
-        c->state.output = c->cfg.out_min;
-    }
-    if (rw_f32_gt(c->state.output, c->cfg.out_max)) {
-        c->state.output = c->cfg.out_max;
-    }
+    return x < lo ? lo : (x > hi ? hi : (int32_t)x);
 }
 
-float rw_pi_controller_output(const rw_pi_controller *c)
+void rw_pi_controller_reset(rw_pi_controller *c)
 {
-    return c->state.output;
+    c->state.integral_q32 = 0;
+    c->state.saturation = 0;
+    /* Keep the held output inside the limits when 0 is not (e.g. out_min = 0.1). */
+    const int32_t lo = rw_f32_to_q16(c->cfg.out_min);
+    const int32_t hi = rw_f32_to_q16(c->cfg.out_max);
+    c->state.output_q16 = lo > 0 ? lo : (hi < 0 ? hi : 0);
+}
+
+int32_t rw_pi_controller_output_q16(const rw_pi_controller *c)
+{
+    return c->state.output_q16;
 }
 
 bool rw_pi_controller_config_is_valid(const rw_pi_controller_config *cfg)
@@ -50,41 +64,24 @@ bool rw_pi_controller_config_is_valid(const rw_pi_controller_config *cfg)
            rw_f32_le(cfg->out_min, cfg->out_max);
 }
 
-static float clampf(float x, float lo, float hi)
+/* x scale for a non-negative config value, rounded, saturated at max scale (< 2^31); NaN -> 0 (float, once
+ * per change; a float -> uint32 conversion: float -> int64 would link libgcc's double-precision code). */
+static uint32_t gain_fixed(float x, float max, float scale)
 {
-    return rw_f32_lt(x, lo) ? lo : (rw_f32_gt(x, hi) ? hi : x);
-}
-
-/* fmaxf/fminf as C99 defines them (a NaN argument gives the other one), compared on the bit patterns. */
-static float maxf(float a, float b)
-{
-    if (rw_f32_isnan(a)) {
-        return b;
+    if (!rw_f32_positive(x)) {
+        return 0u;
     }
-    if (rw_f32_isnan(b)) {
-        return a;
-    }
-    return rw_f32_lt(a, b) ? b : a;
-}
-
-static float minf(float a, float b)
-{
-    if (rw_f32_isnan(a)) {
-        return b;
-    }
-    if (rw_f32_isnan(b)) {
-        return a;
-    }
-    return rw_f32_gt(a, b) ? b : a;
+    const float limited = rw_f32_lt(x, max) ? x : max;
+    return (uint32_t)(limited * scale + 0.5f);
 }
 
 /*
  * Continuous law:   u(t) = ff(t) + kp * e(t) + ki * integral(e dt),   e = setpoint - measurement
- * Discrete law (forward-Euler integral, step k, dt = dt_s):
- *     e[k]  = setpoint[k] - measurement[k]
- *     p[k]  = kp * e[k]
- *     I'    = I[k-1] + ki_per_s * dt * e[k]                       (candidate integral)
- *     v     = ff[k] + p[k] + I'                                    (unsaturated output)
+ * Discrete law (forward-Euler integral, step k, dt = dt_s), all in fixed point:
+ *     e[k]  = setpoint[k] - measurement[k]                              (Q16)
+ *     p[k]  = kp * e[k]                                                  (Q16, rounded)
+ *     I'    = I[k-1] + ki_per_s * dt * e[k]                              (Q32, candidate integral)
+ *     v     = ff[k] + p[k] + I'                                          (unsaturated output)
  * Anti-windup, two parts:
  *  1. conditional integration: if v > out_max and e[k] > 0, the integral only grows as far as
  *     the limit and never backwards, I' = max(I[k-1], out_max - ff[k] - p[k]) (symmetrically
@@ -95,57 +92,71 @@ static float minf(float a, float b)
  *     the integral term alone never drives the output past a limit, so a reversed error leaves
  *     saturation within one step even after a long saturation or a feed-forward jump (f rather than
  *     ff so that a feed-forward beyond a limit does not force the integral to the opposite sign).
- *     u[k] = clamp(ff[k] + p[k] + I[k], out_min, out_max)
- * Bad input: dt_s <= 0 or not finite, or any input not finite -> u[k] = u[k-1] and nothing is
- * integrated. No NaN or infinity ever leaves the step. With out_min > out_max (invalid config,
- * see rw_pi_controller_config_is_valid) the output is held.
- * ki_per_s * dt_s is computed once per (ki_per_s, dt_s) and kept (the product the law uses first, so
- * the same value bit for bit); comparisons run on the bit patterns with the C semantics.
+ *     u[k] = clamp(ff[k] + p[k] + I[k], out_min, out_max)           (I[k] rounded to Q16)
+ * Bad input: dt_s <= 0 or not finite, a non-finite config, or out_min > out_max (invalid config, see
+ * rw_pi_controller_config_is_valid) -> u[k] = u[k-1] and nothing is integrated. Sums run in 64 bits
+ * with the error saturated at +-32768 units, kp at 127 and ki_per_s dt_s at 0.49: nothing overflows,
+ * whatever the Q16 inputs.
+ * kp and ki_per_s * dt_s are converted once per (kp) and (ki_per_s, dt_s) and kept.
  */
-float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measurement,
-                            float feed_forward, float dt_s)
+int32_t rw_pi_controller_step(rw_pi_controller *c, int32_t setpoint_q16, int32_t measurement_q16,
+                              int32_t feed_forward_q16, float dt_s)
 {
     const rw_pi_controller_config *cfg = &c->cfg;
-    /* Only the limits are checked here (one comparison, false for NaN): a non-finite gain makes u
-     * non-finite, which the check below catches. */
-    if (!rw_f32_finite(setpoint) || !rw_f32_finite(measurement) || !rw_f32_finite(feed_forward) ||
-        !rw_f32_positive_finite(dt_s) || !rw_f32_le(cfg->out_min, cfg->out_max)) {
-        return c->state.output;
+    if (!rw_f32_positive_finite(dt_s) || !rw_f32_finite(cfg->out_min) || !rw_f32_finite(cfg->out_max) ||
+        !rw_f32_le(cfg->out_min, cfg->out_max) || !rw_f32_finite(cfg->kp) || !rw_f32_finite(cfg->ki_per_s)) {
+        return c->state.output_q16;
     }
-    if (!rw_f32_same(cfg->ki_per_s, c->state.ki_dt_ki_per_s) || !rw_f32_same(dt_s, c->state.ki_dt_dt_s)) {
-        c->state.ki_dt = cfg->ki_per_s * dt_s;
-        c->state.ki_dt_ki_per_s = cfg->ki_per_s;
-        c->state.ki_dt_dt_s = dt_s;
+    if (!rw_f32_same(cfg->kp, c->state.memo_kp)) {
+        c->state.kp_q24 = (int32_t)gain_fixed(cfg->kp, RW_PI_MAX_KP, 16777216.0f);
+        c->state.memo_kp = cfg->kp;
     }
-    const float error = setpoint - measurement;
-    const float p = cfg->kp * error;
-    float integral = c->state.integral + c->state.ki_dt * error;
-    const float ff_p = feed_forward + p; /* (ff + p) + I: the order C evaluates ff + p + I in */
-    const float unsaturated = ff_p + integral;
-    const float candidate = integral;
-    if (rw_f32_gt(unsaturated, cfg->out_max) && rw_f32_positive(error)) {
+    if (!rw_f32_same(cfg->ki_per_s, c->state.memo_ki_per_s) || !rw_f32_same(dt_s, c->state.memo_dt_s)) {
+        const float ki_dt = cfg->ki_per_s * dt_s;
+        c->state.ki_dt_q32 = (int64_t)gain_fixed(rw_f32_finite(ki_dt) ? ki_dt : RW_PI_MAX_KI_DT, RW_PI_MAX_KI_DT, 4294967296.0f);
+        c->state.memo_ki_per_s = cfg->ki_per_s;
+        c->state.memo_dt_s = dt_s;
+    }
+    if (!rw_f32_same(cfg->out_min, c->state.memo_out_min) || !rw_f32_same(cfg->out_max, c->state.memo_out_max)) {
+        c->state.out_min_q16 = rw_f32_to_q16(cfg->out_min);
+        c->state.out_max_q16 = rw_f32_to_q16(cfg->out_max);
+        c->state.memo_out_min = cfg->out_min;
+        c->state.memo_out_max = cfg->out_max;
+    }
+    const int32_t out_min = c->state.out_min_q16;
+    const int32_t out_max = c->state.out_max_q16;
+    const int64_t wide_error = (int64_t)setpoint_q16 - measurement_q16;
+    const int32_t error = wide_error > RW_PI_MAX_ERROR_Q16
+                              ? RW_PI_MAX_ERROR_Q16
+                              : (wide_error < -RW_PI_MAX_ERROR_Q16 ? -RW_PI_MAX_ERROR_Q16 : (int32_t)wide_error);
+    /* 32 x 32 -> 64-bit products inline (rw_mul_s32_s64): kp_q24 and ki_dt_q32 are under 2^31 */
+    const int64_t p = (rw_mul_s32_s64(c->state.kp_q24, error) + (1 << 23)) >> 24; /* |p| < 2^38 */
+    const int64_t ff = feed_forward_q16;
+    int64_t integral = c->state.integral_q32 + (rw_mul_s32_s64((int32_t)c->state.ki_dt_q32, error) >> 16);
+    const int64_t unsaturated = ff + p + ((integral + 32768) >> 16);
+    if (unsaturated > out_max && error > 0) {
         /* conditional integration: only up to the limit, never backwards */
-        integral = maxf(c->state.integral, cfg->out_max - feed_forward - p);
-    } else if (rw_f32_lt(unsaturated, cfg->out_min) && rw_f32_lt(error, 0.0f)) {
-        integral = minf(c->state.integral, cfg->out_min - feed_forward - p);
+        const int64_t limit = (out_max - ff - p) * 65536;
+        integral = c->state.integral_q32 > limit ? c->state.integral_q32 : limit;
+    } else if (unsaturated < out_min && error < 0) {
+        const int64_t limit = (out_min - ff - p) * 65536;
+        integral = c->state.integral_q32 < limit ? c->state.integral_q32 : limit;
     }
-    const float ff_in_limits = clampf(feed_forward, cfg->out_min, cfg->out_max);
-    integral = clampf(integral, cfg->out_min - ff_in_limits, cfg->out_max - ff_in_limits);
-    /* the integral untouched by the anti-windup (the usual case): u is the sum already made */
-    const float u = rw_f32_same(integral, candidate) ? unsaturated : ff_p + integral;
-    if (!rw_f32_finite(integral) || !rw_f32_finite(u)) { /* overflow of huge (but finite) inputs */
-        return c->state.output;
-    }
-    c->state.integral = integral;
-    if (rw_f32_ge(u, cfg->out_max)) {
-        c->state.output = cfg->out_max;
+    const int64_t ff_in_limits = clamp_q16(ff, out_min, out_max);
+    const int64_t low = (out_min - ff_in_limits) * 65536;
+    const int64_t high = (out_max - ff_in_limits) * 65536;
+    integral = integral < low ? low : (integral > high ? high : integral);
+    c->state.integral_q32 = integral;
+    const int64_t u = ff + p + ((integral + 32768) >> 16);
+    if (u >= out_max) {
+        c->state.output_q16 = out_max;
         c->state.saturation = 1;
-    } else if (rw_f32_le(u, cfg->out_min)) {
-        c->state.output = cfg->out_min;
+    } else if (u <= out_min) {
+        c->state.output_q16 = out_min;
         c->state.saturation = -1;
     } else {
-        c->state.output = u;
+        c->state.output_q16 = (int32_t)u;
         c->state.saturation = 0;
     }
-    return c->state.output;
+    return c->state.output_q16;
 }

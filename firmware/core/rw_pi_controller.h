@@ -3,7 +3,8 @@
  * (conditional integration plus an integrator clamp).
  *
  * In the rope speed loop: setpoint and measurement in m/s, output and feed-forward a throttle
- * fraction, kp in throttle per (m/s), ki_per_s in throttle per (m/s * s).
+ * fraction, kp in throttle per (m/s), ki_per_s in throttle per (m/s * s). The step runs in Q16.16 fixed
+ * point (values x 65536 in an int32, range +-32768); the config stays float (converted when it changes).
  * Portable core module: no Arduino header, no heap, reads no clock (dt_s comes in).
  */
 #ifndef RW_PI_CONTROLLER_H
@@ -27,29 +28,38 @@ typedef struct rw_pi_controller_config {
 typedef struct rw_pi_controller {
     rw_pi_controller_config cfg; /**< public, may be changed between steps */
     struct {
-        float integral;    /**< integral term, output units (already multiplied by ki_per_s) */
-        float output;      /**< last output, output units, always within [out_min, out_max] */
-        int8_t saturation; /**< +1: last output at out_max, -1: at out_min, 0: inside */
-        float ki_dt;       /**< ki_per_s * dt_s for ki_dt_ki_per_s and ki_dt_dt_s (computed once, not per step) */
-        float ki_dt_ki_per_s; /**< the gain ki_dt belongs to */
-        float ki_dt_dt_s;     /**< the dt_s ki_dt belongs to (0: none yet) */
-    } state;               /**< private history */
+        int64_t integral_q32; /**< integral term, output units Q32 (already multiplied by ki_per_s) */
+        int32_t output_q16;   /**< last output, output units Q16, always within the limits */
+        int8_t saturation;    /**< +1: last output at out_max, -1: at out_min, 0: inside */
+        int32_t kp_q24;       /**< kp, Q24 (computed once per kp, not per step) */
+        int64_t ki_dt_q32;    /**< ki_per_s * dt_s, Q32, for the gain and dt_s below */
+        float memo_kp;        /**< the kp kp_q24 belongs to */
+        float memo_ki_per_s;  /**< the gain ki_dt_q32 belongs to */
+        float memo_dt_s;      /**< the dt_s ki_dt_q32 belongs to (0: none yet) */
+        int32_t out_min_q16;  /**< out_min, Q16 (computed once per limit, not per step) */
+        int32_t out_max_q16;  /**< out_max, Q16 */
+        float memo_out_min;   /**< the limits the two above belong to */
+        float memo_out_max;
+    } state;                  /**< private history */
 } rw_pi_controller;
 
 /** Copies cfg and resets. */
 void rw_pi_controller_init(rw_pi_controller *c, const rw_pi_controller_config *cfg);
 /** Fills cfg with the rope speed loop defaults of rw_defaults.h. */
 void rw_pi_controller_config_defaults(rw_pi_controller_config *cfg);
-/** Integral term and output back to 0, saturation cleared. */
+/** Integral term and output back to 0 (0 brought into the limits), saturation cleared. */
 void rw_pi_controller_reset(rw_pi_controller *c);
 /**
- * One control step. setpoint and measurement in error units, feed_forward in output units,
- * dt_s the time since the previous step in seconds. Returns the output, within [out_min, out_max].
+ * One control step in Q16.16 fixed point (x 65536; no soft-float on the Cortex-M0+): setpoint and
+ * measurement in error units, feed_forward in output units, dt_s the time since the previous step in
+ * seconds. Returns the output, Q16, within [out_min, out_max] (the limits rounded to Q16).
+ * Resolution: 1/65536 of an output unit for the output and the proportional term, 2^-32 for the
+ * integral (so a small error still integrates), kp to 2^-24, ki_per_s dt_s to 2^-32.
  */
-float rw_pi_controller_step(rw_pi_controller *c, float setpoint, float measurement,
-                            float feed_forward, float dt_s);
-/** Last output without stepping. */
-float rw_pi_controller_output(const rw_pi_controller *c);
+int32_t rw_pi_controller_step(rw_pi_controller *c, int32_t setpoint_q16, int32_t measurement_q16,
+                              int32_t feed_forward_q16, float dt_s);
+/** Last output without stepping, Q16. */
+int32_t rw_pi_controller_output_q16(const rw_pi_controller *c);
 /** true when the gains are finite and >= 0 and out_min <= out_max, both finite. */
 bool rw_pi_controller_config_is_valid(const rw_pi_controller_config *cfg);
 

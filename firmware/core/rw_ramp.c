@@ -1,5 +1,5 @@
 /*
- * rw_ramp.c - setpoint rate limiter.
+ * rw_ramp.c - setpoint rate limiter, Q16.16 fixed point.
  */
 #include "rw_ramp.h"
 
@@ -10,11 +10,12 @@
 void rw_ramp_init(rw_ramp *r, const rw_ramp_config *cfg)
 {
     r->cfg = *cfg;
-    r->state.step_up = 0.0f;
-    r->state.step_down = 0.0f;
-    r->state.step_rate_up_per_s = 0.0f;
-    r->state.step_rate_down_per_s = 0.0f;
-    r->state.step_dt_s = 0.0f;
+    r->state.step_up_q32 = 0;
+    r->state.step_up_rate_per_s = 0.0f;
+    r->state.step_up_dt_s = 0.0f;
+    r->state.step_down_q32 = 0;
+    r->state.step_down_rate_per_s = 0.0f;
+    r->state.step_down_dt_s = 0.0f;
     rw_ramp_reset(r);
 }
 
@@ -26,23 +27,27 @@ void rw_ramp_config_defaults(rw_ramp_config *cfg)
 
 void rw_ramp_reset(rw_ramp *r)
 {
-    r->state.y = 0.0f;
+    r->state.y_q32 = 0;
 }
 
 void rw_ramp_reset_to(rw_ramp *r, float y)
 {
-    r->state.y = rw_f32_finite(y) ? y : 0.0f;
+    r->state.y_q32 = (int64_t)(rw_f32_finite(y) ? rw_f32_to_q16(y) : 0) * 65536;
 }
 
 float rw_ramp_output(const rw_ramp *r)
 {
-    return r->state.y;
+    return rw_f32_from_q16(rw_ramp_output_q16(r));
+}
+
+int32_t rw_ramp_output_q16(const rw_ramp *r)
+{
+    return (int32_t)((r->state.y_q32 + 32768) >> 16); /* rounded to nearest */
 }
 
 bool rw_ramp_at_target(const rw_ramp *r, float target)
 {
-    /* Exact on purpose: the step lands on the target exactly (written so -Wfloat-equal is quiet). */
-    return !rw_f32_lt(r->state.y, target) && !rw_f32_gt(r->state.y, target) && rw_f32_finite(target);
+    return rw_f32_finite(target) && r->state.y_q32 == (int64_t)rw_f32_to_q16(target) * 65536;
 }
 
 bool rw_ramp_config_is_valid(const rw_ramp_config *cfg)
@@ -50,46 +55,59 @@ bool rw_ramp_config_is_valid(const rw_ramp_config *cfg)
     return rw_f32_finite(cfg->rate_up_per_s) && rw_f32_finite(cfg->rate_down_per_s);
 }
 
-/*
- * Discrete law (per step of dt_s seconds):
- *     d    = target - y[k-1]
- *     y[k] = y[k-1] + min(d,  rate_up_per_s   * dt_s)   if d > 0
- *     y[k] = y[k-1] - min(-d, rate_down_per_s * dt_s)   if d < 0
- * so the output reaches the target exactly (no overshoot, no chatter) and moves by exactly
- * rate * dt_s per step while it is further away than that. A rate <= 0 or not finite: no limit in
- * that direction (y[k] = target).
- * dt_s <= 0, dt_s not finite or target not finite: y[k] = y[k-1].
- * rate * dt_s is computed once per (rates, dt_s) and kept: the same value, bit for bit, as computing it
- * every step; the comparisons run on the bit patterns (rw_float_bits.h), with the C semantics.
- */
-float rw_ramp_step(rw_ramp *r, float target, float dt_s)
+/* rate * dt_s in Q32 (the Q16 part plus the rounded remainder, both by the bit-pattern conversion: no
+ * float -> int64 conversion, which would link double-precision code), at least 2^-32; INT64_MAX (no limit)
+ * for a rate <= 0, not finite, or a step beyond the Q16 range. Once per (rate, dt_s). */
+static int64_t step_q32(float rate_per_s, float dt_s)
 {
-    if (!rw_f32_finite(target) || !rw_f32_positive_finite(dt_s)) {
-        return r->state.y;
+    if (!rw_f32_positive_finite(rate_per_s)) {
+        return INT64_MAX;
     }
-    const float y = r->state.y;
-    const float d = target - y;
-    if (!rw_f32_finite(d)) { /* target and y of opposite sign near FLT_MAX */
-        return r->state.y;
+    const float step = rate_per_s * dt_s;
+    const int32_t whole_q16 = rw_f32_to_q16(step);
+    if (whole_q16 == INT32_MAX) {
+        return INT64_MAX;
     }
-    const float rate_up = r->cfg.rate_up_per_s;
-    const float rate_down = r->cfg.rate_down_per_s;
-    if (!rw_f32_same(dt_s, r->state.step_dt_s) || !rw_f32_same(rate_up, r->state.step_rate_up_per_s) ||
-        !rw_f32_same(rate_down, r->state.step_rate_down_per_s)) {
-        r->state.step_up = rate_up * dt_s;
-        r->state.step_down = rate_down * dt_s;
-        r->state.step_rate_up_per_s = rate_up;
-        r->state.step_rate_down_per_s = rate_down;
-        r->state.step_dt_s = dt_s;
+    const int32_t rest_q32 = rw_f32_to_q16((step - rw_f32_from_q16(whole_q16)) * 65536.0f); /* |rest| <= 1/2 LSB */
+    const int64_t total = (int64_t)whole_q16 * 65536 + rest_q32;
+    return total < 1 ? 1 : total;
+}
+
+/*
+ * Discrete law (per step of dt_s seconds), in integers (Q32: units x 2^32):
+ *     d    = target - y[k-1]
+ *     y[k] = y[k-1] + min(d,  step_up)     if d > 0,     step_up   = rate_up_per_s   * dt_s
+ *     y[k] = y[k-1] - min(-d, step_down)   if d < 0,     step_down = rate_down_per_s * dt_s
+ * so the output reaches the target exactly (no overshoot, no chatter) and moves by exactly one step
+ * while it is further away than that. A rate <= 0 or not finite: no limit in that direction
+ * (y[k] = target). dt_s <= 0 or not finite: y[k] = y[k-1].
+ * The steps are computed once per (rate, dt_s), for each direction when the ramp first moves that way,
+ * and kept (a caller that changes the fall rate while rising pays nothing for it).
+ */
+int32_t rw_ramp_step(rw_ramp *r, int32_t target_q16, float dt_s)
+{
+    if (!rw_f32_positive_finite(dt_s)) {
+        return rw_ramp_output_q16(r);
     }
-    if (rw_f32_positive(d)) {
-        const float max_step = r->state.step_up;
-        r->state.y = (rw_f32_positive(rate_up) && rw_f32_finite(max_step) && rw_f32_gt(d, max_step)) ? y + max_step
-                                                                                                      : target;
-    } else if (rw_f32_lt(d, 0.0f)) {
-        const float max_step = r->state.step_down;
-        r->state.y = (rw_f32_positive(rate_down) && rw_f32_finite(max_step) && rw_f32_gt(-d, max_step)) ? y - max_step
-                                                                                                          : target;
+    const int64_t target = (int64_t)target_q16 * 65536;
+    const int64_t y = r->state.y_q32;
+    const int64_t d = target - y; /* |d| < 2^48 */
+    if (d > 0) {
+        const float rate_up = r->cfg.rate_up_per_s;
+        if (!rw_f32_same(dt_s, r->state.step_up_dt_s) || !rw_f32_same(rate_up, r->state.step_up_rate_per_s)) {
+            r->state.step_up_q32 = step_q32(rate_up, dt_s);
+            r->state.step_up_rate_per_s = rate_up;
+            r->state.step_up_dt_s = dt_s;
+        }
+        r->state.y_q32 = d > r->state.step_up_q32 ? y + r->state.step_up_q32 : target;
+    } else if (d < 0) {
+        const float rate_down = r->cfg.rate_down_per_s;
+        if (!rw_f32_same(dt_s, r->state.step_down_dt_s) || !rw_f32_same(rate_down, r->state.step_down_rate_per_s)) {
+            r->state.step_down_q32 = step_q32(rate_down, dt_s);
+            r->state.step_down_rate_per_s = rate_down;
+            r->state.step_down_dt_s = dt_s;
+        }
+        r->state.y_q32 = -d > r->state.step_down_q32 ? y - r->state.step_down_q32 : target;
     }
-    return r->state.y;
+    return rw_ramp_output_q16(r);
 }

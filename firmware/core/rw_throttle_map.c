@@ -12,6 +12,8 @@
 
 #define RW_TWO_PI_F 6.28318530718f
 #define RW_S_PER_MIN_F 60.0f
+/* The Q24 feed-forward factor saturates here (throttle per m/s; a sane drive needs 0.01-0.1). */
+#define RW_THROTTLE_MAX_PER_MPS 127.0f
 
 void rw_throttle_map_init(rw_throttle_map *m, const rw_throttle_map_config *cfg)
 {
@@ -68,19 +70,23 @@ void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v)
         const float full_m_per_min = rope_m_per_min_at_full_throttle(m->state.two_pi_r_kv, battery_v);
         /* one soft-float division, once per battery voltage */
         m->state.throttle_per_mps = rw_f32_positive(full_m_per_min) ? RW_S_PER_MIN_F / full_m_per_min : 0.0f;
+        const float per_mps = m->state.throttle_per_mps;
+        m->state.throttle_per_mps_q24 = rw_f32_lt(per_mps, RW_THROTTLE_MAX_PER_MPS)
+                                            ? (int32_t)(per_mps * 16777216.0f + 0.5f)
+                                            : (int32_t)(RW_THROTTLE_MAX_PER_MPS * 16777216.0f);
         m->state.memo_battery_v = battery_v;
     }
 }
 
-float rw_throttle_map_feed_forward(rw_throttle_map *m, float rope_mps, float battery_v)
+int32_t rw_throttle_map_feed_forward(rw_throttle_map *m, int32_t rope_mps_q16, float battery_v)
 {
     rw_throttle_map_prepare_battery(m, battery_v);
-    const float per_mps = m->state.throttle_per_mps;
-    if (!rw_f32_positive_finite(rope_mps) || !rw_f32_positive(per_mps)) {
-        return 0.0f;
+    const int32_t per_mps_q24 = m->state.throttle_per_mps_q24;
+    if (rope_mps_q16 <= 0 || per_mps_q24 <= 0) {
+        return 0;
     }
-    const float throttle = rope_mps * per_mps;
-    return rw_f32_gt(throttle, 1.0f) ? 1.0f : throttle;
+    const uint64_t throttle_q16 = (rw_mul_u32_u64((uint32_t)rope_mps_q16, (uint32_t)per_mps_q24) + (1u << 23)) >> 24;
+    return throttle_q16 > RW_Q16_ONE ? RW_Q16_ONE : (int32_t)throttle_q16;
 }
 
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v)
@@ -114,20 +120,19 @@ static void effective_range_us(const rw_throttle_map *m, uint16_t *lo_us, uint16
     *hi_us = hi;
 }
 
-uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, float throttle)
+uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, int32_t throttle_q16)
 {
     uint16_t lo_us;
     uint16_t hi_us;
     effective_range_us(m, &lo_us, &hi_us);
-    if (!rw_f32_positive_finite(throttle)) { /* NaN, -inf, +inf, negative, zero */
+    if (throttle_q16 <= 0) {
         return lo_us;
     }
-    if (rw_f32_ge(throttle, 1.0f)) {
+    if (throttle_q16 >= RW_Q16_ONE) {
         return hi_us;
     }
-    const float span_us = (float)(hi_us - lo_us);
-    /* round half up, on the bit pattern (0 <= throttle span < 1000: in range) */
-    const uint32_t offset_us = rw_f32_round_half_up_u24(throttle * span_us);
+    /* round half up: throttle < 2^16 and span <= 1000, the product fits 32 bits */
+    const uint32_t offset_us = ((uint32_t)throttle_q16 * (uint32_t)(hi_us - lo_us) + 32768u) >> 16;
     uint32_t pulse_us = (uint32_t)lo_us + offset_us;
     if (pulse_us > hi_us) {
         pulse_us = hi_us;

@@ -2,7 +2,8 @@
  * rw_throttle_map.h - feed-forward throttle from rope speed (motor Kv, battery voltage, wheel
  * radius), and throttle fraction <-> ESC pulse width with the ESC minimum as a hard floor.
  *
- * Throttle fraction: 0 = ESC minimum pulse (motor stopped), 1 = full throttle (pulse_max_us).
+ * Throttle fraction: 0 = ESC minimum pulse (motor stopped), 1 = full throttle (pulse_max_us); on the tick
+ * path (feed-forward, pulse) in Q16.16 fixed point, the config float (converted when it changes).
  * Portable core module: no Arduino header, no heap, reads no clock; stateless.
  */
 #ifndef RW_THROTTLE_MAP_H
@@ -31,6 +32,7 @@ typedef struct rw_throttle_map {
         float memo_wheel_radius_m; /**< the radius it belongs to */
         float memo_battery_v;   /**< the battery voltage throttle_per_mps belongs to (0: none yet) */
         float throttle_per_mps; /**< 60 / (2 pi r kv V): feed-forward throttle per m/s of rope (0: none) */
+        int32_t throttle_per_mps_q24; /**< the same, Q24 (saturated at 127) */
     } state;                /**< private: precomputed values only, the map has no history */
 } rw_throttle_map;
 
@@ -39,15 +41,15 @@ void rw_throttle_map_init(rw_throttle_map *m, const rw_throttle_map_config *cfg)
 /** Fills cfg with the defaults of rw_defaults.h. */
 void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg);
 /**
- * Feed-forward throttle fraction in [0, 1] that spins the unloaded motor so the rope moves at
- * rope_mps (m/s) on a battery of battery_v volts:
+ * Feed-forward throttle fraction in [0, 1] (Q16.16: 65536 = full throttle) that spins the unloaded motor so
+ * the rope moves at rope_mps_q16 (m/s, Q16.16) on a battery of battery_v volts:
  *     throttle = 60 rope_mps / (2 pi wheel_radius_m kv_rpm_per_v battery_v), clamped to [0, 1],
- * evaluated as rope_mps * (60 / (2 pi r kv V)): the factor is kept in m->state per battery voltage (and
- * kv, radius), so a step with the same battery_v costs one multiplication, no division (the result may
- * differ from the division in the last bit).
- * Returns 0 for non-finite or non-positive rope_mps or battery_v, or an invalid kv/radius.
+ * evaluated as rope_mps * (60 / (2 pi r kv V)) in fixed point: the factor is kept in m->state per battery
+ * voltage (and kv, radius) in Q24, so a step with the same battery_v costs one integer multiplication, no
+ * division and no soft-float call (resolution: 1/65536 of full throttle).
+ * Returns 0 for non-positive rope_mps_q16, non-finite or non-positive battery_v, or an invalid kv/radius.
  */
-float rw_throttle_map_feed_forward(rw_throttle_map *m, float rope_mps, float battery_v);
+int32_t rw_throttle_map_feed_forward(rw_throttle_map *m, int32_t rope_mps_q16, float battery_v);
 /** Computes the factor of rw_throttle_map_feed_forward for battery_v ahead of time (one division),
  *  so that the next feed-forward at this voltage needs none. */
 void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v);
@@ -55,13 +57,13 @@ void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v);
  *  to [0, 1]) and battery voltage; 0 for non-finite input or invalid config. */
 float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle, float battery_v);
 /**
- * ESC pulse for a throttle fraction: pulse_min_us + throttle (pulse_max_us - pulse_min_us), rounded
- * to the nearest microsecond. Negative or non-finite (NaN, +-inf) throttle -> pulse_min_us (bad
- * input stops the motor), above 1 -> pulse_max_us.
+ * ESC pulse for a throttle fraction (Q16.16, 65536 = full): pulse_min_us + throttle (pulse_max_us -
+ * pulse_min_us), rounded half up to the microsecond, in integers. Zero or negative throttle ->
+ * pulse_min_us (bad input stops the motor), 1 and above -> pulse_max_us.
  * The result is never below pulse_min_us and never above 2000 us, whatever the input; with a
  * configured range outside 1000..2000 us the range is first narrowed into it.
  */
-uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, float throttle);
+uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, int32_t throttle_q16);
 /** Throttle fraction in [0, 1] of a pulse (inverse of rw_throttle_map_pulse_us). */
 float rw_throttle_map_throttle_from_pulse(const rw_throttle_map *m, uint16_t pulse_us);
 /** true when kv and radius are finite and > 0 and 1000 <= pulse_min_us < pulse_max_us <= 2000. */

@@ -7,13 +7,17 @@
 
 #include "rw_float_bits.h"
 
-/* Keep tov_mps * margin for the current config (the same product, computed once). */
+/* Keep tov_mps * margin and the validity for the current config (computed once per config). */
 static void refresh_min_airborne(rw_tov_guard *g)
 {
-    if (!rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) || !rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
+    if (!rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) || !rw_f32_same(g->cfg.margin, g->state.memo_margin) ||
+        !rw_f32_same(g->cfg.collapse_time_s, g->state.memo_collapse_time_s)) {
         g->state.min_airborne_mps = g->cfg.tov_mps * g->cfg.margin;
+        g->state.min_airborne_mps_q16 = rw_f32_to_q16(g->state.min_airborne_mps);
         g->state.memo_tov_mps = g->cfg.tov_mps;
         g->state.memo_margin = g->cfg.margin;
+        g->state.memo_collapse_time_s = g->cfg.collapse_time_s;
+        g->state.config_valid = rw_tov_guard_config_is_valid(&g->cfg);
     }
 }
 
@@ -22,7 +26,10 @@ void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg)
     g->cfg = *cfg;
     g->state.memo_tov_mps = 0.0f;
     g->state.memo_margin = 0.0f;
+    g->state.memo_collapse_time_s = 0.0f;
+    g->state.config_valid = false;
     g->state.min_airborne_mps = 0.0f;
+    g->state.min_airborne_mps_q16 = 0;
     refresh_min_airborne(g);
     rw_tov_guard_reset(g);
 }
@@ -54,6 +61,14 @@ float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g)
     return g->cfg.tov_mps * g->cfg.margin;
 }
 
+int32_t rw_tov_guard_min_airborne_mps_q16(const rw_tov_guard *g)
+{
+    if (rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) && rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
+        return g->state.min_airborne_mps_q16;
+    }
+    return rw_f32_to_q16(g->cfg.tov_mps * g->cfg.margin);
+}
+
 bool rw_tov_guard_setpoint_allowed(const rw_tov_guard *g, float setpoint_mps)
 {
     if (!rw_tov_guard_config_is_valid(&g->cfg) || !rw_f32_finite(setpoint_mps)) {
@@ -78,10 +93,10 @@ bool rw_tov_guard_is_collapsed(const rw_tov_guard *g)
  */
 bool rw_tov_guard_step(rw_tov_guard *g, float measured_mps, float dt_s)
 {
-    if (!rw_f32_finite(measured_mps) || !rw_tov_guard_config_is_valid(&g->cfg)) {
+    refresh_min_airborne(g);
+    if (!rw_f32_finite(measured_mps) || !g->state.config_valid) {
         return false;
     }
-    refresh_min_airborne(g);
     if (rw_f32_ge(measured_mps, g->cfg.tov_mps)) {
         g->state.below_s = 0.0f;
         g->state.collapsed = false;

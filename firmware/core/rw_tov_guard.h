@@ -13,6 +13,7 @@
 #define RW_TOV_GUARD_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -31,8 +32,11 @@ typedef struct rw_tov_guard {
         float below_s;  /**< time the measured speed has been continuously under tov_mps, seconds */
         bool collapsed; /**< the collapse has been reported; cleared when the speed recovers */
         float min_airborne_mps; /**< tov_mps * margin for the two below (kept by init and step) */
+        int32_t min_airborne_mps_q16; /**< the same, m/s Q16.16 */
         float memo_tov_mps;     /**< the tov_mps min_airborne_mps belongs to (0: none yet) */
         float memo_margin;      /**< the margin it belongs to */
+        float memo_collapse_time_s; /**< the collapse time config_valid belongs to (with the two above) */
+        bool config_valid;      /**< rw_tov_guard_config_is_valid of that config */
     } state;            /**< private history */
 } rw_tov_guard;
 
@@ -44,6 +48,8 @@ void rw_tov_guard_config_defaults(rw_tov_guard_config *cfg);
 void rw_tov_guard_reset(rw_tov_guard *g);
 /** Lowest setpoint allowed while airborne, m/s: tov_mps * margin. */
 float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g);
+/** The same, m/s Q16.16 (rounded; kept with the product, so the fixed-point speed loop converts nothing). */
+int32_t rw_tov_guard_min_airborne_mps_q16(const rw_tov_guard *g);
 /** true when setpoint_mps is finite and >= tov_mps * margin; false otherwise (caller NACKs).
  *  Always false with an invalid config. */
 bool rw_tov_guard_setpoint_allowed(const rw_tov_guard *g, float setpoint_mps);

@@ -5,13 +5,17 @@ same types); change both together. Every object is allocated with a canary block
 each wrapper call checks the canary, so a mirror that is smaller than the C struct fails loudly
 instead of corrupting memory silently.
 
-The wrappers take and return Python floats/ints in the units of the C API (seconds, m/s, us).
+The wrappers take and return Python floats/ints in the units of the C API (seconds, m/s, us). Where a C
+step runs in Q16.16 fixed point (rw_float_bits.h: the PI, ramp, low-pass, feed-forward and ESC pulse) the
+wrapper converts with to_q16 / from_q16, the one place the tests do it; a non-finite input is refused there
+with a ValueError naming the argument (a Q16.16 value cannot be NaN or infinite).
 """
 
 from __future__ import annotations
 
 import ctypes
-from ctypes import c_bool, c_float, c_int8, c_uint16, c_uint32
+import math
+from ctypes import c_bool, c_float, c_int8, c_int32, c_int64, c_uint16, c_uint32
 from pathlib import Path
 
 CANARY = 0xA5A5A5A5A5A5A5A5
@@ -23,7 +27,7 @@ class LowpassConfig(ctypes.Structure):
 
 
 class _LowpassState(ctypes.Structure):
-    _fields_ = [("y", c_float), ("alpha", c_float), ("alpha_tau_s", c_float), ("alpha_dt_s", c_float)]
+    _fields_ = [("y_q32", c_int64), ("alpha_q20", c_int32), ("alpha_tau_s", c_float), ("alpha_dt_s", c_float)]
 
 
 class Lowpass(ctypes.Structure):
@@ -35,8 +39,9 @@ class RampConfig(ctypes.Structure):
 
 
 class _RampState(ctypes.Structure):
-    _fields_ = [("y", c_float), ("step_up", c_float), ("step_down", c_float), ("step_rate_up_per_s", c_float),
-                ("step_rate_down_per_s", c_float), ("step_dt_s", c_float)]
+    _fields_ = [("y_q32", c_int64), ("step_up_q32", c_int64), ("step_up_rate_per_s", c_float),
+                ("step_up_dt_s", c_float), ("step_down_q32", c_int64), ("step_down_rate_per_s", c_float),
+                ("step_down_dt_s", c_float)]
 
 
 class Ramp(ctypes.Structure):
@@ -48,8 +53,9 @@ class PiConfig(ctypes.Structure):
 
 
 class _PiState(ctypes.Structure):
-    _fields_ = [("integral", c_float), ("output", c_float), ("saturation", c_int8), ("ki_dt", c_float),
-                ("ki_dt_ki_per_s", c_float), ("ki_dt_dt_s", c_float)]
+    _fields_ = [("integral_q32", c_int64), ("output_q16", c_int32), ("saturation", c_int8), ("kp_q24", c_int32),
+                ("ki_dt_q32", c_int64), ("memo_kp", c_float), ("memo_ki_per_s", c_float), ("memo_dt_s", c_float),
+                ("out_min_q16", c_int32), ("out_max_q16", c_int32), ("memo_out_min", c_float), ("memo_out_max", c_float)]
 
 
 class Pi(ctypes.Structure):
@@ -62,9 +68,9 @@ class MtConfig(ctypes.Structure):
 
 
 class _MtState(ctypes.Structure):
-    _fields_ = [("last_count", c_uint32), ("last_edge_us", c_uint32), ("raw_rev_per_s", c_float),
-                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("two_pi_r_m", c_float),
-                ("two_pi_r_radius_m", c_float)]
+    _fields_ = [("last_count", c_uint32), ("last_edge_us", c_uint32), ("raw_rev_per_s_q16", c_int32),
+                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("two_pi_r_q32", c_uint32),
+                ("two_pi_r_radius_m", c_float), ("rope_mps_q16", c_int32)]
 
 
 class Mt(ctypes.Structure):
@@ -78,7 +84,7 @@ class ThrottleConfig(ctypes.Structure):
 
 class _ThrottleState(ctypes.Structure):
     _fields_ = [("two_pi_r_kv", c_float), ("memo_kv_rpm_per_v", c_float), ("memo_wheel_radius_m", c_float),
-                ("memo_battery_v", c_float), ("throttle_per_mps", c_float)]
+                ("memo_battery_v", c_float), ("throttle_per_mps", c_float), ("throttle_per_mps_q24", c_int32)]
 
 
 class Throttle(ctypes.Structure):
@@ -91,7 +97,9 @@ class TovConfig(ctypes.Structure):
 
 class _TovState(ctypes.Structure):
     _fields_ = [("below_s", c_float), ("collapsed", c_bool), ("min_airborne_mps", c_float),
-                ("memo_tov_mps", c_float), ("memo_margin", c_float)]
+                ("min_airborne_mps_q16", c_int32),
+                ("memo_tov_mps", c_float), ("memo_margin", c_float), ("memo_collapse_time_s", c_float),
+                ("config_valid", c_bool)]
 
 
 class Tov(ctypes.Structure):
@@ -102,23 +110,24 @@ class Tov(ctypes.Structure):
 _SIGNATURES = {
     "rw_lowpass_init": (None, ["Lowpass*", "LowpassConfig*"]),
     "rw_lowpass_reset": (None, ["Lowpass*"]),
-    "rw_lowpass_reset_to": (None, ["Lowpass*", c_float]),
-    "rw_lowpass_step": (c_float, ["Lowpass*", c_float, c_float]),
-    "rw_lowpass_output": (c_float, ["Lowpass*"]),
+    "rw_lowpass_reset_to": (None, ["Lowpass*", c_int32]),
+    "rw_lowpass_step": (c_int32, ["Lowpass*", c_int32, c_float]),
+    "rw_lowpass_output_q16": (c_int32, ["Lowpass*"]),
     "rw_lowpass_config_is_valid": (c_bool, ["LowpassConfig*"]),
     "rw_ramp_init": (None, ["Ramp*", "RampConfig*"]),
     "rw_ramp_config_defaults": (None, ["RampConfig*"]),
     "rw_ramp_reset": (None, ["Ramp*"]),
     "rw_ramp_reset_to": (None, ["Ramp*", c_float]),
-    "rw_ramp_step": (c_float, ["Ramp*", c_float, c_float]),
+    "rw_ramp_step": (c_int32, ["Ramp*", c_int32, c_float]),
+    "rw_ramp_output_q16": (c_int32, ["Ramp*"]),
     "rw_ramp_output": (c_float, ["Ramp*"]),
     "rw_ramp_at_target": (c_bool, ["Ramp*", c_float]),
     "rw_ramp_config_is_valid": (c_bool, ["RampConfig*"]),
     "rw_pi_controller_init": (None, ["Pi*", "PiConfig*"]),
     "rw_pi_controller_config_defaults": (None, ["PiConfig*"]),
     "rw_pi_controller_reset": (None, ["Pi*"]),
-    "rw_pi_controller_step": (c_float, ["Pi*", c_float, c_float, c_float, c_float]),
-    "rw_pi_controller_output": (c_float, ["Pi*"]),
+    "rw_pi_controller_step": (c_int32, ["Pi*", c_int32, c_int32, c_int32, c_float]),
+    "rw_pi_controller_output_q16": (c_int32, ["Pi*"]),
     "rw_pi_controller_config_is_valid": (c_bool, ["PiConfig*"]),
     "rw_mt_speed_estimator_init": (None, ["Mt*", "MtConfig*"]),
     "rw_mt_speed_estimator_config_defaults": (None, ["MtConfig*"]),
@@ -127,14 +136,15 @@ _SIGNATURES = {
     "rw_mt_speed_estimator_rev_per_s": (c_float, ["Mt*"]),
     "rw_mt_speed_estimator_rpm": (c_float, ["Mt*"]),
     "rw_mt_speed_estimator_rope_mps": (c_float, ["Mt*"]),
+    "rw_mt_speed_estimator_rope_mps_q16": (c_int32, ["Mt*"]),
     "rw_mt_speed_estimator_raw_rev_per_s": (c_float, ["Mt*"]),
     "rw_mt_speed_estimator_is_stale": (c_bool, ["Mt*"]),
     "rw_mt_speed_estimator_config_is_valid": (c_bool, ["MtConfig*"]),
     "rw_throttle_map_init": (None, ["Throttle*", "ThrottleConfig*"]),
     "rw_throttle_map_config_defaults": (None, ["ThrottleConfig*"]),
-    "rw_throttle_map_feed_forward": (c_float, ["Throttle*", c_float, c_float]),
+    "rw_throttle_map_feed_forward": (c_int32, ["Throttle*", c_int32, c_float]),
     "rw_throttle_map_no_load_rope_mps": (c_float, ["Throttle*", c_float, c_float]),
-    "rw_throttle_map_pulse_us": (c_uint16, ["Throttle*", c_float]),
+    "rw_throttle_map_pulse_us": (c_uint16, ["Throttle*", c_int32]),
     "rw_throttle_map_throttle_from_pulse": (c_float, ["Throttle*", c_uint16]),
     "rw_throttle_map_config_is_valid": (c_bool, ["ThrottleConfig*"]),
     "rw_tov_guard_init": (None, ["Tov*", "TovConfig*"]),
@@ -168,6 +178,23 @@ def load(build_dir: Path) -> ctypes.CDLL:
 def f32(x: float) -> float:
     """x rounded to single precision (what the C core sees)."""
     return ctypes.c_float(x).value
+
+
+Q16_ONE = 65536
+
+
+def to_q16(x: float, *, name: str = "value") -> int:
+    """x in Q16.16 (x 65536, rounded, saturated at +-(2^31 - 1)) as the fixed-point steps take it; a
+    non-finite x is refused (ValueError naming the argument)."""
+    if not math.isfinite(x):
+        raise ValueError(f"{name}: expected a finite number for a Q16.16 input, got {x!r}")
+    q = min(abs(x) * Q16_ONE, 2.0**31 - 1)
+    return int(math.copysign(math.floor(q + 0.5) if q < 2**31 - 1 else 2**31 - 1, x))
+
+
+def from_q16(q: int) -> float:
+    """A Q16.16 value as a float."""
+    return q / Q16_ONE
 
 
 class _Guarded:
@@ -204,17 +231,18 @@ class LowpassFilter(_Guarded):
         self._call("rw_lowpass_init", ctypes.byref(LowpassConfig(tau_s)))
 
     def step(self, x: float, dt_s: float) -> float:
-        return self._call("rw_lowpass_step", x, dt_s)
+        """One sample; x in Q16.16 (to_q16: a non-finite one raises ValueError), the output as a float."""
+        return from_q16(self._call("rw_lowpass_step", to_q16(x, name="x"), dt_s))
 
     def reset(self) -> None:
         self._call("rw_lowpass_reset")
 
     def reset_to(self, y: float) -> None:
-        self._call("rw_lowpass_reset_to", y)
+        self._call("rw_lowpass_reset_to", to_q16(y, name="y"))
 
     @property
     def output(self) -> float:
-        return self._call("rw_lowpass_output")
+        return from_q16(self._call("rw_lowpass_output_q16"))
 
 
 class RampLimiter(_Guarded):
@@ -225,7 +253,8 @@ class RampLimiter(_Guarded):
         self._call("rw_ramp_init", ctypes.byref(RampConfig(rate_up_per_s, rate_down_per_s)))
 
     def step(self, target: float, dt_s: float) -> float:
-        return self._call("rw_ramp_step", target, dt_s)
+        """One step; target in Q16.16 (to_q16: a non-finite one raises ValueError), the output as a float."""
+        return from_q16(self._call("rw_ramp_step", to_q16(target, name="target"), dt_s))
 
     def reset(self) -> None:
         self._call("rw_ramp_reset")
@@ -249,19 +278,23 @@ class PiController(_Guarded):
         self._call("rw_pi_controller_init", ctypes.byref(PiConfig(kp, ki_per_s, out_min, out_max)))
 
     def step(self, setpoint: float, measurement: float, feed_forward: float, dt_s: float) -> float:
-        return self._call("rw_pi_controller_step", setpoint, measurement, feed_forward, dt_s)
+        """One step; the inputs in Q16.16 (to_q16: non-finite ones raise ValueError), the output as a float."""
+        return from_q16(self._call("rw_pi_controller_step", to_q16(setpoint, name="setpoint"),
+                                   to_q16(measurement, name="measurement"),
+                                   to_q16(feed_forward, name="feed_forward"), dt_s))
 
     def reset(self) -> None:
         self._call("rw_pi_controller_reset")
 
     @property
     def output(self) -> float:
-        return self._call("rw_pi_controller_output")
+        return from_q16(self._call("rw_pi_controller_output_q16"))
 
     @property
     def integral(self) -> float:
+        """The integral term, output units (Q32 in the C state)."""
         self._check()
-        return self.obj.state.integral
+        return self.obj.state.integral_q32 / 2**32
 
     @property
     def saturation(self) -> int:
@@ -317,13 +350,18 @@ class ThrottleMap(_Guarded):
         self._call("rw_throttle_map_init", ctypes.byref(cfg))
 
     def feed_forward(self, rope_mps: float, battery_v: float) -> float:
-        return self._call("rw_throttle_map_feed_forward", rope_mps, battery_v)
+        """Feed-forward throttle; rope_mps in Q16.16 (to_q16: a non-finite one raises ValueError)."""
+        return from_q16(self._call("rw_throttle_map_feed_forward", to_q16(rope_mps, name="rope_mps"), battery_v))
 
     def no_load_rope_mps(self, throttle: float, battery_v: float) -> float:
         return self._call("rw_throttle_map_no_load_rope_mps", throttle, battery_v)
 
     def pulse_us(self, throttle: float) -> int:
-        return self._call("rw_throttle_map_pulse_us", throttle)
+        """ESC pulse for a throttle fraction, in Q16.16 (to_q16: a non-finite one raises ValueError)."""
+        return self.pulse_us_q16(to_q16(throttle, name="throttle"))
+
+    def pulse_us_q16(self, throttle_q16: int) -> int:
+        return self._call("rw_throttle_map_pulse_us", throttle_q16)
 
     def throttle_from_pulse(self, pulse_us: int) -> float:
         return self._call("rw_throttle_map_throttle_from_pulse", pulse_us)

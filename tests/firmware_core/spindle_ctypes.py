@@ -4,19 +4,45 @@ The Structure classes mirror firmware/core/rw_multiturn.h, rw_spindle.h and hal/
 for field (same order, same types); change both together. Objects are held with the canary block of
 rw_core_ctypes, so a mirror smaller than the C struct fails loudly.
 
-Units are those of the C API: degrees, degrees per second, millimetres, mm/s, seconds, raw registers.
+Units: the wrappers (Multiturn.step, Spindle.step) take degrees, deg/s and seconds and convert them here, the
+one place, to the integer units of the C API (multi-turn ticks of 1/2560 register unit, ticks/ms Q10,
+milliseconds; rw_ax12.h); the spindle's config and position_mm stay millimetres, its speeds are um/s.
 """
 
 from __future__ import annotations
 
 import ctypes
-from ctypes import c_bool, c_float, c_int, c_int16, c_uint8, c_uint16
+import math
+from ctypes import c_bool, c_float, c_int, c_int16, c_int32, c_uint8, c_uint16, c_uint32
 from enum import IntEnum
 
 from rw_core_ctypes import _Guarded
 
 DIRECTION_BIT = 0x0400
 MAGNITUDE_MASK = 0x03FF
+TICKS_PER_DEG = 8729.6  # RW_AX12_TICKS_PER_DEG: 2560 ticks per register unit, 1023 units per 300 degrees
+SPEED_Q10_PER_DEG_S = TICKS_PER_DEG * 1024.0 / 1000.0  # deg/s -> ticks per millisecond, Q10
+
+
+def ticks_of_deg(position_deg: float) -> int:
+    """Degrees -> multi-turn ticks, rounded (0.000115 degree resolution)."""
+    if not math.isfinite(position_deg):
+        raise ValueError(f"position_deg: expected a finite angle in degrees, got {position_deg!r}")
+    return int(round(position_deg * TICKS_PER_DEG))
+
+
+def speed_q10_of_deg_s(speed_deg_s: float) -> int:
+    """deg/s -> ticks per millisecond, Q10, rounded."""
+    if not math.isfinite(speed_deg_s):
+        raise ValueError(f"speed_deg_s: expected a finite speed in deg/s, got {speed_deg_s!r}")
+    return int(round(speed_deg_s * SPEED_Q10_PER_DEG_S))
+
+
+def ms_of_s(dt_s: float) -> int:
+    """Seconds -> whole milliseconds (the C steps take dt_ms); rejects what is not a whole, non-negative ms."""
+    if not math.isfinite(dt_s) or dt_s < 0.0 or abs(dt_s * 1000.0 - round(dt_s * 1000.0)) > 1e-6:
+        raise ValueError(f"dt_s: expected a non-negative whole number of milliseconds in seconds, got {dt_s!r}")
+    return int(round(dt_s * 1000.0))
 
 
 class Mode(IntEnum):
@@ -46,8 +72,10 @@ class MultiturnConfig(ctypes.Structure):
 
 
 class _MultiturnState(ctypes.Structure):
-    _fields_ = [("angle_deg", c_float), ("initialized", c_bool), ("dead_reckoning", c_bool),
-                ("rejected", c_uint16), ("agree", c_uint8), ("candidate_deg", c_float)]
+    _fields_ = [("angle_ticks", c_int32), ("angle_rem_q10", c_uint16), ("initialized", c_bool),
+                ("dead_reckoning", c_bool), ("rejected", c_uint16), ("agree", c_uint8),
+                ("candidate_ticks", c_int32), ("turn_base_ticks", c_int32), ("margin_ticks", c_int32),
+                ("max_jump_ticks", c_int32), ("memo_margin_deg", c_float), ("memo_max_jump_deg", c_float)]
 
 
 class MultiturnStruct(ctypes.Structure):
@@ -66,12 +94,21 @@ class SpindleReading(ctypes.Structure):
                 ("limit_switch", c_bool)]
 
 
+class SpindleDerived(ctypes.Structure):
+    _fields_ = [("um_per_tick_q32", c_uint32), ("ticks_per_ms_q10_per_umps_q8", c_int32),
+                ("moving_raw_per_umps_q16", c_uint32)] + [(name, c_int32) for name in (
+                    "full_scale_umps", "kp_per_s_q16", "guide_min_um", "guide_max_um", "tolerance_um",
+                    "max_speed_umps", "homing_speed_umps", "retract_speed_umps", "homing_load_permille",
+                    "stall_load_permille", "secure_load_permille", "still_speed_raw")]
+
+
 class _SpindleState(ctypes.Structure):
     _fields_ = [("turns", MultiturnStruct), ("mode", c_uint8), ("homed", c_bool), ("answering", c_bool),
-                ("target_reported", c_bool), ("home_angle_deg", c_float), ("position_mm", c_float),
-                ("target_mm", c_float), ("speed_mmps", c_float), ("command_mmps", c_float),
-                ("load_permille", c_int16), ("stall_s", c_float), ("silent_s", c_float),
-                ("moving_speed_raw", c_uint16)]
+                ("target_reported", c_bool), ("home_ticks", c_int32), ("position_um", c_int32),
+                ("position_mm", c_float), ("target_mm", c_float), ("target_um", c_int32),
+                ("present_speed_raw", c_uint16), ("command_umps", c_int32), ("load_permille", c_int16),
+                ("stall_ms", c_uint32), ("silent_ms", c_uint32), ("moving_speed_raw", c_uint16),
+                ("memo_cfg", SpindleConfig), ("derived", SpindleDerived)]
 
 
 class SpindleStruct(ctypes.Structure):
@@ -86,13 +123,16 @@ _SIGNATURES = {
     "rw_multiturn_init": (None, [ctypes.POINTER(MultiturnStruct), ctypes.POINTER(MultiturnConfig)]),
     "rw_multiturn_config_defaults": (None, [ctypes.POINTER(MultiturnConfig)]),
     "rw_multiturn_reset": (None, [ctypes.POINTER(MultiturnStruct)]),
-    "rw_multiturn_step": (c_float, [ctypes.POINTER(MultiturnStruct), c_bool, c_float, c_float, c_float]),
+    "rw_ax12_position_ticks": (c_int32, [c_uint16]),
+    "rw_ax12_speed_ticks_per_ms_q10": (c_int32, [c_uint16]),
+    "rw_multiturn_step": (c_int32, [ctypes.POINTER(MultiturnStruct), c_bool, c_int32, c_int32, c_uint32]),
+    "rw_multiturn_angle_deg": (c_float, [ctypes.POINTER(MultiturnStruct)]),
     "rw_spindle_init": (None, [ctypes.POINTER(SpindleStruct), ctypes.POINTER(SpindleConfig)]),
     "rw_spindle_stop": (None, [ctypes.POINTER(SpindleStruct)]),
     "rw_spindle_home": (None, [ctypes.POINTER(SpindleStruct)]),
     "rw_spindle_move_to": (None, [ctypes.POINTER(SpindleStruct), c_float]),
     "rw_spindle_retract": (None, [ctypes.POINTER(SpindleStruct)]),
-    "rw_spindle_step": (c_int, [ctypes.POINTER(SpindleStruct), ctypes.POINTER(SpindleReading), c_float]),
+    "rw_spindle_step": (c_int, [ctypes.POINTER(SpindleStruct), ctypes.POINTER(SpindleReading), c_uint32]),
 }
 
 
@@ -127,16 +167,27 @@ class Multiturn(_Guarded):
         self._call("rw_multiturn_init", ctypes.byref(cfg))
 
     def step(self, *, valid: bool, position_deg: float, speed_deg_s: float, dt_s: float) -> float:
-        """One step; returns the continuous angle, degrees."""
-        return self._call("rw_multiturn_step", valid, position_deg, speed_deg_s, dt_s)
+        """One step (degrees, deg/s and seconds converted to the C units, see the module docstring); returns the
+        continuous angle, degrees."""
+        self.step_ticks(valid=valid, position_ticks=ticks_of_deg(position_deg),
+                        speed_ticks_per_ms_q10=speed_q10_of_deg_s(speed_deg_s), dt_ms=ms_of_s(dt_s))
+        return self.angle_deg
+
+    def step_ticks(self, *, valid: bool, position_ticks: int, speed_ticks_per_ms_q10: int, dt_ms: int) -> int:
+        """One step in the C units; returns the continuous angle, ticks."""
+        return self._call("rw_multiturn_step", valid, position_ticks, speed_ticks_per_ms_q10, dt_ms)
 
     def reset(self) -> None:
         self._call("rw_multiturn_reset")
 
     @property
     def angle_deg(self) -> float:
+        return self._call("rw_multiturn_angle_deg")
+
+    @property
+    def angle_ticks(self) -> int:
         self._check()
-        return self.obj.state.angle_deg
+        return int(self.obj.state.angle_ticks)
 
     @property
     def initialized(self) -> bool:
@@ -176,9 +227,9 @@ class Spindle(_Guarded):
         self._call("rw_spindle_init", ctypes.byref(cfg))
 
     def step(self, reading: SpindleReading | None, dt_s: float) -> Outcome:
-        """One spindle step with the servo's reading (None: no answer)."""
+        """One spindle step with the servo's reading (None: no answer), dt_s a whole number of milliseconds."""
         ptr = ctypes.byref(reading) if reading is not None else None
-        return Outcome(self._call("rw_spindle_step", ptr, dt_s))
+        return Outcome(self._call("rw_spindle_step", ptr, ms_of_s(dt_s)))
 
     def stop(self) -> None:
         self._call("rw_spindle_stop")
@@ -203,6 +254,12 @@ class Spindle(_Guarded):
     def rejected(self) -> int:
         self._check()
         return int(self.obj.state.turns.state.rejected)
+
+    @property
+    def command_mmps(self) -> float:
+        """The commanded guide speed, mm/s (the C state keeps um/s)."""
+        self._check()
+        return self.obj.state.command_umps * 1e-3
 
 
 def signed_raw(value: int) -> int:

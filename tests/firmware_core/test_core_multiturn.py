@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from spindle_ctypes import Multiturn, declare, multiturn_defaults
+from spindle_ctypes import SPEED_Q10_PER_DEG_S, TICKS_PER_DEG, Multiturn, declare, multiturn_defaults
 
 DT_S = 0.01  # the core's spindle period
 TRACK_TOL_DEG = 2.0
@@ -76,11 +76,15 @@ def track(mt: Multiturn, servo: SimServo, *, seconds: float, speed_scale_in_dead
     initialized_before = np.zeros(n, dtype=bool)
     step, ptr = mt.lib.rw_multiturn_step, mt.ptr  # direct calls in the hot loop; the canary is checked below
     state = mt.obj.state
-    previous = state.angle_deg
+    previous = mt.angle_deg
     initialized = bool(state.initialized)
+    # the C units (spindle_ctypes converts the same way): ticks, ticks/ms Q10, milliseconds
+    position_ticks = np.round(positions.astype(np.float64) * TICKS_PER_DEG).astype(np.int64)
+    speed_q10 = np.round(speeds.astype(np.float64) * SPEED_Q10_PER_DEG_S).astype(np.int64)
+    dt_ms = round(DT_S * 1000)
     for k in range(n):
         initialized_before[k] = initialized
-        est[k] = step(ptr, True, float(positions[k]), float(speeds[k]), DT_S)
+        est[k] = step(ptr, True, int(position_ticks[k]), int(speed_q10[k]), dt_ms) / TICKS_PER_DEG
         if not initialized:
             initialized = bool(state.initialized)
     mt._check()
@@ -244,7 +248,7 @@ def test_dead_reckoning_flag_follows_the_predicted_angle_band(rw_core):
     mt = Multiturn(rw_core)
     _referenced(mt, 290.0)
     flags = []
-    for k in range(80):
+    for k in range(85):  # 85 degrees: through the band and 5 degrees past the margin
         mt.step(valid=True, position_deg=1023 * 300.0 / 1023.0, speed_deg_s=100.0, dt_s=DT_S)
         flags.append((mt.angle_deg % 360.0, mt.dead_reckoning))
     for w, flag in flags:
@@ -253,19 +257,54 @@ def test_dead_reckoning_flag_follows_the_predicted_angle_band(rw_core):
     assert any(f for _, f in flags) and not all(f for _, f in flags)
 
 
-@pytest.mark.parametrize("speed, dt_s", [(math.nan, DT_S), (math.inf, DT_S), (10.0, -1.0), (10.0, math.nan)])
-def test_bad_speed_or_dt_holds_the_angle(rw_core, speed, dt_s):
+def test_angle_resolution_is_one_tick(rw_core):
+    """The fixed-point angle: one tick is 1/2560 of a register unit (0.000115 degrees); a register reading
+    converts exactly and a still servo holds its angle to the tick."""
     mt = Multiturn(rw_core)
-    mt.step(valid=True, position_deg=100.0, speed_deg_s=0.0, dt_s=DT_S)
-    assert mt.step(valid=False, position_deg=0.0, speed_deg_s=speed, dt_s=dt_s) == pytest.approx(100.0)
-    assert math.isfinite(mt.angle_deg)
+    assert 1.0 / TICKS_PER_DEG == pytest.approx(300.0 / 1023.0 / 2560.0)
+    for raw in (100, 500, 980):  # clear of the dead-zone margin
+        mt.reset()
+        for _ in range(AGREE):
+            mt.step_ticks(valid=True, position_ticks=mt.lib.rw_ax12_position_ticks(raw), speed_ticks_per_ms_q10=0,
+                          dt_ms=10)
+        assert mt.angle_ticks == raw * 2560
+        assert mt.angle_deg == pytest.approx(mt.lib.rw_ax12_position_deg(raw), abs=1e-4)
 
 
-def test_nan_position_is_not_a_reading(rw_core):
+@pytest.mark.parametrize("speed_deg_s, dt_s", [(math.nan, DT_S), (math.inf, DT_S), (10.0, -1.0), (10.0, math.nan),
+                                               (10.0, 0.0105)])
+def test_bad_speed_or_dt_is_refused_by_the_binding(rw_core, speed_deg_s, dt_s):
     mt = Multiturn(rw_core)
     mt.step(valid=True, position_deg=100.0, speed_deg_s=0.0, dt_s=DT_S)
-    assert mt.step(valid=True, position_deg=math.nan, speed_deg_s=10.0, dt_s=DT_S) == pytest.approx(100.1)
-    assert mt.rejected == 0
+    with pytest.raises(ValueError, match="speed_deg_s|dt_s"):
+        mt.step(valid=False, position_deg=0.0, speed_deg_s=speed_deg_s, dt_s=dt_s)
+    assert mt.angle_deg == pytest.approx(100.0, abs=1e-4)
+
+
+def test_out_of_range_speed_is_clamped_and_position_is_no_reading(rw_core):
+    mt = Multiturn(rw_core)
+    mt.step(valid=True, position_deg=100.0, speed_deg_s=0.0, dt_s=DT_S)
+    start = mt.angle_ticks
+    for bad in (-5, 1023 * 2560 + 1):  # outside the register range: dead reckoning at speed 0
+        mt.step_ticks(valid=True, position_ticks=bad, speed_ticks_per_ms_q10=0, dt_ms=10)
+    assert mt.angle_ticks == start and mt.rejected == 0
+    mt.step_ticks(valid=False, position_ticks=0, speed_ticks_per_ms_q10=2**31 - 1, dt_ms=10)
+    assert mt.angle_ticks == start + 10 * (2**23 >> 10), "clamped to RW_MULTITURN_MAX_SPEED_TICKS_PER_MS_Q10"
+    assert mt.step(valid=True, position_deg=math.fmod(100.0, 360.0) + 0.0, speed_deg_s=0.0, dt_s=DT_S) != 0.0
+
+
+def test_long_gap_dead_reckons_as_the_same_time_in_short_steps(rw_core):
+    """60 s without an answer at 59 rpm: one step (the int64 path) and 6000 steps of 10 ms agree to the tick."""
+    one, many = Multiturn(rw_core), Multiturn(rw_core)
+    speed_q10 = one.lib.rw_ax12_speed_ticks_per_ms_q10(532)
+    for mt in (one, many):
+        mt.step(valid=True, position_deg=100.0, speed_deg_s=0.0, dt_s=DT_S)
+    one.step_ticks(valid=False, position_ticks=0, speed_ticks_per_ms_q10=speed_q10, dt_ms=60000)
+    for _ in range(6000):
+        many.step_ticks(valid=False, position_ticks=0, speed_ticks_per_ms_q10=speed_q10, dt_ms=10)
+    assert one.angle_ticks == many.angle_ticks
+    # 532 units = 354.3 deg/s; the Q10 speed unit is 0.0075 % slow: under 2 degrees over 59 turns
+    assert one.angle_deg - 100.0 == pytest.approx(532 * 0.666 * 60.0, abs=2.0)
 
 
 def test_reset_forgets_the_reference(rw_core):

@@ -116,7 +116,7 @@ def test_spin_up_follows_the_ramp_and_holds_speed_across_battery_sag(rw_core):
     # The setpoint rises at the ramp rate; the rope follows it within a few percent of the target.
     ramp_s = 10.0 / loop.ramp_up_per_s
     mid = log[int(ramp_s / 2 / TICK_S)]
-    assert mid["setpoint"] == pytest.approx(5.0, abs=0.02)
+    assert mid["setpoint"] == pytest.approx(5.0, abs=0.021)  # the 251st step: 5.02 (+ the Q16.16 rounding)
     assert mid["true"] == pytest.approx(mid["setpoint"], abs=0.6)
     settled = log[2000:]
     assert all(abs(x["true"] / 10.0 - 1.0) < 0.01 for x in settled), "within 1 % of 10 m/s after 2 s"

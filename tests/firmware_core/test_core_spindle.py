@@ -92,7 +92,8 @@ def test_homing_by_stall_finds_the_end_stop_after_the_stall_time(rw_core):
     at_stop = next(s["t_s"] for s in rig.trace if s["plant_mm"] <= 1e-6)
     assert start_mm / 3.0 * 0.8 < at_stop, "drove the whole way at the homing speed"
     waited = rig.t_s - at_stop
-    assert DEFAULT_CONFIG["stall_time_s"] - DT_S <= waited <= DEFAULT_CONFIG["stall_time_s"] + 0.1
+    # (the step's time is counted in whole ms: the stall_time_s-th ms of the hold ends it; 1e-9: t_s is a float sum)
+    assert DEFAULT_CONFIG["stall_time_s"] - DT_S - 1e-9 <= waited <= DEFAULT_CONFIG["stall_time_s"] + 0.1
     assert rig.sp.homed and rig.sp.mode == Mode.IDLE and rig.sp.moving_speed_raw == 0
     assert rig.sp.position_mm == 0.0
     rig.run(1.0)
@@ -165,6 +166,24 @@ def test_position_loop_command_is_p_law_saturated_and_zero_in_tolerance(rw_core,
         assert not sp.moving_speed_raw & DIRECTION_BIT, "+mm (retract) = counter-clockwise = bit 10 clear"
     elif expected_mmps < 0:
         assert sp.moving_speed_raw & DIRECTION_BIT
+
+
+def test_fixed_point_resolution_of_position_and_command(rw_core):
+    """The step is integer: the angle in ticks (1/2560 register unit), the guide in um, the command in um/s.
+    Every register value near home maps to the float law (register x 300/1023 deg x lead/360) within 1 um,
+    and the P law's command is kp x the error within kp x 1 um/s (+ 1 um/s of rounding)."""
+    sp = _homed_at_zero(rw_core, guide_min_mm=-50.0)  # home at register 500
+    lead = DEFAULT_CONFIG["lead_mm_per_rev"]
+    kp = DEFAULT_CONFIG["kp_per_s"]
+    for raw in list(range(500, 571, 3)) + list(range(570, 429, -3)):  # small steps: never a rejected jump
+        sp.step(reading(position_raw=raw), DT_S)
+        expected_mm = (raw - 500) * 300.0 / 1023.0 * lead / 360.0
+        assert sp.position_mm == pytest.approx(expected_mm, abs=1e-3), f"register {raw}"
+        target_mm = expected_mm + 0.7777  # inside the speed limit: kp x 0.7777 = 3.11 mm/s
+        sp.move_to(target_mm)
+        sp.step(reading(position_raw=raw), DT_S)
+        assert sp.command_mmps == pytest.approx(kp * 0.7777, abs=(kp + 1.0) * 1e-3)
+    assert sp.rejected == 0
 
 
 def test_target_reached_once_per_target(rw_core):

@@ -96,6 +96,108 @@ static void test_mul_small_equals_the_float_multiply(void)
     TEST_ASSERT_EQUAL_UINT32(0u, rw_f32_mul_small(1.0e-40f, 125u, 3, &e2));
 }
 
+/* rw_f32_ms_past answers what (float)elapsed_ms > / >= threshold_s * 1000.0f answers, for the special
+ * thresholds and a sweep of timeouts around every elapsed value that could straddle them. */
+static void test_ms_past_equals_the_float_comparison(void)
+{
+    const float thresholds[] = {0.0f, -0.0f, -1.0f, 1.0e-40f, 1.0e-4f, 0.0005f, 0.001f, 0.2f, 0.3f, 0.5f,
+                                1.0f, 1.5f, 2.0f, 3.0f, 5.0f, 0.123456f, 16777.215f, 16777.216f, 20000.0f,
+                                4.0e6f, FLT_MAX, INFINITY, -INFINITY, NAN};
+    const uint32_t extra[] = {0u, 1u, 16777215u, 16777216u, 16777217u, 20000001u, 0xFFFFFFFFu};
+    for (unsigned i = 0u; i < sizeof thresholds / sizeof thresholds[0]; ++i) {
+        const float t = thresholds[i];
+        volatile float k1000 = 1000.0f;
+        const float limit = t * k1000;
+        const double centre = isfinite(limit) && limit > 0.0f && limit < 4.0e9f ? floor((double)limit) : 0.0;
+        for (int32_t d = -3; d <= 3; ++d) {
+            const double e = centre + (double)d;
+            const uint32_t elapsed = e < 0.0 ? 0u : (uint32_t)e;
+            TEST_ASSERT_EQUAL_INT((float)elapsed > limit, rw_f32_ms_past(elapsed, t, false));
+            TEST_ASSERT_EQUAL_INT((float)elapsed >= limit, rw_f32_ms_past(elapsed, t, true));
+        }
+        for (unsigned j = 0u; j < sizeof extra / sizeof extra[0]; ++j) {
+            TEST_ASSERT_EQUAL_INT((float)extra[j] > limit, rw_f32_ms_past(extra[j], t, false));
+            TEST_ASSERT_EQUAL_INT((float)extra[j] >= limit, rw_f32_ms_past(extra[j], t, true));
+        }
+    }
+    uint32_t state = 777u;
+    for (unsigned i = 0u; i < 100000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const float t = (float)(state >> 8) * (1.0f / 16777216.0f) * 100.0f;
+        volatile float k1000 = 1000.0f;
+        const float limit = t * k1000;
+        const uint32_t elapsed = (uint32_t)limit + (state & 3u) - 1u;
+        TEST_ASSERT_EQUAL_INT((float)elapsed > limit, rw_f32_ms_past(elapsed, t, false));
+        TEST_ASSERT_EQUAL_INT((float)elapsed >= limit, rw_f32_ms_past(elapsed, t, true));
+    }
+}
+
+/* Q16.16 conversions: to_q16 rounds x 65536 to nearest and saturates, from_q16 equals the C conversion
+ * (float)q / 65536 (exact under 2^24, rounded to nearest even above), over specials and a sweep. */
+static void test_q16_conversions(void)
+{
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(NAN));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_q16(INFINITY));
+    TEST_ASSERT_EQUAL_INT32(-INT32_MAX, rw_f32_to_q16(-INFINITY));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_q16(32768.0f));
+    TEST_ASSERT_EQUAL_INT32(0x7FFFFF80, rw_f32_to_q16(32767.998f));
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(-0.0f));
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(1.0e-40f));
+    TEST_ASSERT_EQUAL_INT32(1, rw_f32_to_q16(1.0f / 65536.0f));
+    TEST_ASSERT_EQUAL_INT32(1, rw_f32_to_q16(0.5f / 65536.0f)); /* half: away from zero */
+    TEST_ASSERT_EQUAL_INT32(0, rw_f32_to_q16(0.49f / 65536.0f));
+    TEST_ASSERT_EQUAL_INT32(-65536 * 5 - 32768, rw_f32_to_q16(-5.5f));
+    uint32_t state = 99u;
+    for (unsigned i = 0u; i < 200000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const float x = ((float)(state >> 8) * (1.0f / 16777216.0f) - 0.5f) * (i % 3u == 0u ? 60000.0f : 40.0f);
+        const double exact = (double)x * 65536.0;
+        const double rounded = exact < 0.0 ? -floor(-exact + 0.5) : floor(exact + 0.5);
+        TEST_ASSERT_EQUAL_INT32((int32_t)rounded, rw_f32_to_q16(x));
+        const int32_t q = (int32_t)(state ^ (state << 7));
+        TEST_ASSERT_TRUE((float)q / 65536.0f == rw_f32_from_q16(q));
+        const int32_t small = (int32_t)(state >> 9) - (1 << 22);
+        TEST_ASSERT_TRUE((float)small / 65536.0f == rw_f32_from_q16(small));
+    }
+    /* other fixed points: Q32 of a tick period, Q0 */
+    TEST_ASSERT_EQUAL_INT32(8589935, rw_f32_to_fixed(0.002f, 32u)); /* 0.002 2^32 = 8589934.6 */
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_fixed(0.5f, 32u));
+    TEST_ASSERT_EQUAL_INT32(1073741824, rw_f32_to_fixed(0.25f, 32u));
+    TEST_ASSERT_EQUAL_INT32(-3, rw_f32_to_fixed(-2.5f, 0u));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rw_f32_to_fixed(3.0e9f, 0u));
+    for (unsigned i = 0u; i < 20000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const float x = (float)(state >> 8) * (1.0f / 16777216.0f) * 0.3f;
+        const double exact = (double)x * 4294967296.0;
+        TEST_ASSERT_EQUAL_INT32((int32_t)floor(exact + 0.5), rw_f32_to_fixed(x, 32u));
+    }
+    TEST_ASSERT_TRUE(rw_f32_from_q16(INT32_MIN) == -32768.0f);
+    TEST_ASSERT_TRUE(rw_f32_from_q16(INT32_MAX) == 32768.0f);
+    TEST_ASSERT_TRUE(rw_f32_from_q16(0) == 0.0f);
+}
+
+/* The inline long multiplies equal the 64-bit products, over the extremes and a sweep. */
+static void test_long_multiply(void)
+{
+    const uint32_t edges[] = {0u, 1u, 0xFFFFu, 0x10000u, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFFu, 123456789u};
+    for (unsigned i = 0u; i < sizeof edges / sizeof edges[0]; ++i) {
+        for (unsigned j = 0u; j < sizeof edges / sizeof edges[0]; ++j) {
+            TEST_ASSERT_TRUE((uint64_t)edges[i] * edges[j] == rw_mul_u32_u64(edges[i], edges[j]));
+            const int32_t a = (int32_t)edges[i];
+            const int32_t b = (int32_t)edges[j];
+            TEST_ASSERT_TRUE((int64_t)a * b == rw_mul_s32_s64(a, b));
+        }
+    }
+    uint32_t state = 4242u;
+    for (unsigned i = 0u; i < 200000u; ++i) {
+        state = state * 1664525u + 1013904223u;
+        const uint32_t a = state;
+        const uint32_t b = state * 2654435761u;
+        TEST_ASSERT_TRUE((uint64_t)a * b == rw_mul_u32_u64(a, b));
+        TEST_ASSERT_TRUE((int64_t)(int32_t)a * (int32_t)b == rw_mul_s32_s64((int32_t)a, (int32_t)b));
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -104,5 +206,8 @@ int main(void)
     RUN_TEST(test_same_is_bit_equality);
     RUN_TEST(test_round_half_up_is_floor_of_x_plus_half);
     RUN_TEST(test_mul_small_equals_the_float_multiply);
+    RUN_TEST(test_ms_past_equals_the_float_comparison);
+    RUN_TEST(test_q16_conversions);
+    RUN_TEST(test_long_multiply);
     return UNITY_END();
 }

@@ -37,6 +37,17 @@ typedef struct {
 
 static rw_multiturn mt;
 
+/* The tests speak degrees, deg/s and seconds; rw_multiturn takes ticks, ticks/ms Q10 and milliseconds
+ * (rw_ax12.h): converted here, rounded to the nearest unit (0.000115 degrees, 0.000112 deg/s, 1 ms). */
+static float step_deg(rw_multiturn *m, bool valid, float position_deg, float speed_deg_s, float dt_s)
+{
+    const int32_t position_ticks = (int32_t)lroundf(position_deg * RW_AX12_TICKS_PER_DEG);
+    const int32_t speed_q10 = (int32_t)lroundf(speed_deg_s * RW_AX12_TICKS_PER_DEG * (1024.0f / 1000.0f));
+    const uint32_t dt_ms = (uint32_t)lroundf(dt_s * 1000.0f);
+    (void)rw_multiturn_step(m, valid, position_ticks, speed_q10, dt_ms);
+    return rw_multiturn_angle_deg(m);
+}
+
 void setUp(void)
 {
     rw_multiturn_config cfg;
@@ -117,9 +128,9 @@ static track_result track(sim_servo *s, long steps, float dead_zone_speed_scale,
         if (dead) {
             speed *= dead_zone_speed_scale;
         }
-        const float before = mt.state.angle_deg;
+        const float before = rw_multiturn_angle_deg(&mt);
         const bool was_initialized = mt.state.initialized;
-        const float est = rw_multiturn_step(&mt, true, servo_position_deg(s), speed, DT_S);
+        const float est = step_deg(&mt, true, servo_position_deg(s), speed, DT_S);
         if (!dead && r.first_valid_step < 0) {
             r.first_valid_step = k;
         }
@@ -218,9 +229,9 @@ static void test_single_impossible_jump_is_rejected_and_counted(void)
     (void)track(&s, 50, 1.0f, 0, 0.0f);
     TEST_ASSERT_EQUAL_UINT16(0u, mt.state.rejected);
     servo_advance(&s);
-    const float before = mt.state.angle_deg;
+    const float before = rw_multiturn_angle_deg(&mt);
     const float speed = servo_speed_measured(&s);
-    const float out = rw_multiturn_step(&mt, true, wrap360(s.angle_deg + 90.0f), speed, DT_S);
+    const float out = step_deg(&mt, true, wrap360(s.angle_deg + 90.0f), speed, DT_S);
     TEST_ASSERT_EQUAL_UINT16(1u, mt.state.rejected);
     TEST_ASSERT_FLOAT_WITHIN(1e-3f, before + speed * DT_S, out);
     const track_result r = track(&s, 100, 1.0f, 0, 0.0f);
@@ -232,7 +243,7 @@ static void test_single_impossible_jump_is_rejected_and_counted(void)
 static void reference_at(float position_deg)
 {
     for (unsigned i = 0u; i < RW_MULTITURN_AGREE; ++i) {
-        (void)rw_multiturn_step(&mt, true, position_deg, 0.0f, DT_S);
+        (void)step_deg(&mt, true, position_deg, 0.0f, DT_S);
     }
     TEST_ASSERT_TRUE(mt.state.initialized);
 }
@@ -241,10 +252,10 @@ static void test_jump_limit_edges(void)
 {
     const float limit = mt.cfg.max_jump_deg;
     reference_at(100.0f);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f + limit - 0.5f, rw_multiturn_step(&mt, true, 100.0f + limit - 0.5f, 0.0f, DT_S));
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f + limit - 0.5f, step_deg(&mt, true, 100.0f + limit - 0.5f, 0.0f, DT_S));
     TEST_ASSERT_EQUAL_UINT16(0u, mt.state.rejected);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f + limit - 0.5f,
-                             rw_multiturn_step(&mt, true, 100.0f + 2.0f * limit + 1.0f, 0.0f, DT_S));
+                             step_deg(&mt, true, 100.0f + 2.0f * limit + 1.0f, 0.0f, DT_S));
     TEST_ASSERT_EQUAL_UINT16(1u, mt.state.rejected);
 }
 
@@ -253,13 +264,13 @@ static void test_start_in_the_dead_zone_dead_reckons_until_a_usable_reading(void
     sim_servo s;
     servo_init(&s, 320.0f, 20.0f, 5u, 1023); /* the register reads its end value in the dead zone */
     servo_advance(&s);
-    const float first = rw_multiturn_step(&mt, true, servo_position_deg(&s), servo_speed_measured(&s), DT_S);
+    const float first = step_deg(&mt, true, servo_position_deg(&s), servo_speed_measured(&s), DT_S);
     TEST_ASSERT_FALSE(mt.state.initialized);
     TEST_ASSERT_TRUE(mt.state.dead_reckoning);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, servo_speed_measured(&s) * DT_S, first);
     (void)track(&s, 100, 1.0f, 0, 0.0f); /* 12 degrees past the zone: referenced */
     TEST_ASSERT_TRUE(mt.state.initialized);
-    const float offset = mt.state.angle_deg - s.angle_deg;
+    const float offset = rw_multiturn_angle_deg(&mt) - s.angle_deg;
     TEST_ASSERT_TRUE(fabsf(offset - 360.0f * roundf(offset / 360.0f)) < TRACK_TOL_DEG);
     const track_result r = track(&s, steps_for_turns(10.0f, 20.0f), 1.0f, 0, offset);
     TEST_ASSERT_TRUE_MESSAGE(r.max_err_deg < TRACK_TOL_DEG, "then tracks ten turns");
@@ -275,7 +286,7 @@ static void test_power_up_in_the_dead_zone_never_references_garbage(void)
         sim_servo s;
         servo_init(&s, 330.0f, 20.0f, seed, GARBAGE);
         (void)track(&s, 100, 1.0f, 0, 0.0f); /* out of the zone by now */
-        const float offset = mt.state.angle_deg - s.angle_deg;
+        const float offset = rw_multiturn_angle_deg(&mt) - s.angle_deg;
         const float off_turn = fabsf(offset - 360.0f * roundf(offset / 360.0f));
         const track_result r = track(&s, steps_for_turns(3.0f, 20.0f), 1.0f, 0, offset);
         lost += (off_turn >= TRACK_TOL_DEG || r.max_err_deg >= TRACK_TOL_DEG) ? 1 : 0;
@@ -288,31 +299,46 @@ static void test_no_answer_dead_reckons(void)
     reference_at(100.0f);
     TEST_ASSERT_TRUE(mt.state.initialized);
     TEST_ASSERT_FALSE(mt.state.dead_reckoning);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 106.0f, rw_multiturn_step(&mt, false, 250.0f, 60.0f, 0.1f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 106.0f, step_deg(&mt, false, 250.0f, 60.0f, 0.1f));
     TEST_ASSERT_EQUAL_UINT16(0u, mt.state.rejected);
 }
 
-static void test_bad_input_holds_the_angle(void)
+/* Integer inputs cannot be NaN; out-of-range ones are bounded: a position outside the register range is
+ * no reading, a speed beyond RW_MULTITURN_MAX_SPEED_TICKS_PER_MS_Q10 is clamped to it, and a long gap
+ * (int64 path) integrates exactly what the same time in short steps does. */
+static void test_out_of_range_input_is_bounded(void)
 {
-    (void)rw_multiturn_step(&mt, true, 100.0f, 0.0f, DT_S);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f, rw_multiturn_step(&mt, false, 0.0f, NAN, DT_S));
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f, rw_multiturn_step(&mt, false, 0.0f, INFINITY, DT_S));
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f, rw_multiturn_step(&mt, false, 0.0f, 10.0f, -1.0f));
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.0f, rw_multiturn_step(&mt, false, 0.0f, 10.0f, NAN));
-    /* a NaN position is no reading: dead reckoning */
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 100.1f, rw_multiturn_step(&mt, true, NAN, 10.0f, DT_S));
+    (void)step_deg(&mt, true, 100.0f, 0.0f, DT_S);
+    const int32_t start = mt.state.angle_ticks;
+    (void)rw_multiturn_step(&mt, true, -5, 0, 10u);
+    (void)rw_multiturn_step(&mt, true, RW_AX12_TICKS_VALID_RANGE + 1, 0, 10u);
+    TEST_ASSERT_EQUAL_INT32(start, mt.state.angle_ticks);
     TEST_ASSERT_EQUAL_UINT16(0u, mt.state.rejected);
+    (void)rw_multiturn_step(&mt, false, 0, INT32_MAX, 10u);
+    TEST_ASSERT_EQUAL_INT32(start + 10 * (RW_MULTITURN_MAX_SPEED_TICKS_PER_MS_Q10 >> 10), mt.state.angle_ticks);
+    (void)rw_multiturn_step(&mt, false, 0, INT32_MIN, 10u);
+    TEST_ASSERT_EQUAL_INT32(start, mt.state.angle_ticks);
+    /* 60 s without an answer at 59 rpm (532 units), once and in 10 ms steps: the same angle (59 turns), no drift */
+    rw_multiturn other = mt;
+    const int32_t speed_q10 = rw_ax12_speed_ticks_per_ms_q10(532u); /* 59 rpm */
+    (void)rw_multiturn_step(&mt, false, 0, speed_q10, 60000u);
+    for (int k = 0; k < 6000; ++k) {
+        (void)rw_multiturn_step(&other, false, 0, speed_q10, 10u);
+    }
+    TEST_ASSERT_EQUAL_INT32(other.state.angle_ticks, mt.state.angle_ticks);
+    /* 532 units = 354.3 deg/s; the Q10 speed unit is 0.0075 % slow: 1.6 degrees over these 59 turns */
+    TEST_ASSERT_FLOAT_WITHIN(2.0f, 532.0f * 0.666f * 60.0f, rw_multiturn_angle_deg(&mt) - 100.0f);
 }
 
 static void test_reset_forgets_the_reference(void)
 {
     reference_at(100.0f);
-    (void)rw_multiturn_step(&mt, true, 250.0f, 0.0f, DT_S);
+    (void)step_deg(&mt, true, 250.0f, 0.0f, DT_S);
     TEST_ASSERT_EQUAL_UINT16(1u, mt.state.rejected);
     rw_multiturn_reset(&mt);
     TEST_ASSERT_FALSE(mt.state.initialized);
     TEST_ASSERT_EQUAL_UINT16(0u, mt.state.rejected);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 250.0f, rw_multiturn_step(&mt, true, 250.0f, 0.0f, DT_S));
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 250.0f, step_deg(&mt, true, 250.0f, 0.0f, DT_S));
 }
 
 int main(void)
@@ -328,7 +354,7 @@ int main(void)
     RUN_TEST(test_start_in_the_dead_zone_dead_reckons_until_a_usable_reading);
     RUN_TEST(test_power_up_in_the_dead_zone_never_references_garbage);
     RUN_TEST(test_no_answer_dead_reckons);
-    RUN_TEST(test_bad_input_holds_the_angle);
+    RUN_TEST(test_out_of_range_input_is_bounded);
     RUN_TEST(test_reset_forgets_the_reference);
     return UNITY_END();
 }

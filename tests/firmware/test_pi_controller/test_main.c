@@ -6,6 +6,7 @@
 #include <math.h>
 #include <unity.h>
 
+#include "rw_float_bits.h"
 #include "rw_pi_controller.h"
 
 #define DT_S 0.001f
@@ -23,6 +24,18 @@ void setUp(void)
 
 void tearDown(void) {}
 
+/* The step in Q16.16 (the tests speak floats: converted here; resolution 1/65536) */
+static float step(float setpoint, float measurement, float feed_forward, float dt_s)
+{
+    return rw_f32_from_q16(rw_pi_controller_step(&pi, rw_f32_to_q16(setpoint), rw_f32_to_q16(measurement),
+                                                 rw_f32_to_q16(feed_forward), dt_s));
+}
+
+static float integral(void)
+{
+    return (float)pi.state.integral_q32 * (1.0f / 4294967296.0f);
+}
+
 static float plant_step(float v_mps, float throttle, float gain)
 {
     return PLANT_A * v_mps + (1.0f - PLANT_A) * gain * FULL_MPS * throttle;
@@ -32,7 +45,7 @@ static void test_proportional_plus_feed_forward(void)
 {
     pi.cfg.kp = 0.5f;
     pi.cfg.ki_per_s = 0.0f;
-    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.25f + 0.5f * 1.0f, rw_pi_controller_step(&pi, 3.0f, 2.0f, 0.25f, DT_S));
+    TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f, 0.25f + 0.5f * 1.0f, step(3.0f, 2.0f, 0.25f, DT_S));
 }
 
 static void test_integral_ramps_at_ki_times_error(void)
@@ -41,7 +54,7 @@ static void test_integral_ramps_at_ki_times_error(void)
     pi.cfg.ki_per_s = 2.0f;
     float u = 0.0f;
     for (int k = 0; k < 100; ++k) {
-        u = rw_pi_controller_step(&pi, 1.5f, 1.0f, 0.0f, DT_S);
+        u = step(1.5f, 1.0f, 0.0f, DT_S);
     }
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.1f, u); /* 2 * 0.5 * 0.1 s */
 }
@@ -51,7 +64,7 @@ static void test_closed_loop_removes_feed_forward_error(void)
     float v = 0.0f;
     float peak = 0.0f;
     for (int k = 0; k < 3000; ++k) {
-        const float u = rw_pi_controller_step(&pi, 10.0f, v, 10.0f / FULL_MPS, DT_S);
+        const float u = step(10.0f, v, 10.0f / FULL_MPS, DT_S);
         v = plant_step(v, u, 0.75f); /* feed-forward 25 % optimistic */
         peak = v > peak ? v : peak;
     }
@@ -65,19 +78,19 @@ static void test_no_windup_while_saturated_and_prompt_exit(void)
     const float ff = 20.0f / FULL_MPS;
     float integral_at_1s = 0.0f;
     for (int k = 0; k < 3000; ++k) {
-        const float u = rw_pi_controller_step(&pi, 20.0f, v, ff, DT_S);
+        const float u = step(20.0f, v, ff, DT_S);
         v = plant_step(v, u, 0.5f); /* only 16 m/s reachable */
         if (k == 1999) {
-            integral_at_1s = pi.state.integral;
+            integral_at_1s = integral();
         }
     }
     TEST_ASSERT_EQUAL_INT(1, pi.state.saturation);
-    TEST_ASSERT_EQUAL_FLOAT(1.0f, rw_pi_controller_output(&pi));
+    TEST_ASSERT_EQUAL_FLOAT(1.0f, rw_f32_from_q16(rw_pi_controller_output_q16(&pi)));
     /* clamped for the last second: the integral did not move, and it holds the output just at 1 */
-    TEST_ASSERT_FLOAT_WITHIN(1e-5f, integral_at_1s, pi.state.integral);
-    TEST_ASSERT_FLOAT_WITHIN(1e-3f, 1.0f - ff - 0.03f * (20.0f - v), pi.state.integral);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, integral_at_1s, integral());
+    TEST_ASSERT_FLOAT_WITHIN(1e-3f, 1.0f - ff - 0.03f * (20.0f - v), integral());
     /* error reverses: out of saturation on the first step */
-    TEST_ASSERT_TRUE(rw_pi_controller_step(&pi, 5.0f, v, 5.0f / FULL_MPS, DT_S) < 1.0f);
+    TEST_ASSERT_TRUE(step(5.0f, v, 5.0f / FULL_MPS, DT_S) < 1.0f);
 }
 
 static void test_lower_limit_symmetric(void)
@@ -87,32 +100,33 @@ static void test_lower_limit_symmetric(void)
     pi.cfg.out_min = -1.0f;
     float u = 0.0f;
     for (int k = 0; k < 3000; ++k) {
-        u = rw_pi_controller_step(&pi, 0.0f, 5.0f, 0.0f, DT_S);
+        u = step(0.0f, 5.0f, 0.0f, DT_S);
     }
     TEST_ASSERT_EQUAL_FLOAT(-1.0f, u);
     TEST_ASSERT_EQUAL_INT(-1, pi.state.saturation);
-    TEST_ASSERT_FLOAT_WITHIN(1e-5f, -0.95f, pi.state.integral);
-    TEST_ASSERT_TRUE(rw_pi_controller_step(&pi, 5.0f, 0.0f, 0.0f, DT_S) > -1.0f);
+    TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f, -0.95f, integral()); /* kp 0.01 x 5 to Q16 */
+    TEST_ASSERT_TRUE(step(5.0f, 0.0f, 0.0f, DT_S) > -1.0f);
 }
 
 static void test_bad_input_holds_output(void)
 {
-    const float held = rw_pi_controller_step(&pi, 10.0f, 5.0f, 0.1f, DT_S);
-    TEST_ASSERT_EQUAL_FLOAT(held, rw_pi_controller_step(&pi, NAN, 5.0f, 0.1f, DT_S));
-    TEST_ASSERT_EQUAL_FLOAT(held, rw_pi_controller_step(&pi, 10.0f, INFINITY, 0.1f, DT_S));
-    TEST_ASSERT_EQUAL_FLOAT(held, rw_pi_controller_step(&pi, 10.0f, 5.0f, NAN, DT_S));
-    TEST_ASSERT_EQUAL_FLOAT(held, rw_pi_controller_step(&pi, 10.0f, 5.0f, 0.1f, 0.0f));
-    TEST_ASSERT_EQUAL_FLOAT(held, rw_pi_controller_step(&pi, 10.0f, 5.0f, 0.1f, -DT_S));
+    const float held = step(10.0f, 5.0f, 0.1f, DT_S);
+    TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, 0.0f));
+    TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, -DT_S));
+    TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, NAN));
     pi.cfg.out_min = 2.0f; /* invalid: out_min > out_max */
-    TEST_ASSERT_EQUAL_FLOAT(held, rw_pi_controller_step(&pi, 10.0f, 5.0f, 0.1f, DT_S));
+    TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, DT_S));
+    pi.cfg.out_min = 0.0f;
+    pi.cfg.kp = NAN; /* invalid gain */
+    TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, DT_S));
 }
 
 static void test_output_within_limits_for_extreme_input(void)
 {
-    const float inputs[] = {-1e30f, -1.0f, 0.0f, 1.0f, 1e30f, 3.0e38f};
+    const float inputs[] = {-1e30f, -1.0f, 0.0f, 1.0f, 1e30f, 3.0e38f}; /* saturate at +-32768 in Q16 */
     for (unsigned i = 0; i < sizeof inputs / sizeof inputs[0]; ++i) {
         for (unsigned j = 0; j < sizeof inputs / sizeof inputs[0]; ++j) {
-            const float u = rw_pi_controller_step(&pi, inputs[i], inputs[j], inputs[(i + j) % 6u], DT_S);
+            const float u = step(inputs[i], inputs[j], inputs[(i + j) % 6u], DT_S);
             TEST_ASSERT_TRUE(isfinite(u));
             TEST_ASSERT_TRUE(u >= 0.0f && u <= 1.0f);
         }

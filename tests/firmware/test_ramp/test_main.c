@@ -4,6 +4,7 @@
 #include <math.h>
 #include <unity.h>
 
+#include "rw_float_bits.h"
 #include "rw_ramp.h"
 
 static rw_ramp ramp;
@@ -16,16 +17,22 @@ void setUp(void)
 
 void tearDown(void) {}
 
+/* The step runs in Q16.16 (1/65536 unit): the tests speak floats. */
+static float step(float target, float dt_s)
+{
+    return rw_f32_from_q16(rw_ramp_step(&ramp, rw_f32_to_q16(target), dt_s));
+}
+
 static void test_rise_at_exact_rate_and_land_on_target(void)
 {
     float prev = 0.0f;
     int moving_steps = 0;
     for (int k = 0; k < 600; ++k) {
-        const float y = rw_ramp_step(&ramp, 5.0f, 0.001f);
+        const float y = step(5.0f, 0.001f);
         const float d = y - prev;
         if (d > 0.0f) {
             ++moving_steps;
-            TEST_ASSERT_TRUE(d <= 0.01f * 1.0001f);
+            TEST_ASSERT_TRUE(d <= 0.01f + 1.0f / 65536.0f);
         }
         TEST_ASSERT_TRUE(y <= 5.0f);
         prev = y;
@@ -41,11 +48,11 @@ static void test_fall_at_the_down_rate(void)
     rw_ramp_reset_to(&ramp, 4.0f);
     float y = 0.0f;
     for (int k = 0; k < 100; ++k) {
-        y = rw_ramp_step(&ramp, 0.0f, 0.01f);
+        y = step(0.0f, 0.01f);
     }
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 2.0f, y); /* 1 s at 2 units/s */
+    TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f, 2.0f, y); /* 1 s at 2 units/s, to the Q16 LSB */
     for (int k = 0; k < 150; ++k) {
-        y = rw_ramp_step(&ramp, 0.0f, 0.01f);
+        y = step(0.0f, 0.01f);
     }
     TEST_ASSERT_EQUAL_FLOAT(0.0f, y);
 }
@@ -53,17 +60,19 @@ static void test_fall_at_the_down_rate(void)
 static void test_zero_rate_is_unlimited(void)
 {
     ramp.cfg.rate_up_per_s = 0.0f;
-    TEST_ASSERT_EQUAL_FLOAT(7.0f, rw_ramp_step(&ramp, 7.0f, 0.001f));
+    TEST_ASSERT_EQUAL_FLOAT(7.0f, step(7.0f, 0.001f));
 }
 
 static void test_bad_input_keeps_output(void)
 {
     rw_ramp_reset_to(&ramp, 2.0f);
-    TEST_ASSERT_EQUAL_FLOAT(2.0f, rw_ramp_step(&ramp, NAN, 0.001f));
-    TEST_ASSERT_EQUAL_FLOAT(2.0f, rw_ramp_step(&ramp, INFINITY, 0.001f));
-    TEST_ASSERT_EQUAL_FLOAT(2.0f, rw_ramp_step(&ramp, 5.0f, 0.0f));
-    TEST_ASSERT_EQUAL_FLOAT(2.0f, rw_ramp_step(&ramp, 5.0f, -1.0f));
-    TEST_ASSERT_EQUAL_FLOAT(2.0f, rw_ramp_step(&ramp, 5.0f, NAN));
+    TEST_ASSERT_EQUAL_FLOAT(2.0f, step(5.0f, 0.0f));
+    TEST_ASSERT_EQUAL_FLOAT(2.0f, step(5.0f, -1.0f));
+    TEST_ASSERT_EQUAL_FLOAT(2.0f, step(5.0f, NAN));
+    /* the extremes of the Q16 range: no overflow, the step still bounded by the rate */
+    TEST_ASSERT_EQUAL_INT32(rw_f32_to_q16(2.0f) + 655, rw_ramp_step(&ramp, INT32_MAX, 0.001f));
+    rw_ramp_reset_to(&ramp, -2.0f);
+    TEST_ASSERT_EQUAL_INT32(rw_f32_to_q16(-2.0f) - 131, rw_ramp_step(&ramp, INT32_MIN, 0.001f));
 }
 
 static void test_defaults_valid(void)

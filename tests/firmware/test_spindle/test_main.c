@@ -17,6 +17,7 @@
 #include "rw_spindle.h"
 
 #define DT_S 0.01f
+#define DT_MS 10u /* DT_S, as rw_spindle_step takes it */
 #define LEAD_MM 8.0f
 #define MM_PER_DEG (LEAD_MM / 360.0f)
 #define W0_DEG_S (59.0f * 6.0f)
@@ -143,7 +144,7 @@ static void servo_step(float dt_s)
 static rw_spindle_outcome tick(void)
 {
     rw_spindle_reading r = servo_registers();
-    const rw_spindle_outcome out = rw_spindle_step(&sp, servo.answering ? &r : NULL, DT_S);
+    const rw_spindle_outcome out = rw_spindle_step(&sp, servo.answering ? &r : NULL, DT_MS);
     TEST_ASSERT_EQUAL_UINT16(0u, sp.state.moving_speed_raw & (uint16_t)~0x07FFu);
     servo.moving_speed_raw = sp.state.moving_speed_raw;
     servo_step(DT_S);
@@ -184,7 +185,7 @@ static void homed_at_zero(void)
 {
     rw_spindle_home(&sp);
     rw_spindle_reading r = reading(0.0f, 0.0f, true);
-    TEST_ASSERT_EQUAL_INT(RW_SPINDLE_HOMED_BY_SWITCH, rw_spindle_step(&sp, &r, DT_S));
+    TEST_ASSERT_EQUAL_INT(RW_SPINDLE_HOMED_BY_SWITCH, rw_spindle_step(&sp, &r, DT_MS));
     TEST_ASSERT_EQUAL_FLOAT(0.0f, sp.state.position_mm);
 }
 
@@ -239,15 +240,15 @@ static void test_homing_stall_needs_load_and_stillness_for_the_stall_time(void)
     rw_spindle_reading light = reading(0.0f, -100.0f, false);
     rw_spindle_reading stalled = reading(0.0f, -400.0f, false);
     for (int k = 0; k < 200; ++k) {
-        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &moving, DT_S));
-        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &light, DT_S));
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &moving, DT_MS));
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &light, DT_MS));
     }
     for (int k = 0; k < STALL_STEPS - 2; ++k) {
-        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &stalled, DT_S));
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &stalled, DT_MS));
     }
-    TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &moving, DT_S)); /* interrupted */
+    TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &moving, DT_MS)); /* interrupted */
     int steps = 1;
-    while (rw_spindle_step(&sp, &stalled, DT_S) == RW_SPINDLE_NOTHING) {
+    while (rw_spindle_step(&sp, &stalled, DT_MS) == RW_SPINDLE_NOTHING) {
         ++steps;
         TEST_ASSERT_TRUE(steps < 100);
     }
@@ -275,8 +276,8 @@ static void test_position_loop_is_p_law_saturated_and_zero_in_tolerance(void)
         homed_at_zero();
         rw_spindle_move_to(&sp, targets[i]);
         rw_spindle_reading r = reading(0.0f, 0.0f, false);
-        (void)rw_spindle_step(&sp, &r, DT_S);
-        TEST_ASSERT_FLOAT_WITHIN(1e-4f, expected[i], sp.state.command_mmps);
+        (void)rw_spindle_step(&sp, &r, DT_MS);
+        TEST_ASSERT_FLOAT_WITHIN(1e-4f, expected[i], ((float)sp.state.command_umps * 1.0e-3f));
         TEST_ASSERT_EQUAL_UINT16(raw_for_mmps(expected[i]), sp.state.moving_speed_raw);
         TEST_ASSERT_EQUAL(expected[i] < 0.0f, (sp.state.moving_speed_raw & RW_AX12_DIRECTION_BIT) != 0u);
     }
@@ -289,13 +290,13 @@ static void test_target_reached_once_per_target(void)
     rw_spindle_move_to(&sp, 0.3f);
     int reached = 0;
     for (int k = 0; k < 100; ++k) {
-        reached += rw_spindle_step(&sp, &r, DT_S) == RW_SPINDLE_TARGET_REACHED;
+        reached += rw_spindle_step(&sp, &r, DT_MS) == RW_SPINDLE_TARGET_REACHED;
     }
     TEST_ASSERT_EQUAL_INT(1, reached);
     rw_spindle_move_to(&sp, 0.2f);
     reached = 0;
     for (int k = 0; k < 100; ++k) {
-        reached += rw_spindle_step(&sp, &r, DT_S) == RW_SPINDLE_TARGET_REACHED;
+        reached += rw_spindle_step(&sp, &r, DT_MS) == RW_SPINDLE_TARGET_REACHED;
     }
     TEST_ASSERT_EQUAL_INT(1, reached);
 }
@@ -325,24 +326,24 @@ static void test_soft_limits_stop_outward_motion_only(void)
     reconfigure();
     homed_at_zero();
     rw_spindle_move_to(&sp, -5.0f);
-    (void)rw_spindle_step(&sp, &r, DT_S);
+    (void)rw_spindle_step(&sp, &r, DT_MS);
     TEST_ASSERT_EQUAL_UINT16(0u, sp.state.moving_speed_raw);
     rw_spindle_move_to(&sp, 5.0f);
-    (void)rw_spindle_step(&sp, &r, DT_S);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 6.0f, sp.state.command_mmps);
+    (void)rw_spindle_step(&sp, &r, DT_MS);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 6.0f, ((float)sp.state.command_umps * 1.0e-3f));
     cfg.guide_min_mm = -10.0f;
     cfg.guide_max_mm = 0.0f;
     reconfigure();
     homed_at_zero();
     rw_spindle_move_to(&sp, 5.0f);
-    (void)rw_spindle_step(&sp, &r, DT_S);
+    (void)rw_spindle_step(&sp, &r, DT_MS);
     TEST_ASSERT_EQUAL_UINT16(0u, sp.state.moving_speed_raw);
     rw_spindle_retract(&sp);
-    (void)rw_spindle_step(&sp, &r, DT_S);
+    (void)rw_spindle_step(&sp, &r, DT_MS);
     TEST_ASSERT_EQUAL_UINT16(0u, sp.state.moving_speed_raw);
     rw_spindle_move_to(&sp, -5.0f);
-    (void)rw_spindle_step(&sp, &r, DT_S);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, -6.0f, sp.state.command_mmps);
+    (void)rw_spindle_step(&sp, &r, DT_MS);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, -6.0f, ((float)sp.state.command_umps * 1.0e-3f));
 }
 
 static void test_retract_secures_after_the_load_has_held(void)
@@ -372,15 +373,15 @@ static void test_retract_spike_shorter_than_the_stall_time_does_not_secure(void)
     rw_spindle_reading pushed = reading(200.0f, -400.0f, false);
     rw_spindle_reading held = reading(5.0f, 130.0f, false);
     for (int k = 0; k < STALL_STEPS - 1; ++k) {
-        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &spike, DT_S));
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &spike, DT_MS));
     }
     for (int k = 0; k < 100; ++k) {
-        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &free_run, DT_S));
-        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &pushed, DT_S));
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &free_run, DT_MS));
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &pushed, DT_MS));
     }
     TEST_ASSERT_EQUAL_UINT16(raw_for_mmps(5.0f), sp.state.moving_speed_raw); /* retract = counter-clockwise */
     int steps = 1;
-    while (rw_spindle_step(&sp, &held, DT_S) != RW_SPINDLE_SECURED) {
+    while (rw_spindle_step(&sp, &held, DT_MS) != RW_SPINDLE_SECURED) {
         ++steps;
         TEST_ASSERT_TRUE(steps < 100);
     }
@@ -456,7 +457,7 @@ static void test_command_register_never_exceeds_1023(void)
         case 2: rw_spindle_move_to(&sp, -500.0f); break;
         default: rw_spindle_retract(&sp); break;
         }
-        (void)rw_spindle_step(&sp, &r, DT_S);
+        (void)rw_spindle_step(&sp, &r, DT_MS);
         TEST_ASSERT_EQUAL_UINT16(mode == 0 || mode == 2 ? 2047u : 1023u, sp.state.moving_speed_raw);
     }
 }
