@@ -686,13 +686,15 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
             elapsed_ms = RW_CORE_SPINDLE_PERIOD_MS; /* first step */
         }
         spindle_tick(core, hal, (float)elapsed_ms * 1.0e-3f);
+        /* the load-loss check shares the 10 ms slot (its time constants are 50 ms and more; it reads the PI's
+         * integral, which the speed ticks keep current). Its dt is the slot's period: the slot keeps it but
+         * when a telemetry tick holds it back once (2 ms), and a constant dt keeps the filters' coefficients
+         * (a float division each) computed once. */
+        rw_core_load_loss_step(core);
         core->state.spindle_last_ms = core->state.uptime_ms;
         core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
     }
     control(core, speed_dt_s, speed_tick);
-    if (speed_tick) {
-        rw_core_load_loss_step(core, speed_dt_s);
-    }
     hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
 
     /* 5. telemetry, then at most one datagram out per tick */

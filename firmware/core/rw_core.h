@@ -27,8 +27,9 @@
  * float operation is a libgcc call):
  *   speed tick (odd calls):    M/T estimator + ramp + PI + feed-forward, dt = the time since the last
  *                              speed tick (2 ms at a 1 ms tick: 500 Hz, above the ESC's 400 Hz frame rate)
- *   other tick (even calls):   the telemetry pack when due; otherwise the spindle loop when due
- *                              (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick of its kind;
+ *   other tick (even calls):   the telemetry pack when due; otherwise the spindle loop and the load-loss
+ *                              check when due (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick
+ *                              of its kind;
  *                              with neither, the feed-forward's battery factor (60 / (2 pi r kv V), one
  *                              division) is refreshed if the battery reading changed, so the speed tick
  *                              never divides for it (the feed-forward sees the battery a few ms late);

@@ -10,7 +10,9 @@ void rw_core_set_state(rw_core *core, uint8_t new_state, uint8_t cause);
 void rw_core_raise_fault(rw_core *core, uint16_t fault_bit);
 /* The load-loss monitor's configuration from the parameters, and its step (speed ticks, after the PI step). */
 void rw_core_load_loss_apply_params(rw_core *core);
-void rw_core_load_loss_step(rw_core *core, float dt_s);
+/* The load-loss check runs in the spindle's 10 ms slot with this dt (the slot's period). */
+#define RW_CORE_LOAD_CHECK_DT_S ((float)RW_CORE_SPINDLE_PERIOD_MS * 1.0e-3f)
+void rw_core_load_loss_step(rw_core *core);
 
 /* Receive at most one datagram on a link, answer it; returns true when a datagram was sent this tick. */
 bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link);

@@ -29,14 +29,16 @@ void rw_core_load_loss_apply_params(rw_core *core)
                               rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M));
     c->drop_n = rw_params_get(p, RW_PARAM_LOAD_LOSS_DROP_N);
     c->time_s = rw_params_get(p, RW_PARAM_LOAD_LOSS_TIME_S);
+    rw_load_monitor_prepare(&core->state.load_monitor, RW_CORE_LOAD_CHECK_DT_S);
 }
 
-void rw_core_load_loss_step(rw_core *core, float dt_s)
+void rw_core_load_loss_step(rw_core *core)
 {
+    const float dt_s = RW_CORE_LOAD_CHECK_DT_S;
     const uint8_t st = core->state.state;
     const bool steady = st == RW_STATE_AIRBORNE && rw_f32_same(core->state.setpoint_mps, core->state.target_mps) &&
                         core->state.pi.state.saturation == 0;
-    if (!rw_load_monitor_step(&core->state.load_monitor, steady, core->state.pi.state.integral,
+    if (!rw_load_monitor_step(&core->state.load_monitor, steady, rw_pi_controller_integral(&core->state.pi),
                               core->state.ff_battery_v, dt_s)) {
         return;
     }

@@ -42,6 +42,24 @@ void rw_load_monitor_reset(rw_load_monitor *m)
     m->state.drop_s = 0.0f;
 }
 
+/* The filters follow the configuration's time constants (public fields, may change between steps). */
+static void follow_config(rw_load_monitor *m)
+{
+    m->state.load.cfg.tau_s = m->cfg.filter_tau_s;
+    m->state.reference.cfg.tau_s = m->cfg.reference_tau_s;
+    m->state.rise.cfg.tau_s = m->cfg.rise_tau_s;
+    m->state.battery.cfg.tau_s = m->cfg.battery_tau_s;
+}
+
+void rw_load_monitor_prepare(rw_load_monitor *m, float dt_s)
+{
+    follow_config(m);
+    rw_lowpass_prepare(&m->state.load, dt_s);
+    rw_lowpass_prepare(&m->state.reference, dt_s);
+    rw_lowpass_prepare(&m->state.rise, dt_s);
+    rw_lowpass_prepare(&m->state.battery, dt_s);
+}
+
 float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resistance_ohm, float wheel_radius_m)
 {
     if (!(isfinite(motor_count) && isfinite(kv_rpm_per_v) && isfinite(resistance_ohm) && isfinite(wheel_radius_m)) ||
@@ -64,6 +82,23 @@ void rw_load_monitor_set_drive(rw_load_monitor *m, float motor_count, float kv_r
     }
 }
 
+/* The filters are the core's Q16.16 low-pass (rw_lowpass.h); forces in N and volts fit Q16.16 with 1.5e-5
+ * resolution. */
+static void lp_reset_to(rw_lowpass *f, float y)
+{
+    rw_lowpass_reset_to(f, rw_f32_to_q16(y));
+}
+
+static float lp_step(rw_lowpass *f, float x, float dt_s)
+{
+    return rw_f32_from_q16(rw_lowpass_step(f, rw_f32_to_q16(x), dt_s));
+}
+
+static float lp_output(const rw_lowpass *f)
+{
+    return rw_f32_from_q16(rw_lowpass_output_q16(f));
+}
+
 /* x finite and >= 0 (+0 included, -0 not), from the bit pattern: no soft-float call. */
 static bool nonneg_finite(float x)
 {
@@ -77,8 +112,7 @@ bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)
            nonneg_finite(cfg->battery_tau_s) && nonneg_finite(cfg->settle_s);
 }
 
-/* Comparisons and checks on bit patterns (rw_float_bits.h): on the M0+ every float compare is a libgcc call,
- * and this runs every speed tick. */
+/* Comparisons and checks on bit patterns (rw_float_bits.h): on the M0+ every float compare is a libgcc call. */
 bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float battery_v, float dt_s)
 {
     const rw_load_monitor_config *c = &m->cfg;
@@ -89,30 +123,27 @@ bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float
         }
         return false;
     }
-    m->state.load.cfg.tau_s = c->filter_tau_s;
-    m->state.reference.cfg.tau_s = c->reference_tau_s;
-    m->state.rise.cfg.tau_s = c->rise_tau_s;
-    m->state.battery.cfg.tau_s = c->battery_tau_s;
+    follow_config(m);
     if (!m->state.steady) { /* a new steady spell: start from here */
         m->state.steady = true;
         m->state.steady_s = 0.0f;
         m->state.drop_s = 0.0f;
-        rw_lowpass_reset_to(&m->state.battery, battery_v);
+        lp_reset_to(&m->state.battery, battery_v);
         float force0_n = c->n_per_v * integral * battery_v;
-        rw_lowpass_reset_to(&m->state.load, force0_n);
-        rw_lowpass_reset_to(&m->state.reference, force0_n);
+        lp_reset_to(&m->state.load, force0_n);
+        lp_reset_to(&m->state.reference, force0_n);
     }
-    float force_n = c->n_per_v * integral * rw_lowpass_step(&m->state.battery, battery_v, dt_s);
-    float load = rw_lowpass_step(&m->state.load, force_n, dt_s);
+    float force_n = c->n_per_v * integral * lp_step(&m->state.battery, battery_v, dt_s);
+    float load = lp_step(&m->state.load, force_n, dt_s);
     if (rw_f32_lt(m->state.steady_s, c->settle_s)) { /* learning: the PI is still settling */
         m->state.steady_s += dt_s;
-        rw_lowpass_reset_to(&m->state.reference, load);
+        lp_reset_to(&m->state.reference, load);
         return false;
     }
-    float reference = rw_lowpass_output(&m->state.reference);
+    float reference = lp_output(&m->state.reference);
     if (rw_f32_ge(load, reference)) { /* rises: the reference climbs with rise_tau_s */
-        rw_lowpass_reset_to(&m->state.rise, reference);
-        rw_lowpass_reset_to(&m->state.reference, rw_lowpass_step(&m->state.rise, load, dt_s));
+        lp_reset_to(&m->state.rise, reference);
+        lp_reset_to(&m->state.reference, lp_step(&m->state.rise, load, dt_s));
         m->state.drop_s = 0.0f;
         return false;
     }
@@ -125,16 +156,16 @@ bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float
         return false;
     }
     m->state.drop_s = 0.0f;
-    (void)rw_lowpass_step(&m->state.reference, load, dt_s);
+    (void)lp_step(&m->state.reference, load, dt_s);
     return false;
 }
 
 float rw_load_monitor_load_n(const rw_load_monitor *m)
 {
-    return rw_lowpass_output(&m->state.load);
+    return lp_output(&m->state.load);
 }
 
 float rw_load_monitor_drop_n(const rw_load_monitor *m)
 {
-    return rw_lowpass_output(&m->state.reference) - rw_lowpass_output(&m->state.load);
+    return lp_output(&m->state.reference) - lp_output(&m->state.load);
 }

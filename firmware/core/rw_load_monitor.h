@@ -80,6 +80,9 @@ void rw_load_monitor_init(rw_load_monitor *m, const rw_load_monitor_config *cfg)
 void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg);
 /** Forget the learnt levels: the next steady step starts learning. */
 void rw_load_monitor_reset(rw_load_monitor *m);
+/** The filters' coefficients for steps of dt_s, computed now (four float divisions) so that steps with this dt_s
+ *  do none; call after changing the configuration. */
+void rw_load_monitor_prepare(rw_load_monitor *m, float dt_s);
 /** n_per_v for motor_count motors of kv_rpm_per_v behind resistance_ohm each, on wheels of wheel_radius_m;
  *  0 when an argument is not finite and > 0. */
 float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resistance_ohm, float wheel_radius_m);

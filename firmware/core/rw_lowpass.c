@@ -39,6 +39,20 @@ bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
     return rw_f32_finite(cfg->tau_s) && rw_f32_ge(cfg->tau_s, 0.0f);
 }
 
+void rw_lowpass_prepare(rw_lowpass *f, float dt_s)
+{
+    const float tau_s = f->cfg.tau_s;
+    if (!rw_f32_positive_finite(dt_s) || !rw_f32_positive_finite(tau_s)) {
+        return;
+    }
+    if (!rw_f32_same(tau_s, f->state.alpha_tau_s) || !rw_f32_same(dt_s, f->state.alpha_dt_s)) {
+        const int32_t alpha_q20 = rw_f32_to_q16(dt_s / (tau_s + dt_s) * 16.0f); /* Q16 of 16 alpha = Q20 */
+        f->state.alpha_q20 = alpha_q20 < 1 ? 1 : (alpha_q20 > RW_LOWPASS_ALPHA_ONE_Q20 ? RW_LOWPASS_ALPHA_ONE_Q20 : alpha_q20);
+        f->state.alpha_tau_s = tau_s;
+        f->state.alpha_dt_s = dt_s;
+    }
+}
+
 /*
  * Continuous law:   tau * dy/dt + y = x
  * Discrete law (backward Euler, unconditionally stable for any dt_s > 0, no exp() on the M0+):
@@ -59,12 +73,7 @@ int32_t rw_lowpass_step(rw_lowpass *f, int32_t x_q16, float dt_s)
         rw_lowpass_reset_to(f, x_q16);
         return x_q16;
     }
-    if (!rw_f32_same(tau_s, f->state.alpha_tau_s) || !rw_f32_same(dt_s, f->state.alpha_dt_s)) {
-        const int32_t alpha_q20 = rw_f32_to_q16(dt_s / (tau_s + dt_s) * 16.0f); /* Q16 of 16 alpha = Q20 */
-        f->state.alpha_q20 = alpha_q20 < 1 ? 1 : (alpha_q20 > RW_LOWPASS_ALPHA_ONE_Q20 ? RW_LOWPASS_ALPHA_ONE_Q20 : alpha_q20);
-        f->state.alpha_tau_s = tau_s;
-        f->state.alpha_dt_s = dt_s;
-    }
+    rw_lowpass_prepare(f, dt_s);
     if (f->state.alpha_q20 == RW_LOWPASS_ALPHA_ONE_Q20) { /* dt far beyond tau */
         rw_lowpass_reset_to(f, x_q16);
         return x_q16;

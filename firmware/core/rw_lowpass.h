@@ -37,6 +37,9 @@ void rw_lowpass_reset_to(rw_lowpass *f, int32_t y_q16);
 /** Runs one sample x_q16 (Q16.16) taken dt_s after the previous one; returns the filtered value, Q16.16.
  *  Integer arithmetic (no soft-float on the Cortex-M0+): the state is kept to 2^-32 unit, alpha to 2^-20. */
 int32_t rw_lowpass_step(rw_lowpass *f, int32_t x_q16, float dt_s);
+/** Computes the coefficient for steps of dt_s now (the one float division), so that the steps that follow
+ *  with this dt_s and tau_s do none: for a caller that must keep its per-step cost flat. */
+void rw_lowpass_prepare(rw_lowpass *f, float dt_s);
 /** Last output without stepping, Q16.16. */
 int32_t rw_lowpass_output_q16(const rw_lowpass *f);
 /** true when tau_s is finite and >= 0. */

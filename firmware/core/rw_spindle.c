@@ -14,6 +14,10 @@
 /* Wheel-mode drive as a load threshold: 70 % of the drive, i.e. |load permille| 1023 >= 700 drive register. */
 #define RW_SPINDLE_STALL_DRIVE_PERMILLE_PER_RAW 700
 #define RW_SPINDLE_UM_PER_MM 1000.0f
+/* Retracting, a load that holds within this distance of guide_max is the end of the stroke, not an object:
+ * guide_max may sit on the hard stop (180 mm, the default), and the servo stalling on the stop reads as a
+ * full load a little short of it (the position estimate is not exact). 2 mm of the 180 mm stroke. */
+#define RW_SPINDLE_END_MARGIN_UM 2000
 /* Saturation of the micrometre values derived from the config (+-2,000 m: far outside any stroke). */
 #define RW_SPINDLE_MAX_UM 2000000000
 
@@ -296,8 +300,9 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
         cmd_umps = d->retract_speed_umps;
         /* secured: the rope resists with at least secure_load_pct for stall_time_s (the load spike of
          * starting from rest is over within a few servo time constants, far less than that) */
+        const bool at_end = pos_um >= d->guide_max_um - RW_SPINDLE_END_MARGIN_UM;
         if (held_for(s, load_permille >= d->secure_load_permille, dt_ms)) {
-            outcome = RW_SPINDLE_SECURED;
+            outcome = at_end ? RW_SPINDLE_STROKE_END : RW_SPINDLE_SECURED;
             rw_spindle_stop(s);
             cmd_umps = 0;
         } else if (pos_um >= d->guide_max_um) {

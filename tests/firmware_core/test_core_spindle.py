@@ -318,6 +318,18 @@ def test_retract_start_up_spike_shorter_than_the_stall_time_does_not_secure(rw_c
     assert sp.mode == Mode.IDLE and sp.moving_speed_raw == 0
 
 
+def test_retract_with_nothing_to_hold_against_the_hard_stop_is_not_secured(rw_core):
+    """guide_max = the stroke (180 mm, where the hard stop is): the servo stalls on the stop with a full load
+    just short of guide_max (the position estimate is not exact); that is the end of the stroke, not an
+    object: an empty loop must never read as secured."""
+    rig = Rig(rw_core, guide_max_mm=180.0)
+    rig.home()
+    rig.sp.retract()
+    assert rig.run(60.0, until=Outcome.STROKE_END) == Outcome.STROKE_END
+    assert [o for _, o in rig.outcomes] == [Outcome.STROKE_END]
+    assert rig.sp.mode == Mode.IDLE and rig.sp.moving_speed_raw == 0
+
+
 def test_retract_with_nothing_to_hold_ends_at_the_stroke(rw_core):
     rig = Rig(rw_core, guide_max_mm=30.0)
     rig.home()

@@ -89,7 +89,7 @@ typedef enum {
     RW_CAUSE_FAULT = 4, /* A fault (see fault_bits). */
     RW_CAUSE_BATTERY_LOW = 5, /* Battery under battery_cutoff_v for battery_cutoff_time_s. */
     RW_CAUSE_LOAD_SECURED = 6, /* Spindle load reached grasp_secure_load_pct while retracting: the object is held. */
-    RW_CAUSE_STROKE_END = 7, /* Retracting reached the end of the guide stroke without securing a load. */
+    RW_CAUSE_STROKE_END = 7, /* Retracting reached the end of the guide stroke without securing a load (a load within its last 2 mm cannot be told from the hard stop and counts as the end). */
     RW_CAUSE_LOAD_LOST = 8, /* The load on the flying rope vanished (EVENT LOAD_LOST): rope broken or object lost. */
 } rw_cause;
 #define RW_CAUSE_COUNT 9u

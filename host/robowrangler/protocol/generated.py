@@ -149,7 +149,7 @@ class Cause(IntEnum):
     LOAD_SECURED = 6
     """Spindle load reached grasp_secure_load_pct while retracting: the object is held."""
     STROKE_END = 7
-    """Retracting reached the end of the guide stroke without securing a load."""
+    """Retracting reached the end of the guide stroke without securing a load (a load within its last 2 mm cannot be told from the hard stop and counts as the end)."""
     LOAD_LOST = 8
     """The load on the flying rope vanished (EVENT LOAD_LOST): rope broken or object lost."""
 

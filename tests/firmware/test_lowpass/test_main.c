@@ -94,6 +94,20 @@ static void test_reset_to(void)
     TEST_ASSERT_EQUAL_FLOAT(0.0f, output());
 }
 
+/* prepare computes the coefficient ahead (the steps then divide nothing); the outputs are the same. */
+static void test_prepare_changes_no_output(void)
+{
+    rw_lowpass other;
+    const rw_lowpass_config cfg = {.tau_s = 0.05f};
+    rw_lowpass_init(&other, &cfg);
+    rw_lowpass_prepare(&other, 0.01f);
+    rw_lowpass_prepare(&other, -1.0f); /* ignored */
+    for (int k = 0; k < 50; ++k) {
+        const int32_t x = rw_f32_to_q16(k < 25 ? 3.0f : -1.0f);
+        TEST_ASSERT_EQUAL_INT32(rw_lowpass_step(&lp, x, 0.01f), rw_lowpass_step(&other, x, 0.01f));
+    }
+}
+
 static void test_config_validation(void)
 {
     rw_lowpass_config cfg = {.tau_s = 0.0f};
@@ -113,6 +127,7 @@ int main(void)
     RUN_TEST(test_bad_input_keeps_output);
     RUN_TEST(test_small_inputs_are_not_lost_to_the_resolution);
     RUN_TEST(test_reset_to);
+    RUN_TEST(test_prepare_changes_no_output);
     RUN_TEST(test_config_validation);
     return UNITY_END();
 }

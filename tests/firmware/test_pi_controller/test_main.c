@@ -57,6 +57,9 @@ static void test_integral_ramps_at_ki_times_error(void)
         u = step(1.5f, 1.0f, 0.0f, DT_S);
     }
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.1f, u); /* 2 * 0.5 * 0.1 s */
+    /* the accessor the load-loss check reads: the integral term to 2^-16 */
+    TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f, integral(), rw_pi_controller_integral(&pi));
+    TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f, 0.1f, rw_pi_controller_integral(&pi));
 }
 
 static void test_closed_loop_removes_feed_forward_error(void)

@@ -403,6 +403,16 @@ static void test_retract_with_nothing_ends_at_the_stroke(void)
     TEST_ASSERT_EQUAL_UINT16(0u, sp.state.moving_speed_raw);
 }
 
+/* guide_max on the hard stop (180 mm, the model's stroke): the stall on the stop is the stroke's end. */
+static void test_retract_against_the_hard_stop_is_not_secured(void)
+{
+    home_by_stall();
+    rw_spindle_retract(&sp);
+    TEST_ASSERT_TRUE(run_until(RW_SPINDLE_STROKE_END, 60.0f));
+    TEST_ASSERT_EQUAL_INT(0, outcome_count[RW_SPINDLE_SECURED]);
+    TEST_ASSERT_EQUAL_UINT16(0u, sp.state.moving_speed_raw);
+}
+
 static void test_blocked_guide_stalls_after_the_stall_time(void)
 {
     home_by_stall();
@@ -476,6 +486,7 @@ int main(void)
     RUN_TEST(test_retract_secures_after_the_load_has_held);
     RUN_TEST(test_retract_spike_shorter_than_the_stall_time_does_not_secure);
     RUN_TEST(test_retract_with_nothing_ends_at_the_stroke);
+    RUN_TEST(test_retract_against_the_hard_stop_is_not_secured);
     RUN_TEST(test_blocked_guide_stalls_after_the_stall_time);
     RUN_TEST(test_silent_servo_reported_once_after_the_timeout);
     RUN_TEST(test_command_register_never_exceeds_1023);
