@@ -36,7 +36,8 @@ void rw_core_load_loss_step(rw_core *core)
 {
     const float dt_s = RW_CORE_LOAD_CHECK_DT_S;
     const uint8_t st = core->state.state;
-    const bool steady = st == RW_STATE_AIRBORNE && rw_f32_same(core->state.setpoint_mps, core->state.target_mps) &&
+    /* "at its target" in the ramp's own Q16.16 (the float target, 15000 mm/s x 0.001, is 15.000001 m/s) */
+    const bool steady = st == RW_STATE_AIRBORNE && rw_ramp_at_target(&core->state.ramp, core->state.target_mps) &&
                         core->state.pi.state.saturation == 0;
     if (!rw_load_monitor_step(&core->state.load_monitor, steady, rw_pi_controller_integral(&core->state.pi),
                               core->state.ff_battery_v, dt_s)) {

@@ -76,6 +76,24 @@ def test_a_rope_break_under_load_is_reported_and_the_rope_landed(flying: Scripte
     assert [e[3] for e in events_since(flying, lost_ms) if e[1] == EventKind.FAULT_CLEARED] == [Fault.LOAD_LOST]
 
 
+@pytest.mark.parametrize("speed_mmps", [15000, 7300])
+def test_a_rope_break_is_seen_at_any_speed(native_build_dir: Path, speed_mmps: int) -> None:
+    """The target is a float of mm/s x 0.001 (15.000001 m/s) and the setpoint a Q16.16 value: the monitor
+    must still count the setpoint as at its target (it saw nothing at 15 m/s when it compared floats)."""
+    with SilSession(speedup=None) as sil:
+        host = ScriptedHost(sil)
+        host.run_for(0.6)
+        host.arm_and_spin(speed_mmps, settle_s=1.5)
+        sil.set_rope_load(5.0)
+        host.run_for(1.0)
+        t0_ms = now_ms(host)
+        RopeBreak(start_s=t0_ms / 1000).install(sil)
+        host.run_for(1.0)
+        lost = [t for t in load_losses(host) if t >= t0_ms]
+        assert len(lost) == 1 and lost[0] - t0_ms <= 400
+        host.close()
+
+
 def test_a_load_under_the_threshold_is_not_seen(flying: ScriptedHost) -> None:
     """The detection limit: a 0.5 N load that vanishes is under load_loss_drop_n (1 N): speed held, no event."""
     flying.sil.set_rope_load(0.5)
