@@ -174,23 +174,47 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
 @click.option("--speedup", type=click.FloatRange(0.1, 3.0), default=1.0, show_default=True,
               help="Simulated seconds per wall second.")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Plant noise seed.")
+@click.option("--wrangle", "wrangle_dir", type=click.Path(file_okay=False, writable=True), default="out/wrangle",
+              show_default=True, metavar="DIR",
+              help="Then a wrangle (the mug scenario, firmware in the loop, MuJoCo rope chain): PNG frames and an "
+                   "MP4 in DIR (about a minute).")
+@click.option("--no-wrangle", is_flag=True, help="Only the speed demo.")
 @pass_context
-def demo_command(ctx: CliContext, out_png: str, speedup: float, seed: int) -> None:
-    """The end-to-end demo on the simulated rope: arm, 4 m/s, 6 m/s, spin down, disarm, plot."""
+def demo_command(ctx: CliContext, out_png: str, speedup: float, seed: int, wrangle_dir: str,
+                 no_wrangle: bool) -> None:
+    """The end-to-end demo on the simulated rope: arm, 4 m/s, 6 m/s, spin down, disarm, plot; then a wrangle
+    of a mug, rendered (`wrangler sil --scenario NAME` runs any other)."""
+    if not no_wrangle:
+        _headless_gl(None, None, wrangle_dir)  # before anything imports MuJoCo
     sil_pkg, demo = _sil_modules()
     try:
         result = demo.run_demo(out_png, speedup=speedup, seed=seed, progress=ctx.note)
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
+    wrangle = None
+    if not no_wrangle:
+        from robowrangler_sim.scenarios import run_scenario
+
+        ctx.note(f"wrangle: the mug scenario with the firmware in the loop, frames to {wrangle_dir}")
+        try:
+            wrangle = run_scenario("mug", seed=seed, progress=ctx.note, render_dir=wrangle_dir)
+        except sil_pkg.SilError as exc:
+            raise SimulatorUnavailable(str(exc)) from exc
 
     def fmt(x: float | None) -> str:
         return "did not settle" if x is None else f"{x:.2f} s"
 
+    wrangle_text = "" if wrangle is None else (
+        f"\nwrangle (mug): {wrangle.verdict}; {len(wrangle.frames_written)} files in {wrangle_dir}")
     ctx.result(
         {"command": "demo", "plot": str(result.plot_path), "settle_4_mps_s": result.settle_4_mps_s,
          "settle_6_mps_s": result.settle_6_mps_s, "min_airborne_speed_mps": result.min_airborne_speed_mps,
-         "telemetry_samples": result.samples, "wall_s": round(result.wall_s, 2)},
+         "telemetry_samples": result.samples, "wall_s": round(result.wall_s, 2),
+         "wrangle": None if wrangle is None else {"scenario": "mug", "verdict": wrangle.verdict,
+                                                   "files": [str(f) for f in wrangle.frames_written]}},
         f"plot written to {result.plot_path}\n"
         f"0 -> 4 m/s settled within 2 % in {fmt(result.settle_4_mps_s)}; 4 -> 6 m/s in {fmt(result.settle_6_mps_s)}; "
-        f"slowest airborne sample {result.min_airborne_speed_mps:.2f} m/s (guard 2.99 m/s)",
+        f"slowest airborne sample {result.min_airborne_speed_mps:.2f} m/s (guard 2.99 m/s)" + wrangle_text,
     )
+    if wrangle is not None and wrangle.secured is None:
+        raise ScenarioFailed(f"demo wrangle: {wrangle.verdict}")
