@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from robowrangler.protocol.generated import State
 from robowrangler_sim.sil import SilSession
 from robowrangler_sim.sil.impairment import ImpairedLockstep, ImpairmentConfig, ImpairmentProxy
 from robowrangler_sim.sil.scripted_host import ScriptedHost
@@ -50,3 +51,18 @@ def plain_host(native_build_dir: Path) -> Iterator[ScriptedHost]:
         yield host
         host.close()
 
+
+
+FLYING_MMPS = 5000  # the rope speed of the `flying` fixture
+
+
+@pytest.fixture
+def flying(native_build_dir: Path) -> Iterator[ScriptedHost]:
+    """Rope airborne at FLYING_MMPS (5 m/s) and settled (2.6 s simulated), every tick traced."""
+    with SilSession(speedup=None, trace_every=1) as sil:
+        host = ScriptedHost(sil)
+        host.run_for(0.6)
+        host.arm_and_spin(FLYING_MMPS, settle_s=1.5)
+        assert host.last_telemetry.state == State.AIRBORNE
+        yield host
+        host.close()

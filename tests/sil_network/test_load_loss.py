@@ -9,7 +9,6 @@ load_loss_time_s (0.1 s) while airborne at a steady setpoint.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -20,20 +19,8 @@ from robowrangler_sim.sil import SilSession
 from robowrangler_sim.sil.plant_faults import BatterySag, RopeBreak
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 
-TARGET_MMPS = 5000
+TARGET_MMPS = 5000  # the `flying` fixture's speed (conftest.FLYING_MMPS)
 P = gen.PARAMS_BY_NAME
-
-
-@pytest.fixture
-def flying(native_build_dir: Path) -> Iterator[ScriptedHost]:
-    """Rope airborne at 5 m/s and settled (2.6 s simulated), every tick traced."""
-    with SilSession(speedup=None, trace_every=1) as sil:
-        host = ScriptedHost(sil)
-        host.run_for(0.6)
-        host.arm_and_spin(TARGET_MMPS, settle_s=1.5)
-        assert host.last_telemetry.state == State.AIRBORNE
-        yield host
-        host.close()
 
 
 def now_ms(host: ScriptedHost) -> int:

@@ -6,7 +6,6 @@ have yet is an xfail(strict=True) test naming what is missing.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -18,24 +17,12 @@ from robowrangler_sim.sil.plant_faults import (BatterySag, EncoderDropout, EscNo
                                                SpindleStall, StalledControlLoop)
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 
-TARGET_MMPS = 5000
+TARGET_MMPS = 5000  # the `flying` fixture's speed (conftest.FLYING_MMPS)
 ENCODER_TIMEOUT_MS = 250
 COLLAPSE_TIME_MS = 300
 TICK_MS = 1
 CUTOFF_MV = 9900  # battery_cutoff_v default (3S, 3.3 V a cell)
 CUTOFF_TIME_MS = 1000  # battery_cutoff_time_s default
-
-
-@pytest.fixture
-def flying(native_build_dir: Path) -> Iterator[ScriptedHost]:
-    """Rope airborne at 5 m/s and settled (2.6 s simulated), every tick traced."""
-    with SilSession(speedup=None, trace_every=1) as sil:
-        host = ScriptedHost(sil)
-        host.run_for(0.6)
-        host.arm_and_spin(TARGET_MMPS, settle_s=1.5)
-        assert host.last_telemetry.state == State.AIRBORNE
-        yield host
-        host.close()
 
 
 def events_since(host: ScriptedHost, since_ms: int) -> list[tuple[int, EventKind, State, int]]:
