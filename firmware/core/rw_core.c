@@ -322,8 +322,9 @@ static void supervise(rw_core *core, float dt_s, uint32_t dt_ms, uint32_t encode
     }
 }
 
-/* The spindle loop, every RW_CORE_SPINDLE_PERIOD_MS: read the servo, step, write, act on the outcome. */
-static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
+/* The spindle loop, every RW_CORE_SPINDLE_PERIOD_MS: read the servo, step, write, act on the outcome.
+ * elapsed_ms: the real time since the previous step (the period, or more after a gap). */
+static void spindle_tick(rw_core *core, const rw_hal *hal, uint32_t elapsed_ms)
 {
     if (hal->spindle == NULL) {
         return;
@@ -332,8 +333,7 @@ static void spindle_tick(rw_core *core, const rw_hal *hal, float dt_s)
     bool answered = hal->spindle->read(hal->spindle->ctx, &reading);
     rw_spindle *sp = &core->state.spindle;
     uint8_t st = core->state.state;
-    /* dt_s is a whole number of milliseconds (the spindle period, or the real elapsed time after a gap) */
-    switch (rw_spindle_step(sp, answered ? &reading : NULL, sat_u16_times(dt_s, 125u, 3))) {
+    switch (rw_spindle_step(sp, answered ? &reading : NULL, elapsed_ms)) {
     case RW_SPINDLE_HOMED_BY_STALL:
         rw_core_emit_event(core, RW_EVENT_KIND_SPINDLE_HOMED, st, st, 1);
         break;
@@ -685,7 +685,7 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         if (elapsed_ms == 0u || elapsed_ms > 60000u) {
             elapsed_ms = RW_CORE_SPINDLE_PERIOD_MS; /* first step */
         }
-        spindle_tick(core, hal, (float)elapsed_ms * 1.0e-3f);
+        spindle_tick(core, hal, elapsed_ms);
         /* the load-loss check shares the 10 ms slot (its time constants are 50 ms and more; it reads the PI's
          * integral, which the speed ticks keep current). Its dt is the slot's period: the slot keeps it but
          * when a telemetry tick holds it back once (2 ms), and a constant dt keeps the filters' coefficients
