@@ -38,6 +38,23 @@ MAX_JOINT_SPEED_RAD_S = 1.0e4
 
 
 @dataclass(frozen=True, kw_only=True)
+class ContactSummary:
+    """The contact forces of one instant, N.
+
+    Attributes:
+        chain_on_object_n: {object name: normal force of the chain on it}.
+        module_on_object_n: {object name: normal force of the module on it}.
+        chain_on_floor_n: normal force between the chain and the floor.
+        chain_net_on_object_n: {object name: shape (3,) world, net force (normal + friction) of the chain on it}.
+    """
+
+    chain_on_object_n: dict
+    module_on_object_n: dict
+    chain_on_floor_n: float
+    chain_net_on_object_n: dict
+
+
+@dataclass(frozen=True, kw_only=True)
 class PlantInputs:
     """Inputs of one tick (SI).
 
@@ -416,14 +433,16 @@ class ChainPlant:
 
     def contact_forces_n(self) -> tuple[dict, dict, float]:
         """Normal contact forces: (chain->object per object, module->object per object, chain<->floor), N."""
-        chain_obj, module_obj, chain_floor, _ = self._contact_summary()
-        return chain_obj, module_obj, chain_floor
+        c = self.contact_summary()
+        return c.chain_on_object_n, c.module_on_object_n, c.chain_on_floor_n
 
     def chain_object_net_force_n(self) -> dict:
         """Net force (normal + friction) of the chain on each object, {name: shape (3,) world}, N."""
-        return self._contact_summary()[3]
+        return self.contact_summary().chain_net_on_object_n
 
-    def _contact_summary(self) -> tuple[dict, dict, float, dict]:
+    def contact_summary(self) -> ContactSummary:
+        """Every contact force of the chain, the module and the objects now, in one pass over the contacts
+        (for a caller that needs several of them each step, e.g. the SIL bridge)."""
         d = self.data
         chain_obj = {k: 0.0 for k in self._object_body}
         module_obj = {k: 0.0 for k in self._object_body}
@@ -447,7 +466,8 @@ class ChainPlant:
                 chain_floor += fn
             elif obj and self._module_geom in (g1, g2):
                 module_obj[obj] += fn
-        return chain_obj, module_obj, chain_floor, net
+        return ContactSummary(chain_on_object_n=chain_obj, module_on_object_n=module_obj, chain_on_floor_n=chain_floor,
+                              chain_net_on_object_n=net)
 
     def rope_tension_n(self) -> float:
         """Load on the closure, N: the constraint force when the closure constraint is active, else the
@@ -463,7 +483,10 @@ class ChainPlant:
 
     def outputs(self) -> PlantOutputs:
         """Named outputs now; also feeds each object's SecuredMonitor (call it once per bridge tick)."""
-        chain_obj, module_obj, chain_floor, net = self._contact_summary()
+        contacts = self.contact_summary()
+        chain_obj, module_obj, chain_floor = (contacts.chain_on_object_n, contacts.module_on_object_n,
+                                              contacts.chain_on_floor_n)
+        net = contacts.chain_net_on_object_n
         base = self.data.mocap_pos[0].copy()
         for name, mon in self._monitors.items():
             mon.update(time_s=self.time_s, object_com_m=self.object_com_m(name), base_pos_m=base,

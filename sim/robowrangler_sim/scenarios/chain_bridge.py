@@ -102,14 +102,14 @@ class ChainBridge:
             self._couple()
 
     def _couple(self) -> None:
-        # one pass over the contacts (contact_forces_n() and chain_object_net_force_n() would each make one)
-        normal_obj, _, normal_floor, net = self.chain._contact_summary()
+        contacts = self.chain.contact_summary()  # one pass over the contacts
         total = np.zeros(3)
-        for f in net.values():
+        for f in contacts.chain_net_on_object_n.values():
             total += f
         self.guide_load_n = float(np.linalg.norm(total))
         self.peak_guide_load_n = max(self.peak_guide_load_n, self.guide_load_n)
-        self.drive_load_n = self.rope_axial_friction * (sum(normal_obj.values()) + normal_floor)
+        self.drive_load_n = self.rope_axial_friction * (sum(contacts.chain_on_object_n.values())
+                                                        + contacts.chain_on_floor_n)
         self.sil.spindle.guide_load_n = self.guide_load_n
         self.sil.plant.external_rope_load_n = self.drive_load_n
 
