@@ -5,32 +5,22 @@ core through its fake HAL to AIRBORNE (ARM, HOME by the limit switch, SET_ROPE_S
 the matching speed, heartbeats, then SET_LOOP so the spindle position loop is moving the guide), then profiles
 single rw_core_tick calls:
 
-  quiet        AIRBORNE, speed loop active, nothing received, no telemetry due (with the alternating schedule
-               of rw_core.h this is a speed tick: estimator + ramp + PI + feed-forward, setpoint still ramping)
-  telemetry    the same, telemetry packed and sent
-  command      SET_ROPE_SPEED received, decoded, executed and ACKed, telemetry packed (queued: the core sends
-               at most one datagram per tick, so the ACK goes out and the telemetry in the next tick)
-  param_set    PARAM_SET received and ACKed, PARAM_CHANGED event and PARAM_VALUE queued, parameters re-applied,
-               telemetry packed (the heaviest path found)
-  heartbeat    HEARTBEAT received and accepted (no reply), telemetry packed and sent in the same tick: the
-               one path on which a received datagram and an outgoing telemetry frame share a tick
-  replayed     the identical bytes of an accepted command again (a replay): its tag is checked (one SipHash),
-               its counter is not above the last accepted, dropped unanswered; a speed tick, like quiet
-  forged       a signed command with one tag bit flipped: tag check fails, dropped; a speed tick, like quiet
-  cycle_max    the heaviest of SCHEDULE_TICKS consecutive ticks with nothing received (the speed loop, the
-               spindle step every 10th tick and the telemetry pack at their own phases): the worst case of the
-               periodic work; the table then names the ticks of the cycle by what ran in them
+  1. the periodic schedule: SCHEDULE_TICKS consecutive ticks with nothing received, each labelled by what ran
+     in it (TICK_PARTS: speed loop, spindle step + load-loss check, telemetry pack, the steps signing a queued
+     frame over idle ticks: begin / absorb / finish + send); the worst tick of each kind, the mean, and the
+     verdict against the target: every periodic tick under 10 % of a 1 kHz tick (4,800 modelled cycles);
+  2. a datagram received at each of PHASES consecutive schedule phases, worst tick of each kind: a command
+     (SET_ROPE_SPEED: tag check, execution, the ACK signed at once), PARAM_SET (+ event and PARAM_VALUE
+     queued, parameters re-applied), a HEARTBEAT (no reply), a replayed and a forged command (dropped
+     unanswered after the tag check);
+  3. rw_siphash24 alone on the signed part of typical frames (SET_ROPE_SPEED, ACK, TELEMETRY).
 
 The link is signed (protocol v2): the harness's fake flash holds the test key, every host frame is signed
-for the session with a growing counter, and every frame the core sends over WiFi is signed (ACK/NACK,
-TELEMETRY, events). The columns "MAC instr/cycles" are what the tick spent inside rw_frame_tag_valid and
-rw_frame_sign (the SipHash-2-4 tags, checksum rewrite and signature block), callees included. A second
-table runs rw_siphash24 alone on the signed part of typical frames (SET_ROPE_SPEED, ACK, TELEMETRY).
-
-The target for the periodic work is cycle_max under 10 % of a 1 kHz tick (4,800 modelled cycles).
-Prints instructions, modelled cycles (see tests/firmware_arm/arm_harness_emulator.py for the Cortex-M0+ cycle
-model) and the CPU load of that tick at 1 kHz on 48 MHz, then what dominates the heaviest tick per function
-and per group (soft-float, CRC, memcpy/memset, integer division, codec, core, fake HAL).
+for the session with a growing counter, and every frame the core sends over WiFi is checked to be signed.
+"MAC cyc" is what a tick spent inside rw_frame_tag_valid, rw_frame_sign and the rw_signer steps, callees
+included. Prints instructions, modelled cycles (see tests/firmware_arm/arm_harness_emulator.py for the
+Cortex-M0+ cycle model) and the CPU load at 1 kHz on 48 MHz, then what dominates the heaviest ticks per
+function and per group (soft-float, CRC, memcpy/memset, integer division, codec, MAC, core, fake HAL).
 
     uv run python bench/bench_tick_instructions.py
 """
@@ -69,7 +59,7 @@ def group_of(func: str) -> str:
         return "integer division"
     if func == "rw_crc16_ccitt":
         return "CRC-16 (table)"
-    if func in ("rw_siphash24", "sip_round", "compress", "load_le64", "rotl"):
+    if func.startswith(("rw_siphash", "rw_signer_")) or func in ("compress", "load_le64"):
         return "SipHash-2-4 (MAC)"
     if func in ("__aeabi_llsl", "__aeabi_llsr", "__aeabi_lasr", "__ashldi3", "__lshrdi3", "__ashrdi3"):
         return "64-bit shifts (libgcc)"
@@ -167,15 +157,6 @@ class Scenario:
             out.append((tick_label(profile), profile))
         return out
 
-    def until_label(self, label: str, *, datagram: bytes | None = None, max_ticks: int = 200):  # noqa: ANN201
-        """Tick (profiled) until a tick's label is `label`; the first tick receives datagram. Returns (sent,
-        profile) of that tick."""
-        for i in range(max_ticks):
-            sent, profile = self.tick(datagram if i == 0 else None, count=True)
-            if tick_label(profile) == label:
-                return sent, profile
-        raise RuntimeError(f"no '{label}' tick within {max_ticks} ticks")
-
     def until_telemetry_message(self) -> "proto.Telemetry":
         """Tick until a tick sends TELEMETRY; returns the message."""
         for _ in range(200):
@@ -183,14 +164,6 @@ class Scenario:
             for m in sent:
                 if isinstance(m, proto.Telemetry):
                     return m
-        raise RuntimeError("no telemetry within 200 ticks")
-
-    def until_telemetry(self):  # noqa: ANN201
-        """Tick (profiled) until a tick sends TELEMETRY; returns that tick's profile."""
-        for _ in range(200):
-            sent, profile = self.tick(None, count=True)
-            if any(isinstance(m, proto.Telemetry) for m in sent):
-                return profile
         raise RuntimeError("no telemetry within 200 ticks")
 
 
