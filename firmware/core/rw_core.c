@@ -576,7 +576,7 @@ static uint32_t telemetry_period_ms(rw_core *core)
  * (rw_signer.h), each idle tick doing at most RW_CORE_MAC_TICK_BUDGET blocks' worth of work: begin (copy,
  * checksum: RW_CORE_MAC_BEGIN_COST), absorb (one per block), finish and send (RW_CORE_MAC_FINISH_COST). So no
  * tick carries a whole MAC, and a telemetry frame leaves within two idle ticks. Its counter is taken when it
- * leaves. A frame the signer refuses (not a well-formed frame) is dropped. */
+ * leaves. A frame the signer refuses (not a well-formed frame) is dropped and counted (tx_dropped). */
 static void send_queued(rw_core *core, const rw_hal *hal, bool sent, bool idle_tick)
 {
     rw_signer *signer = &core->state.signer;
@@ -596,20 +596,18 @@ static void send_queued(rw_core *core, const rw_hal *hal, bool sent, bool idle_t
         if (!idle_tick) {
             return;
         }
-        (void)rw_signer_begin(signer, slot->bytes, slot->len, rw_core_take_seq(core, RW_LINK_WIFI),
-                              rw_core_session_id(core), core->state.config.key);
+        if (!rw_signer_begin(signer, slot->bytes, slot->len, rw_core_take_seq(core, RW_LINK_WIFI),
+                             rw_core_session_id(core), core->state.config.key)) {
+            rw_outbox_count_drop(&core->state.outbox); /* counted: its seq is spent */
+        }
         rw_outbox_pop(&core->state.outbox, slot);
-        size_t left = rw_signer_blocks_left(signer);
-        size_t budget = RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BEGIN_COST;
-        (void)rw_signer_absorb(signer, left < budget ? left : budget);
+        (void)rw_signer_absorb(signer, RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BEGIN_COST);
         return;
     }
     if (!idle_tick) {
         return;
     }
-    size_t left = rw_signer_blocks_left(signer);
-    size_t now = left < RW_CORE_MAC_TICK_BUDGET ? left : RW_CORE_MAC_TICK_BUDGET;
-    (void)rw_signer_absorb(signer, now);
+    const size_t now = rw_signer_absorb(signer, RW_CORE_MAC_TICK_BUDGET);
     if (rw_signer_blocks_left(signer) == 0u && now + RW_CORE_MAC_FINISH_COST <= RW_CORE_MAC_TICK_BUDGET && !sent &&
         hal->link != NULL) {
         const uint8_t *frame = NULL;

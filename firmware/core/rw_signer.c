@@ -34,13 +34,13 @@ size_t rw_signer_blocks_left(const rw_signer *s)
     return rw_signer_busy(s) ? (size_t)(s->state.fixed_blocks - s->state.done_blocks) : 0u;
 }
 
-bool rw_signer_absorb(rw_signer *s, size_t max_blocks)
+size_t rw_signer_absorb(rw_signer *s, size_t max_blocks)
 {
     size_t left = rw_signer_blocks_left(s);
     size_t n = left < max_blocks ? left : max_blocks;
     rw_siphash_absorb(&s->state.mac, s->state.frame + RW_SIPHASH_BLOCK_LEN * s->state.done_blocks, n);
     s->state.done_blocks = (uint8_t)(s->state.done_blocks + n);
-    return rw_signer_busy(s) && rw_signer_blocks_left(s) == 0u;
+    return n;
 }
 
 size_t rw_signer_finish(rw_signer *s, uint64_t counter, const uint8_t **out)

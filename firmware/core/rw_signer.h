@@ -34,8 +34,8 @@ bool rw_signer_busy(const rw_signer *s);
  * refuse, or when busy. */
 bool rw_signer_begin(rw_signer *s, const uint8_t *frame, size_t len, uint16_t seq, uint32_t session_id,
                      const uint8_t key[RW_KEY_LEN]);
-/* Absorb up to max_blocks more of the blocks before the counter; true when all of them are absorbed. */
-bool rw_signer_absorb(rw_signer *s, size_t max_blocks);
+/* Absorb up to max_blocks more of the blocks before the counter; returns how many it absorbed. */
+size_t rw_signer_absorb(rw_signer *s, size_t max_blocks);
 /* Blocks still to absorb before rw_signer_finish may be called. */
 size_t rw_signer_blocks_left(const rw_signer *s);
 /* Append the counter, finish the MAC, append the tag; *out points at the signed frame (valid until the next

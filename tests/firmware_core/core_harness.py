@@ -532,7 +532,7 @@ class CoreHarness:
         for _ in range(ticks):
             self.tick()
         for _ in range(int(max_ms)):
-            if self.lib.rw_core_tx_idle(self.core):
+            if self.tx_idle:
                 return
             self.tick()
         raise AssertionError(f"frames still queued after {max_ms} ms (t = {self.t_ms} ms)")
