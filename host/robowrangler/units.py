@@ -30,16 +30,24 @@ def check_real(argument: str, value: object, *, allow_inf: bool = True) -> float
     return x
 
 
+def _to_int32(argument: str, value: object, *, scale: float, what: str, symbol: str, wire_unit: str,
+              si_unit: str) -> int:
+    """value x scale rounded to the nearest int32; InvalidArgument for NaN, inf and what int32 cannot hold."""
+    x = check_real(argument, value, allow_inf=False)
+    wire = round(x * scale)
+    if not INT32_MIN <= wire <= INT32_MAX:
+        raise InvalidArgument(argument, f"a {what} encodable as int32 {wire_unit} "
+                              f"(|{symbol}| <= {INT32_MAX / scale:g} {si_unit})", x)
+    return wire
+
+
 def mps_to_mmps(rope_speed_mps: object, *, argument: str = "rope_speed_mps") -> int:
     """Rope speed m/s -> int32 mm/s on the wire (rounded to the nearest mm/s).
 
     Only what cannot be encoded is refused here (NaN, inf, beyond int32); range is the device's job.
     """
-    v = check_real(argument, rope_speed_mps, allow_inf=False)
-    mmps = round(v * 1000.0)
-    if not INT32_MIN <= mmps <= INT32_MAX:
-        raise InvalidArgument(argument, f"a speed encodable as int32 mm/s (|v| <= {INT32_MAX / 1000:g} m/s)", v)
-    return mmps
+    return _to_int32(argument, rope_speed_mps, scale=1000.0, what="speed", symbol="v", wire_unit="mm/s",
+                     si_unit="m/s")
 
 
 def mmps_to_mps(mmps: int) -> float:
@@ -49,11 +57,8 @@ def mmps_to_mps(mmps: int) -> float:
 
 def m_to_um(guide_position_m: object, *, argument: str = "guide_position_m") -> int:
     """Guide position m -> int32 um on the wire (rounded); only what cannot be encoded is refused."""
-    x = check_real(argument, guide_position_m, allow_inf=False)
-    um = round(x * 1e6)
-    if not INT32_MIN <= um <= INT32_MAX:
-        raise InvalidArgument(argument, f"a position encodable as int32 um (|x| <= {INT32_MAX / 1e6:g} m)", x)
-    return um
+    return _to_int32(argument, guide_position_m, scale=1e6, what="position", symbol="x", wire_unit="um",
+                     si_unit="m")
 
 
 def um_to_m(um: int) -> float:
