@@ -40,6 +40,7 @@ from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArg
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
 from robowrangler.telemetry import DeviceEvent, ProvisionStatus, TelemetrySample
+from robowrangler.provisioning import staging_messages
 from robowrangler.session_epoch import new_session_epoch
 from robowrangler.transport import DEFAULT_URL, Transport, open_transport, parse_url
 
@@ -416,12 +417,8 @@ class Client:
             length = len(wifi_password.encode()) if isinstance(wifi_password, str) else "?"
             raise InvalidArgument("wifi_password", "text of at most 63 bytes without NUL",
                                   f"a {type(wifi_password).__name__} of {length} bytes (not shown)")
-        if key is not None:
-            self._command(gen.ProvisionSetKey(bytes(key)))
-        if wifi_ssid is not None:
-            self._command(gen.ProvisionSetWifiSsid(wifi_ssid))
-        if wifi_password is not None:
-            self._command(gen.ProvisionSetWifiPassword(wifi_password))
+        for message in staging_messages(key=key, wifi_ssid=wifi_ssid, wifi_password=wifi_password):
+            self._command(message)
         if commit:
             self._command(gen.ProvisionCommit(new_session_epoch()))  # a fresh random base for the session ids
         return self.provision_status()

@@ -13,6 +13,7 @@ from collections.abc import Callable, Mapping
 
 from robowrangler.errors import CommandRefused, LinkTimeout
 from robowrangler.protocol import generated as gen
+from robowrangler.provisioning import staging_messages
 from robowrangler.session_epoch import new_session_epoch
 from robowrangler.telemetry import ProvisionStatus
 from robowrangler.transport import Transport
@@ -77,14 +78,7 @@ class Provisioner:
         session_epoch: the base of the session ids from this commit on (0 <= epoch < 2^31); None draws a fresh
         one from the OS CSPRNG, as a host does at every provisioning.
         """
-        if key is not None:
-            self.command(gen.ProvisionSetKey(bytes(key)))
-        if wifi_ssid is not None:
-            self.command(gen.ProvisionSetWifiSsid(wifi_ssid))
-        if wifi_password is not None:
-            self.command(gen.ProvisionSetWifiPassword(wifi_password))
-        for name, value in (params or {}).items():
-            spec = gen.PARAMS_BY_NAME[name]
-            self.command(gen.ParamSet(spec.id, float(value)))
+        for message in staging_messages(key=key, wifi_ssid=wifi_ssid, wifi_password=wifi_password, params=params):
+            self.command(message)
         self.command(gen.ProvisionCommit(new_session_epoch() if session_epoch is None else session_epoch))
         return self.status()
