@@ -64,6 +64,14 @@ def test_scenario_renders_png_frames_and_an_mp4(native_build_dir: Path, tmp_path
     assert "slipped" in proc.stdout
 
 
+def test_door_scenario_shows_the_state_path_ending_in_hold(native_build_dir: Path) -> None:
+    status, out, err = _run("sil", "--scenario", "door_handle", "--links", "10")
+    assert status == ExitStatus.OK, err
+    path_line = next(line for line in out.splitlines() if line.startswith("firmware state path:"))
+    assert path_line.endswith("RETRACT (SPEED_REACHED) -> HOLD (LOAD_SECURED)"), path_line
+    assert "door_handle: held (RETRACT ended: LOAD_SECURED" in out
+
+
 def test_divergence_exits_1_with_the_outcome_on_stdout(native_build_dir: Path, monkeypatch) -> None:
     from robowrangler_sim.chain.errors import ChainDivergenceError
     from robowrangler_sim.chain.plant import ChainPlant

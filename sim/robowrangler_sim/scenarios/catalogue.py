@@ -29,6 +29,7 @@ class ScenarioSpec:
         script: geometry and timing shared with the plant-level grasp (phi, roll, exit height, object
             position in the loop, airborne speed, hold and pull).
         firmware_params: PARAM_SET sent before homing, {name: value} (protocol units).
+        chain_params: ChainParams overrides of this scenario, ((field, value), ...) (n_links comes from the run).
     """
 
     name: str
@@ -37,6 +38,7 @@ class ScenarioSpec:
     description: str
     script: GraspScript = field(default_factory=GraspScript)
     firmware_params: tuple[tuple[str, float], ...] = ()
+    chain_params: tuple[tuple[str, float], ...] = ()
 
 
 GRASP_FIRMWARE_PARAMS = (("homing_speed_mmps", 10.0), ("retract_speed_mmps", 15.0), ("guide_max_mm", 178.0))
@@ -46,9 +48,23 @@ short of the lead screw's hard stop: with the default 180 mm (= the hard stop) a
 hold stalls on the stop before its noisy position reads 180, and the stall load is taken for a secured
 object (LOAD_SECURED at the end stop; seen in this SIL, reported in docs/table_i.md)."""
 
-DOOR_FIRMWARE_PARAMS = GRASP_FIRMWARE_PARAMS + (("guide_max_mm", 60.0), ("grasp_secure_load_pct", 5.0))
-"""The lever sits 4 cm inside the loop's tip: 60 mm of guide (12 cm of rope) tightens the loop on it; the
-secure threshold at its minimum (5 %: about 7 N on the guide) so RETRACT can stop on the handle's load."""
+DOOR_FIRMWARE_PARAMS = GRASP_FIRMWARE_PARAMS + (("grasp_secure_load_pct", 5.0),)
+"""The whole stroke (178 mm, as every grasp) and the secure threshold at its minimum, 5 %: the AX-12A's load
+register reads (screw friction 0.05 N m + F x 8 mm / 2 pi / 0.35) / 1.5 N m, so 5 % means a guide load of
+(0.075 - 0.05) / 0.003638 = 6.9 N (3.4 N in each strand) held for spindle_stall_time_s (0.3 s). The default 12 %
+means 35.7 N on the guide: more than this chain keeps on a 19 mm bar (docs/table_i.md, door section)."""
+
+DOOR_CHAIN_PARAMS = (("timestep_s", 0.002),)
+"""The door's chain steps at 2 ms instead of 5 ms. Why: once the loop is taut on the bar, the bar sits in the V of
+two 10 cm links near the loop's middle joint, and the soft closure leaves the lower strand nearly slack, so the
+upper strand drags the rope round the bar (capstan: T1 / T2 far over e^(0.3 pi) = 2.6); 10 cm links can only
+pass round a 19 mm bar through it. At 5 ms MuJoCo lets the bar through link 10 at about 12 N of guide load
+(penetration 4-7 mm), at 2 ms (and 1 ms) at about 27 N, over the 6.9 N the firmware needs for LOAD_SECURED."""
+
+DOOR_PULL_M = 0.01
+"""The robot's pull once the firmware holds: 1 cm. In HOLD the loop is already taut on a fixed handle, so the
+pull is a displacement imposed on a nearly inextensible tether: 1 cm adds about 6 N; 5 cm (the script before
+the loop could be tightened) drives the rope past the ~27 N at which the bar passes through a link (lost)."""
 
 
 def _catalogue() -> dict[str, ScenarioSpec]:
@@ -57,10 +73,11 @@ def _catalogue() -> dict[str, ScenarioSpec]:
                           firmware_params=GRASP_FIRMWARE_PARAMS)
              for obj in TABLE_I_OBJECTS]
     specs.append(ScenarioSpec(name="door_handle", kind="door", object_name="door_handle",
-                              description="thread the loop over a door's lever handle, GRASP, pull 5 cm",
-                              script=GraspScript(phi_deg=0.0, roll_deg=0.0, pull_s=1.0, pull_m=0.05,
-                                                 retract_guide_mm=60.0),
-                              firmware_params=DOOR_FIRMWARE_PARAMS))
+                              description="thread the loop over a door's lever handle, GRASP until the load says "
+                                          "secured (HOLD), pull 1 cm",
+                              script=GraspScript(phi_deg=0.0, roll_deg=0.0, pull_s=1.0, pull_m=DOOR_PULL_M,
+                                                 retract_guide_mm=178.0),
+                              firmware_params=DOOR_FIRMWARE_PARAMS, chain_params=DOOR_CHAIN_PARAMS))
     return {s.name: s for s in specs}
 
 
