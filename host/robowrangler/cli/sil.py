@@ -22,10 +22,6 @@ class SimulatorUnavailable(RoboWranglerError):
     """The SIL firmware or the simulator cannot run here; the message says what to build or install."""
 
 
-class ViewerUnavailableError(RoboWranglerError):
-    """--viewer where no interactive OpenGL display exists; the message names MUJOCO_GL and DISPLAY."""
-
-
 class ScenarioFailed(RoboWranglerError):
     """A scenario did not reach its judgement: the chain simulation diverged or the firmware stopped the script."""
 
@@ -92,14 +88,10 @@ def _sil_modules():
 @click.option("--render", "render_dir", type=click.Path(file_okay=False, writable=True), default=None,
               metavar="DIR", is_eager=True, callback=_headless_gl, help="With --scenario: write PNG frames and an MP4 of the run to DIR "
                                   "(headless: MUJOCO_GL=osmesa, Debian libosmesa6).")
-@click.option("--viewer", is_flag=True,
-              help="With --scenario: watch it in MuJoCo's interactive viewer, synced with the chain while the "
-                   "firmware runs, paced at --speedup (needs a display: DISPLAY or WAYLAND_DISPLAY, MUJOCO_GL unset "
-                   "or glfw).")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
                 duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
-                render_dir: str | None, viewer: bool) -> None:
+                render_dir: str | None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
@@ -109,18 +101,9 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     With --scenario NAME it runs a wrangle instead (home, spin up, GRASP, pull) with the firmware driving the
     rope chain, shows progress on stderr and prints the simulation's verdict (secured / slipped; held / lost
     for the door handle). Exit status 1 if the chain simulation diverged or the firmware stopped the script.
-    With --viewer it is also shown live in MuJoCo's interactive viewer (exit status 1 where no display exists).
     """
-    if viewer and scenario is None:
-        raise click.UsageError("--viewer needs --scenario")
-    if viewer and render_dir is not None:
-        raise click.UsageError("--viewer and --render cannot be combined (one OpenGL backend per process: the "
-                               "viewer's window, or headless frames)")
     if scenario is not None:
-        if viewer:
-            _check_viewer(ctx)
-        _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir,
-                      viewer_speedup=speedup if viewer else None)
+        _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir)
         return
     if render_dir is not None:
         raise click.UsageError("--render needs --scenario")
@@ -159,28 +142,14 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
                f"SIL stopped after {session.time_s:.3f} simulated seconds")
 
 
-def _check_viewer(ctx: CliContext) -> None:
-    """ViewerUnavailableError (exit 1) before anything starts where the viewer cannot open a window."""
-    from robowrangler_sim.scenarios.viewer import viewer_unavailable_reason
-
-    reason = viewer_unavailable_reason(ctx.env.environ)
-    if reason is not None:
-        raise ViewerUnavailableError(f"--viewer: {reason}")
-
-
-def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None,
-                  viewer_speedup: float | None = None) -> None:
+def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None) -> None:
     sil_pkg, _ = _sil_modules()
     from robowrangler_sim.scenarios import run_scenario
-    from robowrangler_sim.scenarios.viewer import ViewerUnavailable
 
     try:
-        outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
-                               viewer=viewer_speedup is not None, viewer_speedup=viewer_speedup or 1.0)
+        outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir)
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
-    except ViewerUnavailable as exc:
-        raise ViewerUnavailableError(f"--viewer: {exc}") from exc
     data = {"command": "sil", "scenario": name, "verdict": outcome.verdict, "secured": outcome.secured,
             "grasp_end": outcome.grasp_end, "guide_at_grasp_end_mm": round(outcome.guide_at_grasp_end_mm, 2),
             "peak_guide_load_n": round(outcome.peak_guide_load_n, 3),

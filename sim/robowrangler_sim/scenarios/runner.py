@@ -124,11 +124,8 @@ class _Run:
 
     def __init__(self, spec: ScenarioSpec, *, seed: int, n_links: int, sample_s: float,
                  progress: Callable[[str], None] | None, render_dir: Path | None, render_every: int,
-                 render_fps: float, chain_noise_rad: float, viewer_speedup: float | None = None) -> None:
+                 render_fps: float, chain_noise_rad: float) -> None:
         self.spec = spec
-        self.viewer_speedup = viewer_speedup
-        self.viewer = None
-        self._viewed_steps = -1
         self.chain_noise_rad = chain_noise_rad
         self.script = spec.script
         self.sample_us = round(sample_s * 1e6)
@@ -201,21 +198,8 @@ class _Run:
         if self.progress is not None:
             self.progress(f"[{self.sil.time_s:6.2f} s] {text}")
 
-    def open_viewer(self) -> None:
-        from robowrangler_sim.scenarios.viewer import ScenarioViewer
-
-        self.viewer = ScenarioViewer(self.chain.model, self.chain.data, speedup=self.viewer_speedup)
-
-    def close_viewer(self) -> None:
-        if self.viewer is not None:
-            self.viewer.close()
-            self.viewer = None
-
     def tick(self) -> None:
         self.host.tick()
-        if self.viewer is not None and self.bridge.chain_steps != self._viewed_steps:
-            self._viewed_steps = self.bridge.chain_steps
-            self.viewer.sync(self.chain.time_s)
         t_us = self.sil.plant.time_us
         if t_us >= self._next_sample_us:
             self._next_sample_us += self.sample_us
@@ -373,7 +357,7 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
                  progress: Callable[[str], None] | None = None, render_dir: str | Path | None = None,
                  render_png_every: int = 10, render_fps: float = 10.0,
                  firmware_params: dict[str, float] | None = None,
-                 chain_noise_rad: float = 0.0, viewer: bool = False, viewer_speedup: float = 1.0) -> ScenarioOutcome:
+                 chain_noise_rad: float = 0.0) -> ScenarioOutcome:
     """Run scenario ``name`` with the firmware in the loop and judge it (see module doc).
 
     Args:
@@ -389,10 +373,6 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
             overriding) the scenario's own (protocol names and units, e.g. {"guide_max_mm": 120.0}).
         chain_noise_rad: standard deviation of seeded noise on the chain's initial joint angles, rad (a
             perturbed rollout: how robust an outcome is; 0 = none).
-        viewer: open MuJoCo's interactive passive viewer on the chain and sync it after every chain step,
-            pacing the run at viewer_speedup x wall time while the window is open (scenarios/viewer.py);
-            ViewerUnavailable (before anything starts) where no display exists.
-        viewer_speedup: simulated seconds per wall second with the viewer (> 0).
     Returns:
         ScenarioOutcome. The firmware process is stopped before returning, also on errors.
     """
@@ -407,18 +387,6 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         raise ScenarioError(f"render_fps: expected 0 < fps <= 1 / sample_s = {1.0 / sample_s:g}, got {render_fps!r}")
     if not (isinstance(chain_noise_rad, (int, float)) and 0.0 <= chain_noise_rad <= 0.5):
         raise ScenarioError(f"chain_noise_rad: expected 0..0.5 rad, got {chain_noise_rad!r}")
-    if not isinstance(viewer, bool):
-        raise ScenarioError(f"viewer: expected True or False, got {viewer!r}")
-    if not (isinstance(viewer_speedup, (int, float)) and math.isfinite(viewer_speedup) and viewer_speedup > 0):
-        raise ScenarioError(f"viewer_speedup: expected a finite factor > 0, got {viewer_speedup!r}")
-    if viewer:
-        import os
-
-        from robowrangler_sim.scenarios.viewer import ViewerUnavailable, viewer_unavailable_reason
-
-        reason = viewer_unavailable_reason(os.environ)
-        if reason is not None:
-            raise ViewerUnavailable(reason)
     overrides = dict(firmware_params or {})
     for pname, value in overrides.items():
         if pname not in P:
@@ -430,14 +398,11 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         out_dir = Path(render_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
     run = _Run(spec, seed=seed, n_links=n_links, sample_s=sample_s, progress=progress, render_dir=out_dir,
-               render_every=render_png_every, render_fps=render_fps, chain_noise_rad=chain_noise_rad,
-               viewer_speedup=viewer_speedup)
+               render_every=render_png_every, render_fps=render_fps, chain_noise_rad=chain_noise_rad)
     run.firmware_params.update(overrides)
     wall0 = time.perf_counter()
     run.build()
     try:
-        if viewer:
-            run.open_viewer()
         run.sil.start()
         try:
             run.script_run()
@@ -458,7 +423,6 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
             if out_dir is not None:
                 run.finish_render()
     finally:
-        run.close_viewer()
         run.sil.stop()
     run.outcome.wall_s = time.perf_counter() - wall0
     run.note(f"outcome: {run.outcome.verdict}")
