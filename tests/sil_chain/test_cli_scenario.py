@@ -69,7 +69,7 @@ def test_door_scenario_shows_the_state_path_ending_in_hold(native_build_dir: Pat
     assert status == ExitStatus.OK, err
     path_line = next(line for line in out.splitlines() if line.startswith("firmware state path:"))
     assert path_line.endswith("RETRACT (SPEED_REACHED) -> HOLD (LOAD_SECURED)"), path_line
-    assert "door_handle: held (RETRACT ended: LOAD_SECURED" in out
+    assert "door_handle: held (RETRACT ended: LOAD_SECURED" in out and ", door opened 1" in out
 
 
 def test_divergence_exits_1_with_the_outcome_on_stdout(native_build_dir: Path, monkeypatch) -> None:

@@ -156,6 +156,8 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
             "follow_ratio": None if outcome.follow_ratio != outcome.follow_ratio else round(outcome.follow_ratio, 3),
             "touching_fraction": round(outcome.touching_fraction, 3),
             "mean_pull_force_n": round(outcome.mean_pull_force_n, 3), "drag_force_n": round(outcome.drag_force_n, 3),
+            "door_opening_deg": (None if outcome.door_opening_deg != outcome.door_opening_deg
+                                 else round(outcome.door_opening_deg, 2)),
             "firmware_path": ["->".join(step[:2]) + f" ({step[2]})" for step in outcome.firmware_path],
             "diverged": outcome.diverged, "simulated_s": round(outcome.simulated_s, 3),
             "wall_s": round(outcome.wall_s, 2), "seed": seed, "links": n_links, "files": outcome.frames_written}
@@ -165,7 +167,9 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
     ctx.result(data, f"firmware state path: {states}\n"
                      f"{name}: {outcome.verdict} (RETRACT ended: {outcome.grasp_end}, follow "
                      f"{data['follow_ratio']}, rope touching {100 * outcome.touching_fraction:.0f} %, mean pull "
-                     f"{outcome.mean_pull_force_n:.2f} N; {outcome.simulated_s:.1f} simulated s in "
+                     f"{outcome.mean_pull_force_n:.2f} N"
+                     + ("" if data["door_opening_deg"] is None else f", door opened {outcome.door_opening_deg:.1f} deg")
+                     + f"; {outcome.simulated_s:.1f} simulated s in "
                      f"{outcome.wall_s:.1f} s){files}")
     if outcome.secured is None:
         raise ScenarioFailed(f"scenario {name}: {outcome.verdict}")

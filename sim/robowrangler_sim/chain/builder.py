@@ -170,6 +170,12 @@ def _add_object(world: ET.Element, placement: ObjectPlacement) -> None:
         raise ChainModelError(f"pos_m/yaw_rad of {spec.name}: expected finite numbers, got "
                               f"{placement.pos_m}, {placement.yaw_rad}")
     body = _sub(world, "body", name=spec.name, pos=(x, y, z), euler=(0, 0, placement.yaw_rad))
+    if spec.extra.get("door_leaf") is not None:  # the door on its hinges (chain/door.py)
+        from robowrangler_sim.chain.door import add_door_leaf
+
+        add_door_leaf(body, spec, sub=_sub, geom_attrs=dict(friction=(spec.friction, 0.005, 0.0001), condim="4",
+                                                            **_bits(OBJECT_BITS)))
+        return
     if spec.free:
         _sub(body, "freejoint", name=f"{spec.name}_free")
     masses = spec.geom_masses_kg() if spec.free else [None] * len(spec.geoms)

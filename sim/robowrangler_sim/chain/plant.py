@@ -209,8 +209,8 @@ class ChainPlant:
         self._geom_object = {}
         for o in self.objects:
             bid = self._object_body[o.spec.name]
-            for g in range(m.ngeom):
-                if m.geom_bodyid[g] == bid:
+            for g in range(m.ngeom):  # the object's own geoms and those of its moving parts (a door's leaf)
+                if m.geom_bodyid[g] == bid or m.body_rootid[m.geom_bodyid[g]] == bid:
                     self._geom_object[g] = o.spec.name
         self._chain_geoms = set(self._link_geom.tolist())
         self._monitors = {

@@ -27,9 +27,12 @@ Grasp scenarios (a free object on the floor), all in simulated time:
      second half of the pull, whether the loop keeps hold of the object and the object follows the
      module (secured.SecuredMonitor, the plant-level judgement) or it slipped out.
 The door scenario positions with the robot's leg: the vertical loop (whose plane gravity does not
-leave) flies beside a fixed lever handle and the module slides sideways so that the loop threads over
-the lever's free end; then GRASP and a 5 cm pull;
-"held" means the rope still touches and pulls the handle through the second half of the pull.
+leave) flies up to the door beside its lever handle and the module slides sideways so that the loop
+threads over the lever's free end; then GRASP: RETRACT tightens the loop on the bar until the load says
+secured (LOAD_SECURED -> HOLD; the door's closer holds the leaf shut meanwhile) and the robot pulls the
+module back, opening the door on its hinge (catalogue.DOOR_LEAF, chain/door.py). "held" means the rope
+still touches and pulls the handle through the second half of the pull; ``door_opening_deg`` says how far
+the door opened.
 
 A ChainDivergenceError (MuJoCo blew up on the light links, known on the door handle) ends the run: it is
 reported in the outcome (``diverged``), never hidden; the CLI exits non-zero on it.
@@ -47,6 +50,7 @@ import numpy as np
 
 from robowrangler.protocol import generated as gen
 from robowrangler_sim.chain.default_table import default_or_synthetic_table
+from robowrangler_sim.chain.door import door_placement, leaf_opening_rad
 from robowrangler_sim.chain.errors import ChainDivergenceError
 from robowrangler_sim.chain.grasp import grasp_scene
 from robowrangler_sim.chain.objects import ObjectPlacement, get_object
@@ -64,6 +68,7 @@ P = gen.PARAMS_BY_NAME
 BOOT_S = 0.6                # ESC arming hold of the SIL device
 RISE_S = 1.5                # after AIRBORNE: the chain rises into its shape (drives: tau = kd/kp = 0.5 s)
 FORWARD_S = 1.5             # door: the sideways move that threads the loop over the lever
+CLOSE_IN_S = 0.5            # hinged door: the flying loop moves up to the leaf before the sideways move
 SETTLE_S = 0.5              # after positioning
 HOMING_TIMEOUT_S = 30.0
 GRASP_TIMEOUT_S = 30.0
@@ -84,11 +89,12 @@ class ScenarioOutcome:
         peak_guide_load_n: largest chain load on the guide (bridge), N.
         follow_ratio, touching_fraction, mean_pull_force_n: the judgement's figures (secured.SecuredMonitor).
         drag_force_n: force that slides the object on the floor (0 for a fixture), N.
+        door_opening_deg: hinged door: the leaf's opening angle at the end of the pull, deg (nan otherwise).
         diverged: the ChainDivergenceError message, or None.
         simulated_s, wall_s: simulated time reached, wall time of the run.
         trace: per-sample rows (time_s, phase, state, rope_speed_mps, guide_mm, guide_load_n,
             spindle_load_permille (the firmware's last reported AX-12A load), base_pos_m, object_com_m,
-            chain_force_n, loop_tip_pos_m).
+            chain_force_n, loop_tip_pos_m, door_opening_deg (nan but for a hinged door)).
         frames_written: PNG/MP4 paths written with render_dir.
     """
 
@@ -108,6 +114,7 @@ class ScenarioOutcome:
     touching_fraction: float = 0.0
     mean_pull_force_n: float = 0.0
     drag_force_n: float = 0.0
+    door_opening_deg: float = float("nan")
     diverged: str | None = None
     simulated_s: float = 0.0
     wall_s: float = 0.0
@@ -188,9 +195,14 @@ class _Run:
         bar_x, bar_z = -0.060, 1.0
         exit_x = bar_x + 0.04 - reach
         exit_z = bar_z - z_tip
-        placement = ObjectPlacement(spec=obj, pos_m=(0.0, 0.0, 0.0))
         self.grasp_pos_m = np.array([exit_x, -0.08, exit_z])
-        self.approach_pos_m = self.grasp_pos_m + np.array([0.0, -0.45, 0.0])
+        if self.spec.door_leaf is None:  # the handle on a fixed door (the catalogue's fixture)
+            placement = ObjectPlacement(spec=obj, pos_m=(0.0, 0.0, 0.0))
+            self.approach_pos_m = self.grasp_pos_m + np.array([0.0, -0.45, 0.0])
+        else:  # on a hinged leaf: it spans y -0.80..0.06, where the resting loop (0.95 m long) would reach
+            # into it from 0.84 m away, so the approach starts 0.15 m further back
+            placement = door_placement(self.spec.door_leaf)
+            self.approach_pos_m = self.grasp_pos_m + np.array([-0.15, -0.45, 0.0])
         return placement, self.approach_pos_m.copy()
 
     # --- running -----------------------------------------------------------------------------
@@ -245,13 +257,17 @@ class _Run:
         com = chain.object_com_m(name) if self.spec.kind == "grasp" else chain.object_pos_m(name)
         base = self.trajectory.pos_at(chain.time_s)
         tel = self.host.last_telemetry
+        opening_deg = (math.degrees(leaf_opening_rad(chain.model, chain.data))
+                       if self.spec.door_leaf is not None else float("nan"))
+        if self.phase == "pull":
+            self.outcome.door_opening_deg = opening_deg
         self.outcome.trace.append(dict(
             time_s=self.sil.time_s, phase=self.phase, state=None if tel is None else int(tel.state),
             rope_speed_mps=self.sil.plant.rope_speed_mps, guide_mm=self.sil.spindle.guide_position_mm,
             guide_load_n=self.bridge.guide_load_n,
             spindle_load_permille=None if tel is None else int(tel.spindle_load_permille),
             base_pos_m=base, object_com_m=com, chain_force_n=force,
-            loop_tip_pos_m=chain.loop_tip_pos_m()))
+            loop_tip_pos_m=chain.loop_tip_pos_m(), door_opening_deg=opening_deg))
         if self.monitor is not None:
             self.monitor.update(time_s=chain.time_s, object_com_m=com, base_pos_m=base, chain_force_n=force)
         if self.render_dir is not None and self._sample_index % self.frame_stride == 0:
@@ -306,6 +322,11 @@ class _Run:
         if spec.kind == "grasp":  # the loop already lies around the object (see module doc)
             self.run_for(SETTLE_S)
         else:
+            beside = np.array([self.grasp_pos_m[0], self.approach_pos_m[1], self.grasp_pos_m[2]])
+            if not np.allclose(beside, self.approach_pos_m):  # hinged door: the flying loop first comes up to
+                self.trajectory.move_to(beside, start_s=t, duration_s=CLOSE_IN_S)  # the leaf, clear of it
+                self.run_for(CLOSE_IN_S)
+                t = self.sil.time_s
             self.trajectory.move_to(self.grasp_pos_m, start_s=t, duration_s=FORWARD_S)
             self.run_for(FORWARD_S + SETTLE_S)
         self.phase = "grasp"
