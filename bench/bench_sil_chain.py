@@ -30,7 +30,7 @@ from robowrangler_sim.chain.params import ChainParams  # noqa: E402
 from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxyz  # noqa: E402
 from robowrangler_sim.scenarios import run_scenario  # noqa: E402
 from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory  # noqa: E402
-from robowrangler_sim.scenarios.chain_bridge import ChainBridge, use_chain_loaded_spindle  # noqa: E402
+from robowrangler_sim.scenarios.chain_bridge import ChainBridge, chain_loaded_spindle  # noqa: E402
 from robowrangler_sim.sil import SilSession  # noqa: E402
 from robowrangler_sim.sil.scripted_host import ScriptedHost  # noqa: E402
 
@@ -75,12 +75,11 @@ def measure(*, n_links: int, seconds: float, chain: bool,
     script = GraspScript()
     table = default_or_synthetic_table()
     params = ChainParams(n_links=n_links)
-    sil = SilSession(speedup=None, trace_every=0)
+    sil = SilSession(speedup=None, trace_every=0, spindle=chain_loaded_spindle if chain else None)
     bridge = None
     if chain:
         placed, base = grasp_scene("mug", table=table, params=params, script=script)
         quat = pitch_quat_wxyz(0.0, roll_rad=math.radians(script.roll_deg))
-        use_chain_loaded_spindle(sil, seed=0)
         plant = ChainPlant(table=table, params=params, objects=placed.objects, floor_height_m=0.0,
                            initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=40.0, base_pos_m=tuple(base),
                                                base_quat_wxyz=quat), airborne=True)

@@ -68,6 +68,24 @@ TickHook = Callable[["SilSession"], None]
 """Per tick, after the drive and spindle plants stepped: couples another plant (e.g. the rope chain) in lockstep."""
 
 
+def _make_spindle(spindle, spindle_params: SpindleParams | None, seed: int) -> SpindlePlant:
+    """The session's spindle plant from SilSession's ``spindle`` argument (see there)."""
+    if spindle is None:
+        return SpindlePlant(spindle_params, seed=seed)
+    if isinstance(spindle, SpindlePlant):
+        if spindle_params is not None and spindle.params != spindle_params:
+            raise ValueError("spindle: expected a SpindlePlant built with spindle_params (or spindle_params=None), "
+                             f"got one with {spindle.params!r}")
+        return spindle
+    if callable(spindle):
+        made = spindle(spindle_params, seed)
+        if not isinstance(made, SpindlePlant):
+            raise TypeError(f"spindle: expected the factory to return a SpindlePlant, got {type(made).__name__}")
+        return made
+    raise TypeError(f"spindle: expected None, a SpindlePlant or a factory(spindle_params, seed), "
+                    f"got {type(spindle).__name__}")
+
+
 class SilSession:
     """Firmware + drive plant in lockstep. Use as a context manager, or start()/stop().
 
@@ -83,6 +101,10 @@ class SilSession:
             one; read it from ``key``). provision=False starts an unprovisioned device (it refuses WiFi).
         state_file: the SIL device's flash (configuration record, boot counter = session id); None: a file in
             a temporary folder removed at stop().
+        spindle: the spindle plant the firmware's servo bus drives: None builds a SpindlePlant(spindle_params,
+            seed=seed); a SpindlePlant (or subclass, e.g. the chain-loaded spindle of the wrangling scenarios)
+            is used as given; a callable ``factory(spindle_params, seed) -> SpindlePlant`` is called with the
+            session's spindle_params and seed (so the register noise follows the session's seed).
 
     Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
     ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
@@ -100,13 +122,14 @@ class SilSession:
                  seed: int = 0, tick_us: int = 1000,
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
                  plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
-                 state_file: str | Path | None = None) -> None:
+                 state_file: str | Path | None = None,
+                 spindle: SpindlePlant | Callable[[SpindleParams | None, int], SpindlePlant] | None = None) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
             raise ValueError(f"speedup: expected a positive factor or None (unpaced), got {speedup!r}")
         self.plant = DrivePlant(drive_params, seed=seed)
-        self.spindle = SpindlePlant(spindle_params, seed=seed)
+        self.spindle: SpindlePlant = _make_spindle(spindle, spindle_params, seed)
         self.last_spindle_speed_raw = 0
         self.tick_us = tick_us
         self.speedup = speedup
