@@ -17,6 +17,7 @@ display_problem() says what is missing before anything is run.
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable, Mapping
 
@@ -100,6 +101,7 @@ class ScenarioViewer:
         self._clock_s = clock_s
         self._sleep_s = sleep_s
         self._handle = None
+        self._drawn = None  # (model, data) the window draws: kept alive until the window is gone
         self._next_sync_s = -math.inf
         self._origin: tuple[float, float] | None = None  # (wall s, simulated s) at the first update
         self.synced = 0
@@ -129,6 +131,7 @@ class ScenarioViewer:
         except Exception as exc:  # GLFW could not open a window (no GLX, ...)
             raise ViewerUnavailable(f"the interactive viewer could not open a window ({type(exc).__name__}: {exc}); "
                                     f"check DISPLAY / WAYLAND_DISPLAY and MUJOCO_GL=glfw; {HEADLESS_HINT}") from exc
+        self._drawn = (chain.model, chain.data)
         pts = chain.chain_points_m()
         with self._handle.lock():
             cam = self._handle.cam
@@ -151,10 +154,20 @@ class ScenarioViewer:
         elif ahead_s < -0.5:  # the machine fell behind: do not race to catch up
             self._origin = (now, t_s)
 
-    def close(self) -> None:
+    def close(self, *, timeout_s: float = 5.0) -> None:
+        """Close the window and wait (up to timeout_s) for the viewer's thread to end: it draws from the plant's
+        MjModel/MjData and tears its GL window down in its own (daemon) thread; freeing the model under it, or
+        GLFW's exit handler running while it still tears down, crashes the process (seen: segfault at exit).
+        mujoco.viewer.launch_passive starts that thread with target _launch_internal and does not expose it;
+        Python names such a thread "Thread-N (_launch_internal)"."""
         if self._handle is not None:
             self._handle.close()
+            deadline = time.monotonic() + timeout_s
+            for thread in threading.enumerate():
+                if thread is not threading.current_thread() and thread.name.endswith("(_launch_internal)"):
+                    thread.join(max(0.0, deadline - time.monotonic()))
             self._handle = None
+        self._drawn = None
 
     def __enter__(self) -> ScenarioViewer:
         return self
