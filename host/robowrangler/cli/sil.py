@@ -88,10 +88,13 @@ def _sil_modules():
 @click.option("--render", "render_dir", type=click.Path(file_okay=False, writable=True), default=None,
               metavar="DIR", is_eager=True, callback=_headless_gl, help="With --scenario: write PNG frames and an MP4 of the run to DIR "
                                   "(headless: MUJOCO_GL=osmesa, Debian libosmesa6).")
+@click.option("--viewer", is_flag=True,
+              help="With --scenario: watch the run in MuJoCo's interactive viewer, paced by --speedup (--unpaced: as "
+                   "fast as it goes). Needs a display (DISPLAY or WAYLAND_DISPLAY) and MUJOCO_GL unset or glfw.")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
                 duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
-                render_dir: str | None) -> None:
+                render_dir: str | None, viewer: bool) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
@@ -101,9 +104,17 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     With --scenario NAME it runs a wrangle instead (home, spin up, GRASP, pull) with the firmware driving the
     rope chain, shows progress on stderr and prints the simulation's verdict (secured / slipped; held / lost
     for the door handle). Exit status 1 if the chain simulation diverged or the firmware stopped the script.
+    With --viewer as well, MuJoCo's interactive viewer shows the rope chain while the firmware runs (exit status 1,
+    naming MUJOCO_GL and DISPLAY, where no display can show it).
     """
+    if viewer and scenario is None:
+        raise click.UsageError("--viewer needs --scenario")
+    if viewer and render_dir is not None:
+        raise click.UsageError("--viewer and --render cannot be combined: MuJoCo uses one OpenGL backend per process "
+                               "(GLFW windows for --viewer, headless OSMesa for --render)")
     if scenario is not None:
-        _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir)
+        _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir, viewer=viewer,
+                      viewer_speedup=None if unpaced else speedup)
         return
     if render_dir is not None:
         raise click.UsageError("--render needs --scenario")
@@ -142,14 +153,35 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
                f"SIL stopped after {session.time_s:.3f} simulated seconds")
 
 
-def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None) -> None:
+def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None,
+                  viewer: bool = False, viewer_speedup: float | None = 1.0) -> None:
+    watch = None
+    if viewer:  # before anything runs (or imports MuJoCo's viewer): say what is missing
+        from robowrangler_sim.scenarios.viewer import HEADLESS_HINT, ScenarioViewer, display_problem, glfw_problem
+
+        problem = display_problem(ctx.env.environ)
+        if problem is None and (glfw := glfw_problem()) is not None:
+            problem = (f"the interactive viewer cannot open a window: {glfw}; check DISPLAY / WAYLAND_DISPLAY "
+                       f"(MUJOCO_GL=glfw); {HEADLESS_HINT}")
+        if problem is not None:
+            raise SimulatorUnavailable(f"--viewer: {problem}")
+        watch = ScenarioViewer(speedup=viewer_speedup)
     sil_pkg, _ = _sil_modules()
     from robowrangler_sim.scenarios import run_scenario
+    from robowrangler_sim.scenarios.viewer import ViewerUnavailable
 
     try:
-        outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir)
+        outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
+                               watch=watch)
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
+    except ViewerUnavailable as exc:
+        raise SimulatorUnavailable(f"--viewer: {exc}") from exc
+    finally:
+        if watch is not None:
+            watch.close()
+    if watch is not None:
+        ctx.note(f"viewer: {watch.synced} updates" + (" (window closed before the end)" if watch.closed_by_user else ""))
     data = {"command": "sil", "scenario": name, "verdict": outcome.verdict, "secured": outcome.secured,
             "grasp_end": outcome.grasp_end, "guide_at_grasp_end_mm": round(outcome.guide_at_grasp_end_mm, 2),
             "peak_guide_load_n": round(outcome.peak_guide_load_n, 3),
@@ -160,7 +192,8 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
                                  else round(outcome.door_opening_deg, 2)),
             "firmware_path": ["->".join(step[:2]) + f" ({step[2]})" for step in outcome.firmware_path],
             "diverged": outcome.diverged, "simulated_s": round(outcome.simulated_s, 3),
-            "wall_s": round(outcome.wall_s, 2), "seed": seed, "links": n_links, "files": outcome.frames_written}
+            "wall_s": round(outcome.wall_s, 2), "seed": seed, "links": n_links, "files": outcome.frames_written,
+            "viewer_updates": None if watch is None else watch.synced}
     files = f"; {len(outcome.frames_written)} files in {render_dir}" if outcome.frames_written else ""
     path = outcome.firmware_path
     states = " -> ".join([path[0][0]] + [f"{to} ({cause})" for _, to, cause in path]) if path else "-"

@@ -6,6 +6,7 @@
 - base_trajectory.BaseTrajectory: the robot's leg (module pose over time).
 - catalogue: the scenarios by name; runner.run_scenario(name, seed=...) -> ScenarioOutcome.
 - table_i_sil: Table I through the firmware-driven scenarios (docs/table_i.md).
+- viewer.ScenarioViewer: MuJoCo's interactive viewer following a scenario's chain (``--viewer``; needs a display).
 """
 
 from robowrangler_sim.scenarios.catalogue import SCENARIOS, ScenarioError, ScenarioSpec, get_scenario, scenario_names

@@ -153,6 +153,7 @@ class _Run:
         self._renderer = None
         self._frames: list = []
         self._sample_index = 0
+        self.watch: Callable[[ChainPlant], None] | None = None
 
     # --- scene -------------------------------------------------------------------------------
     def build(self) -> None:
@@ -212,6 +213,8 @@ class _Run:
 
     def tick(self) -> None:
         self.host.tick()
+        if self.watch is not None:
+            self.watch(self.chain)
         t_us = self.sil.plant.time_us
         if t_us >= self._next_sample_us:
             self._next_sample_us += self.sample_us
@@ -378,7 +381,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
                  progress: Callable[[str], None] | None = None, render_dir: str | Path | None = None,
                  render_png_every: int = 10, render_fps: float = 10.0,
                  firmware_params: dict[str, float] | None = None,
-                 chain_noise_rad: float = 0.0) -> ScenarioOutcome:
+                 chain_noise_rad: float = 0.0,
+                 watch: Callable[[ChainPlant], None] | None = None) -> ScenarioOutcome:
     """Run scenario ``name`` with the firmware in the loop and judge it (see module doc).
 
     Args:
@@ -394,6 +398,9 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
             overriding) the scenario's own (protocol names and units, e.g. {"guide_max_mm": 120.0}).
         chain_noise_rad: standard deviation of seeded noise on the chain's initial joint angles, rad (a
             perturbed rollout: how robust an outcome is; 0 = none).
+        watch: called with the ChainPlant after every control tick (1 ms of simulated time), e.g. a
+            viewer.ScenarioViewer that draws the chain in MuJoCo's interactive viewer and paces the run; it must
+            only read the plant (the outcome is then the same as without it).
     Returns:
         ScenarioOutcome. The firmware process is stopped before returning, also on errors.
     """
@@ -408,6 +415,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         raise ScenarioError(f"render_fps: expected 0 < fps <= 1 / sample_s = {1.0 / sample_s:g}, got {render_fps!r}")
     if not (isinstance(chain_noise_rad, (int, float)) and 0.0 <= chain_noise_rad <= 0.5):
         raise ScenarioError(f"chain_noise_rad: expected 0..0.5 rad, got {chain_noise_rad!r}")
+    if watch is not None and not callable(watch):
+        raise ScenarioError(f"watch: expected a callable(chain_plant) or None, got {type(watch).__name__}")
     overrides = dict(firmware_params or {})
     for pname, value in overrides.items():
         if pname not in P:
@@ -421,6 +430,7 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
     run = _Run(spec, seed=seed, n_links=n_links, sample_s=sample_s, progress=progress, render_dir=out_dir,
                render_every=render_png_every, render_fps=render_fps, chain_noise_rad=chain_noise_rad)
     run.firmware_params.update(overrides)
+    run.watch = watch
     wall0 = time.perf_counter()
     run.build()
     try:
