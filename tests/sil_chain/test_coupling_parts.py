@@ -63,13 +63,13 @@ def test_bridge_steps_the_chain_with_the_plants_and_loads_the_drive_with_rope_fr
     from robowrangler_sim.chain.default_table import default_or_synthetic_table
     from robowrangler_sim.chain.params import ChainParams
     from robowrangler_sim.chain.plant import ChainPlant, PlantInputs
-    from robowrangler_sim.scenarios.chain_bridge import ChainBridge, chain_loaded_spindle
+    from robowrangler_sim.scenarios.chain_bridge import ChainBridge
     from robowrangler_sim.sil import SilSession
     from robowrangler_sim.sil.scripted_host import ScriptedHost
 
     params = ChainParams(n_links=10)
     quat = pitch_quat_wxyz(0.0, roll_rad=np.pi / 2)  # loop plane horizontal, exit 3 cm above the floor
-    sil = SilSession(speedup=None, trace_every=0, seed=5, spindle=chain_loaded_spindle)
+    sil = SilSession(speedup=None, trace_every=0, seed=5, spindle=ChainLoadedSpindlePlant)
     spindle = sil.spindle
     assert isinstance(spindle, ChainLoadedSpindlePlant)
     chain = ChainPlant(table=default_or_synthetic_table(), params=params, floor_height_m=0.0, airborne=False,
@@ -93,23 +93,22 @@ def test_bridge_steps_the_chain_with_the_plants_and_loads_the_drive_with_rope_fr
 
 def test_session_spindle_argument_takes_a_plant_or_a_factory_and_rejects_anything_else() -> None:
     from robowrangler_sim.plants.spindle import SpindlePlant
-    from robowrangler_sim.scenarios.chain_bridge import chain_loaded_spindle
     from robowrangler_sim.sil import SilSession
 
     params = SpindleParams(load_noise_permille=0.0)
     default = SilSession(speedup=None, seed=2, spindle_params=params)
     assert type(default.spindle) is SpindlePlant and default.spindle.params == params
-    made = SilSession(speedup=None, seed=2, spindle_params=params, spindle=chain_loaded_spindle)
+    made = SilSession(speedup=None, seed=2, spindle_params=params, spindle=ChainLoadedSpindlePlant)
     assert isinstance(made.spindle, ChainLoadedSpindlePlant) and made.spindle.params == params
     # the factory gets the session's seed: the same register noise as a plant built with that seed
     twin = ChainLoadedSpindlePlant(SpindleParams(), seed=9)
-    seeded = SilSession(speedup=None, seed=9, spindle=chain_loaded_spindle)
+    seeded = SilSession(speedup=None, seed=9, spindle=ChainLoadedSpindlePlant)
     assert seeded.spindle.position_raw == twin.position_raw and seeded.spindle.load_raw == twin.load_raw
     given = ChainLoadedSpindlePlant(params, seed=1)
     assert SilSession(speedup=None, spindle=given).spindle is given
     with pytest.raises(TypeError, match="spindle: expected None, a SpindlePlant or a factory"):
         SilSession(speedup=None, spindle=3)
     with pytest.raises(TypeError, match="spindle: expected the factory to return a SpindlePlant, got str"):
-        SilSession(speedup=None, spindle=lambda p, s: "servo")
+        SilSession(speedup=None, spindle=lambda p, *, seed: "servo")
     with pytest.raises(ValueError, match="spindle: expected a SpindlePlant built with spindle_params"):
         SilSession(speedup=None, spindle_params=params, spindle=ChainLoadedSpindlePlant(SpindleParams(), seed=0))

@@ -54,7 +54,7 @@ class ChainBridge:
 
     Args:
         sil: the session; its spindle must be a ChainLoadedSpindlePlant
-            (``SilSession(spindle=chain_loaded_spindle, ...)``).
+            (``SilSession(spindle=ChainLoadedSpindlePlant, ...)``).
         chain: the chain plant, built with the trajectory's start pose.
         trajectory: the module's pose over simulated time.
         rope_axial_friction: friction coefficient for the drive's rope load (dimensionless, >= 0).
@@ -66,7 +66,7 @@ class ChainBridge:
     def __init__(self, sil, chain: ChainPlant, trajectory: BaseTrajectory, *,
                  rope_axial_friction: float = DEFAULT_ROPE_AXIAL_FRICTION) -> None:
         if not isinstance(sil.spindle, ChainLoadedSpindlePlant):
-            raise TypeError(f"sil.spindle: expected a ChainLoadedSpindlePlant (SilSession(spindle=chain_loaded_spindle)), "
+            raise TypeError(f"sil.spindle: expected a ChainLoadedSpindlePlant (SilSession(spindle=ChainLoadedSpindlePlant)), "
                             f"got {type(sil.spindle).__name__}")
         if not (math.isfinite(rope_axial_friction) and rope_axial_friction >= 0):
             raise ValueError(f"rope_axial_friction: expected a finite value >= 0, got {rope_axial_friction!r}")
@@ -114,8 +114,3 @@ class ChainBridge:
         self.sil.spindle.guide_load_n = self.guide_load_n
         self.sil.plant.external_rope_load_n = self.drive_load_n
 
-
-def chain_loaded_spindle(spindle_params=None, seed: int = 0) -> ChainLoadedSpindlePlant:
-    """SilSession spindle factory: ``SilSession(spindle=chain_loaded_spindle, seed=...)`` gives the session a
-    spindle plant loaded by the chain, built with the session's spindle_params and seed."""
-    return ChainLoadedSpindlePlant(spindle_params, seed=seed)

@@ -59,7 +59,8 @@ from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxy
 from robowrangler_sim.chain.secured import SecuredMonitor
 from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory
 from robowrangler_sim.scenarios.catalogue import ScenarioError, ScenarioSpec, get_scenario
-from robowrangler_sim.scenarios.chain_bridge import ChainBridge, chain_loaded_spindle
+from robowrangler_sim.scenarios.chain_bridge import ChainBridge
+from robowrangler_sim.scenarios.loaded_spindle import ChainLoadedSpindlePlant
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 from robowrangler_sim.sil.session import SilSession
 
@@ -170,7 +171,7 @@ class _Run:
             placement, start = self._door_geometry(obj)
         self.trajectory = BaseTrajectory(start_pos_m=start, quat_wxyz=quat)
         self.placement = placement
-        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0, spindle=chain_loaded_spindle)
+        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0, spindle=ChainLoadedSpindlePlant)
         guide = min(max(self.sil.spindle.guide_position_mm, 0.0), self.params.guide_stroke_mm)
         self.chain = ChainPlant(table=self.table, params=self.params, objects=(placement,), floor_height_m=0.0,
                                 initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=guide,

@@ -78,11 +78,11 @@ def _make_spindle(spindle, spindle_params: SpindleParams | None, seed: int) -> S
                              f"got one with {spindle.params!r}")
         return spindle
     if callable(spindle):
-        made = spindle(spindle_params, seed)
+        made = spindle(spindle_params, seed=seed)
         if not isinstance(made, SpindlePlant):
             raise TypeError(f"spindle: expected the factory to return a SpindlePlant, got {type(made).__name__}")
         return made
-    raise TypeError(f"spindle: expected None, a SpindlePlant or a factory(spindle_params, seed), "
+    raise TypeError(f"spindle: expected None, a SpindlePlant or a factory(spindle_params, *, seed), "
                     f"got {type(spindle).__name__}")
 
 
@@ -103,8 +103,9 @@ class SilSession:
             a temporary folder removed at stop().
         spindle: the spindle plant the firmware's servo bus drives: None builds a SpindlePlant(spindle_params,
             seed=seed); a SpindlePlant (or subclass, e.g. the chain-loaded spindle of the wrangling scenarios)
-            is used as given; a callable ``factory(spindle_params, seed) -> SpindlePlant`` is called with the
-            session's spindle_params and seed (so the register noise follows the session's seed).
+            is used as given; a callable ``factory(spindle_params, *, seed) -> SpindlePlant`` (a SpindlePlant
+            subclass itself, e.g. ``spindle=ChainLoadedSpindlePlant``) is called with the session's spindle_params
+            and seed (so the register noise follows the session's seed).
 
     Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
     ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
@@ -123,7 +124,7 @@ class SilSession:
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
                  plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
                  state_file: str | Path | None = None,
-                 spindle: SpindlePlant | Callable[[SpindleParams | None, int], SpindlePlant] | None = None) -> None:
+                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
