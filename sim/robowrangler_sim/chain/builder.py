@@ -4,7 +4,8 @@ Tree (names are the plant's API)::
 
     world
       floor                      optional plane at floor_height_m (contype 8)
-      module   (mocap body)      the manipulator base; its frame: x = launch axis, z = up, y = loop normal
+      module   (freejoint)       the manipulator base (motion prescribed by the plant: the robot's leg);
+                                 its frame: x = launch axis, z = up, y = loop normal
         module_housing (geom)    box behind the exit (contacts objects, not the chain)
         exit, return (sites)     guide exit (origin) and return point of the loop
         link_0                   joints inplane_0 (axis -y), outplane_0 (axis z); capsule geom link_0
@@ -70,7 +71,7 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
         params: the chain parameters.
         objects: objects placed in the scene.
         floor_height_m: z of a floor/table plane, or None for no floor.
-        module_pos_m: initial module (mocap) position, world frame, metres.
+        module_pos_m: initial module position, world frame, metres.
     Returns: MJCF XML string.
     """
     n = params.n_links
@@ -102,7 +103,13 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
         _sub(world, "geom", name="floor", type="plane", size=(10, 10, 0.1), pos=(0, 0, floor_height_m),
              material="grid", friction=(params.floor_friction, 0.005, 0.0001), **_bits(FLOOR_BITS))
 
-    module = _sub(world, "body", name="module", mocap="true", pos=module_pos_m)
+    # the module moves on a free joint whose motion the plant prescribes (velocity set each step):
+    # unlike a mocap body it has a real velocity, which the contact solver sees
+    # (docs/chain_model.md, "prescribed module motion")
+    module = _sub(world, "body", name="module", pos=module_pos_m, gravcomp="1")
+    _sub(module, "freejoint", name="module_free")
+    _sub(module, "inertial", pos=(0, 0, 0), mass=params.module_mass_kg,
+         diaginertia=(params.module_inertia_kgm2,) * 3)
     hx, hy, hz = MODULE_HOUSING_HALF_M
     _sub(module, "geom", name="module_housing", type="box", size=(hx, hy, hz), pos=(-hx, 0, -0.01),
          rgba=(0.25, 0.27, 0.3, 1), friction=(0.5, 0.005, 0.0001), **_bits(MODULE_BITS))

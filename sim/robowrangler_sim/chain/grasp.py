@@ -186,9 +186,14 @@ def run_grasp(obj: ObjectSpec | str, *, table: ShapeTable, params: ChainParams |
     trace: list[dict] = []
     max_force = 0.0
     n = int(round(script.duration_s / sample_s))
+    h = params.timestep_s
     for k in range(n):
-        phase, inputs = grasp_inputs(script, k * sample_s, base_pos_m=base)
-        plant.advance(inputs, duration_s=sample_s)
+        # the inputs follow the script at every plant step (a guide and a leg that move continuously,
+        # not in sample_s jumps: a jump teleports links into the object, see docs/chain_model.md)
+        t_end = (k + 1) * sample_s
+        while plant.time_s + 0.5 * h < t_end:
+            phase, inputs = grasp_inputs(script, plant.time_s, base_pos_m=base)
+            plant.step(inputs)
         force = float(np.linalg.norm(plant.chain_object_net_force_n()[name]))
         max_force = max(max_force, force)
         com = plant.object_com_m(name)

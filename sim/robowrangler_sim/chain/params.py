@@ -53,6 +53,13 @@ class ChainParams:
         drive_armature_factor: driven joints get an extra armature of factor * lift * kd * timestep_s,
             the inertia their implicit drive damping has within one step, so that the contact solver
             does not answer the huge drive torques with huge forces on the light links (0 = off).
+        module_mass_kg: mass (and, times 0.01 m2, rotational inertia) of the module body. Its motion is
+            prescribed (the robot's leg: the plant sets its velocity every step so that it reaches the
+            commanded pose at the end of the step); rope and object loads deflect it a little within a
+            step, and the next step's velocity takes that back. Gravity-compensated.
+        module_max_step_m, module_max_step_rad: a commanded pose farther than this from the present one
+            (per step) is a re-placement, applied at once with zero velocity, not a motion (a 5 mm step
+            at 5 ms is 1 m/s of leg motion).
     Lift:
         takeoff_speed_mps: ToV; at and above it the loop is airborne (paper rope: 2.6 m/s).
         lift_ramp_s: time for the lift factor to go 1 -> 0 (falling) or 0 -> 1 (rising).
@@ -90,10 +97,14 @@ class ChainParams:
     passive_damping_nms_per_rad: float = 1.0e-4
     armature_kgm2: float = 1.0e-5
     drive_armature_factor: float = 1.0
+    module_mass_kg: float = 1.0
+    module_inertia_kgm2: float = 100.0
+    module_max_step_m: float = 0.005
+    module_max_step_rad: float = 0.02
     takeoff_speed_mps: float = 2.6
     lift_ramp_s: float = 0.2
     rope_friction: float = 0.3
-    rope_floor_clearance_m: float = 0.01
+    rope_floor_clearance_m: float = 0.0
     contact_impedance_min: float = 0.99
     contact_impedance_max: float = 0.9999
     contact_impedance_width_m: float = 0.001
@@ -114,7 +125,8 @@ class ChainParams:
             if value < 0:
                 raise ChainModelError(f"{f.name}: expected >= 0, got {value}")
         for name in ("rope_length_m", "rope_linear_density_kg_per_m", "rope_radius_m", "timestep_s",
-                     "takeoff_speed_mps", "guide_take_up_ratio"):
+                     "takeoff_speed_mps", "guide_take_up_ratio", "module_mass_kg",
+                     "module_inertia_kgm2"):
             if getattr(self, name) <= 0:
                 raise ChainModelError(f"{name}: expected > 0, got {getattr(self, name)}")
         if not 0.0 < self.upper_branch_fraction < 1.0:

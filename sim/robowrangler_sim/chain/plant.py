@@ -9,8 +9,8 @@ A lockstep bridge drives it once per tick::
 
 Each step: the lift factor follows the rope speed (lift.py); the inclination phi is read from the base
 pose; the in-plane drive targets come from the shape table at phi (targets.py); the link length
-follows the loop length the guide leaves outside; the module (mocap) takes the base pose; MuJoCo
-steps; divergence raises ChainDivergenceError.
+follows the loop length the guide leaves outside; the module moves to the base pose with a real
+velocity (prescribed motion, see _move_module); MuJoCo steps; divergence raises ChainDivergenceError.
 
 Time: the plant owns its clock, ``time_s = steps * timestep_s``. ``advance(duration_s)`` runs the
 whole number of steps that brings the clock nearest to the requested end time (the remainder is
@@ -202,6 +202,10 @@ class ChainPlant:
         self._drive_dof = np.array([m.jnt_dofadr[m.actuator_trnid[a, 0]] for a in self._drive_act], dtype=int)
         self._base_armature = m.dof_armature[self._drive_dof].copy()
         self._closure_eq = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, "closure_constraint")
+        module_joint = name(J, "module_free")
+        self._module_qpos = int(m.jnt_qposadr[module_joint])
+        self._module_dof = int(m.jnt_dofadr[module_joint])
+        self._module_body = name(B, "module")
         self._has_contacts = floor_height_m is not None or bool(self.objects)
         self._floor_geom = name(G, "floor")
         self._module_geom = name(G, "module_housing")
@@ -227,6 +231,7 @@ class ChainPlant:
         self._warning_badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
 
         self._apply_inputs(initial)
+        self._place_module()
         if airborne:
             # the whole chain (both branches) starts on the target contour
             q = self.targets.joint_targets(self._phi_rad, speed_index=self._speed_index(initial.rope_speed_mps))
@@ -250,8 +255,8 @@ class ChainPlant:
         p = self.params
         self._inputs = inputs
         self._inputs_applied = inputs
-        self.data.mocap_pos[0] = inputs.base_pos_m
-        self.data.mocap_quat[0] = inputs.base_quat_wxyz
+        self._base_pos_target = np.asarray(inputs.base_pos_m, dtype=float)
+        self._base_quat_target = np.asarray(inputs.base_quat_wxyz, dtype=float)
         self._phi_rad = base_inclination_rad(np.asarray(inputs.base_quat_wxyz))
         self._loop_length_m = p.loop_length_m(inputs.guide_position_mm)
         self._set_link_length(self._loop_length_m / p.n_links)
@@ -302,6 +307,30 @@ class ChainPlant:
         if self._drive_act.size:
             self.data.ctrl[self._drive_act] = self._ctrl_targets[self._drive_joint]
 
+    def _place_module(self) -> None:
+        """Put the module at the commanded pose at once, at rest (construction, re-placement)."""
+        a, d = self._module_qpos, self.data
+        d.qpos[a:a + 3] = self._base_pos_target
+        d.qpos[a + 3:a + 7] = self._base_quat_target
+        d.qvel[self._module_dof:self._module_dof + 6] = 0.0
+
+    def _move_module(self) -> None:
+        """Prescribed module motion: the velocity that brings the module from its present pose to the
+        commanded one in this step (constant over the step), so that the rope and the housing move with a
+        velocity the contact solver sees (see docs/chain_model.md, "prescribed module motion"). A
+        commanded pose farther away than module_max_step_m / module_max_step_rad is a re-placement:
+        applied at once, at rest."""
+        p, d = self.params, self.data
+        a, v = self._module_qpos, self._module_dof
+        dp = self._base_pos_target - d.qpos[a:a + 3]
+        dq = np.empty(3)
+        mujoco.mju_subQuat(dq, self._base_quat_target, d.qpos[a + 3:a + 7])  # body-frame rotation vector
+        if np.linalg.norm(dp) > p.module_max_step_m or np.linalg.norm(dq) > p.module_max_step_rad:
+            self._place_module()
+            return
+        d.qvel[v:v + 3] = dp / p.timestep_s       # free joint: linear velocity in the world frame
+        d.qvel[v + 3:v + 6] = dq / p.timestep_s   # angular velocity in the body frame
+
     def _rest_angles(self) -> np.ndarray:
         """The loop at rest: collapsed into a doubled line along the launch axis, the upper branch out,
         the lower branch folded back under it to end at the return point."""
@@ -326,6 +355,7 @@ class ChainPlant:
             self._apply_inputs(inputs)
         self.lift_state.step(self._inputs.rope_speed_mps, self.params.timestep_s)
         self._apply_drives()
+        self._move_module()
         mujoco.mj_step(self.model, self.data)
         self._steps += 1
         self._check_divergence()
@@ -387,6 +417,14 @@ class ChainPlant:
         fwd[2] = 0.0
         fwd /= np.linalg.norm(fwd)
         return np.column_stack([pts @ fwd, pts[:, 2]])
+
+    def module_pos_m(self) -> np.ndarray:
+        """Module (exit point) position, world frame, shape (3,), metres."""
+        return self.data.xpos[self._module_body].copy()
+
+    def module_quat_wxyz(self) -> np.ndarray:
+        """Module orientation, shape (4,)."""
+        return self.data.xquat[self._module_body].copy()
 
     def exit_pos_m(self) -> np.ndarray:
         return self.data.site_xpos[self._exit_site].copy()
@@ -487,7 +525,7 @@ class ChainPlant:
         chain_obj, module_obj, chain_floor = (contacts.chain_on_object_n, contacts.module_on_object_n,
                                               contacts.chain_on_floor_n)
         net = contacts.chain_net_on_object_n
-        base = self.data.mocap_pos[0].copy()
+        base = self.module_pos_m()
         for name, mon in self._monitors.items():
             mon.update(time_s=self.time_s, object_com_m=self.object_com_m(name), base_pos_m=base,
                        chain_force_n=float(np.linalg.norm(net[name])))
