@@ -53,10 +53,13 @@ class ChainParams:
         drive_armature_factor: driven joints get an extra armature of factor * lift * kd * timestep_s,
             the inertia their implicit drive damping has within one step, so that the contact solver
             does not answer the huge drive torques with huge forces on the light links (0 = off).
-        module_mass_kg: mass (and, times 0.01 m2, rotational inertia) of the module body. Its motion is
-            prescribed (the robot's leg: the plant sets its velocity every step so that it reaches the
-            commanded pose at the end of the step); rope and object loads deflect it a little within a
-            step, and the next step's velocity takes that back. Gravity-compensated.
+        module_mass_kg, module_inertia_kgm2: mass and rotational inertia of the module body. Its motion
+            is prescribed (the robot's leg: the plant sets its velocity every step so that it reaches the
+            commanded pose at the end of the step), so that the rope and the housing move with a velocity
+            the contact solver sees (a teleported mocap body has none). Rope and drive loads deflect it a
+            little within a step and the next step's velocity takes that back; the inertia is above the
+            driven joints' armature (25 kg m2) so that drive reactions barely turn it. Gravity-compensated.
+            1e4 kg was tried and made the solver chaotic. Numerical devices, not the device's mass.
         module_max_step_m, module_max_step_rad: a commanded pose farther than this from the present one
             (per step) is a re-placement, applied at once with zero velocity, not a motion (a 5 mm step
             at 5 ms is 1 m/s of leg motion).
@@ -67,7 +70,9 @@ class ChainParams:
         rope_friction: sliding friction of the rope links (MuJoCo takes the larger of a pair's values).
         floor_friction: sliding friction of the floor/table plane.
         rope_floor_clearance_m: the chain rests this far above the floor (contact margin of the explicit
-            chain-floor pairs), so that it meets objects above their bottom rim (see docs).
+            chain-floor pairs). 0: the rope lies on the floor and meets objects at their base. (It was
+            10 mm while the module was a teleported mocap body: the rope was then driven 2-6 mm into
+            objects and under their rims at floor level; docs/chain_model.md, "Rope on the floor".)
         contact_impedance_min, contact_impedance_max, contact_impedance_width_m: MuJoCo solimp of the
             rope's contacts (the rope's value dominates its pairs through solmix; objects, floor and
             module keep MuJoCo's default). MuJoCo scales a contact's softness with the effective mass it

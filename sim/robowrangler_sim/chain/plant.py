@@ -205,7 +205,6 @@ class ChainPlant:
         module_joint = name(J, "module_free")
         self._module_qpos = int(m.jnt_qposadr[module_joint])
         self._module_dof = int(m.jnt_dofadr[module_joint])
-        self._module_body = name(B, "module")
         self._has_contacts = floor_height_m is not None or bool(self.objects)
         self._floor_geom = name(G, "floor")
         self._module_geom = name(G, "module_housing")
@@ -420,11 +419,15 @@ class ChainPlant:
 
     def module_pos_m(self) -> np.ndarray:
         """Module (exit point) position, world frame, shape (3,), metres."""
-        return self.data.xpos[self._module_body].copy()
+        return self.data.qpos[self._module_qpos:self._module_qpos + 3].copy()
+
+    def module_velocity_mps(self) -> np.ndarray:
+        """Module linear velocity (world frame, m/s, shape (3,)): the commanded motion over the last step."""
+        return self.data.qvel[self._module_dof:self._module_dof + 3].copy()
 
     def module_quat_wxyz(self) -> np.ndarray:
         """Module orientation, shape (4,)."""
-        return self.data.xquat[self._module_body].copy()
+        return self.data.qpos[self._module_qpos + 3:self._module_qpos + 7].copy()
 
     def exit_pos_m(self) -> np.ndarray:
         return self.data.site_xpos[self._exit_site].copy()

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from robowrangler_sim.chain.objects import OBJECTS
+from robowrangler_sim.chain.params import ChainParams
 from robowrangler_sim.chain.table_i import TABLE_I_OBJECTS, run_table_i
 from robowrangler_sim.scenarios.runner import ScenarioOutcome, run_scenario
 
@@ -44,8 +45,9 @@ def _why(o: ScenarioOutcome, spec) -> str:
     if o.touching_fraction < 0.8 and (math.isnan(o.follow_ratio) or abs(o.follow_ratio) < 0.1):
         return (f"it stayed where it was and the rope touched it in {100 * o.touching_fraction:.0f} % of the judged "
                 f"half of the pull (peak guide load {o.peak_guide_load_n:.2f} N): the loop lost it; the object is "
-                f"{1000 * spec.height_m:.0f} mm tall, the rope rests 10 mm above the floor and leaves the exit 30 mm "
-                "up, so a pulled rope can ride over a low object")
+                f"{1000 * spec.height_m:.2g} mm tall and the rope, resting on the floor, has a "
+                f"{1000 * ChainParams().rope_radius_m:g} mm radius: where the object is thinner than the rope's "
+                "radius the rope rides onto it (docs/chain_model.md, \"Rope on the floor\")")
     if o.follow_ratio > 1.2 and o.touching_fraction < 0.5:
         return "knocked ahead: it rolled on out of the rope's contact faster than the module moved"
     if o.follow_ratio >= 0.5 and o.touching_fraction < 0.8:
@@ -172,8 +174,6 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     note = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
     sil = run_sil_rows(seed=args.seed, n_links=args.links, progress=note)
-    from robowrangler_sim.chain.params import ChainParams
-
     plant = run_table_i(params=ChainParams(n_links=args.links))
     door = []
     runs = [(0, 0.0)] + [(seed, noise) for noise in DOOR_NOISES_RAD for seed in range(1, args.door_seeds)]
