@@ -67,7 +67,7 @@ def test_module_moves_with_a_real_velocity_and_jumps_are_replacements(table):
     plant.step(PlantInputs(rope_speed_mps=5.0, base_pos_m=tuple(far), base_quat_wxyz=quat))
     np.testing.assert_allclose(plant.module_pos_m(), far, atol=1e-5)
     assert np.linalg.norm(plant.module_velocity_mps()) < 1e-3
-    # orientation follows too (the inclination that selects the shape)
+    # the orientation is set directly (the inclination that selects the shape)
     tilted = pitch_quat_wxyz(math.radians(0.5))
     plant.step(PlantInputs(rope_speed_mps=5.0, base_pos_m=tuple(far), base_quat_wxyz=tilted))
     np.testing.assert_allclose(plant.module_quat_wxyz(), tilted, atol=1e-5)

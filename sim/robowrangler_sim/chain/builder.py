@@ -4,7 +4,9 @@ Tree (names are the plant's API)::
 
     world
       floor                      optional plane at floor_height_m (contype 8)
-      module   (freejoint)       the manipulator base (motion prescribed by the plant: the robot's leg);
+      module_carriage            slide joints module_x/y/z (world axes): the module's position, motion
+                                 prescribed by the plant (the robot's leg), with a real velocity
+        module                   the manipulator base, orientation set by the plant;
                                  its frame: x = launch axis, z = up, y = loop normal
         module_housing (geom)    box behind the exit (contacts objects, not the chain)
         exit, return (sites)     guide exit (origin) and return point of the loop
@@ -103,16 +105,17 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
         _sub(world, "geom", name="floor", type="plane", size=(10, 10, 0.1), pos=(0, 0, floor_height_m),
              material="grid", friction=(params.floor_friction, 0.005, 0.0001), **_bits(FLOOR_BITS))
 
-    # the module moves on a free joint whose motion the plant prescribes (velocity set each step):
-    # unlike a mocap body it has a real velocity, which the contact solver sees
-    # (docs/chain_model.md, "prescribed module motion")
-    module = _sub(world, "body", name="module", pos=module_pos_m, gravcomp="1")
-    _sub(module, "freejoint", name="module_free")
-    _sub(module, "inertial", pos=(0, 0, 0), mass=params.module_mass_kg,
-         diaginertia=(params.module_inertia_kgm2,) * 3)
+    # the module translates on three world-aligned slide joints whose motion the plant prescribes (velocity
+    # set each step): unlike a mocap body it has a real velocity, which the contact solver sees; its
+    # orientation is the child body's quaternion, set by the plant (docs/chain_model.md, "Rope on the floor")
+    carriage = _sub(world, "body", name="module_carriage", pos=module_pos_m, gravcomp="1")
+    for axis, vec in (("x", (1, 0, 0)), ("y", (0, 1, 0)), ("z", (0, 0, 1))):
+        _sub(carriage, "joint", name=f"module_{axis}", type="slide", axis=vec)
+    _sub(carriage, "inertial", pos=(0, 0, 0), mass=params.module_mass_kg, diaginertia=(1e-3, 1e-3, 1e-3))
+    module = _sub(carriage, "body", name="module", pos=(0, 0, 0))
     hx, hy, hz = MODULE_HOUSING_HALF_M
     _sub(module, "geom", name="module_housing", type="box", size=(hx, hy, hz), pos=(-hx, 0, -0.01),
-         rgba=(0.25, 0.27, 0.3, 1), friction=(0.5, 0.005, 0.0001), **_bits(MODULE_BITS))
+         rgba=(0.25, 0.27, 0.3, 1), mass="0", friction=(0.5, 0.005, 0.0001), **_bits(MODULE_BITS))
     _sub(module, "site", name="exit", pos=(0, 0, 0), size=(0.004,), rgba=(0, 1, 0, 1))
     _sub(module, "site", name="return", pos=(0, 0, -0.02), size=(0.004,), rgba=(1, 0, 0, 1))
 

@@ -53,16 +53,16 @@ class ChainParams:
         drive_armature_factor: driven joints get an extra armature of factor * lift * kd * timestep_s,
             the inertia their implicit drive damping has within one step, so that the contact solver
             does not answer the huge drive torques with huge forces on the light links (0 = off).
-        module_mass_kg, module_inertia_kgm2: mass and rotational inertia of the module body. Its motion
-            is prescribed (the robot's leg: the plant sets its velocity every step so that it reaches the
-            commanded pose at the end of the step), so that the rope and the housing move with a velocity
-            the contact solver sees (a teleported mocap body has none). Rope and drive loads deflect it a
-            little within a step and the next step's velocity takes that back; the inertia is above the
-            driven joints' armature (25 kg m2) so that drive reactions barely turn it. Gravity-compensated.
-            1e4 kg was tried and made the solver chaotic. Numerical devices, not the device's mass.
-        module_max_step_m, module_max_step_rad: a commanded pose farther than this from the present one
-            (per step) is a re-placement, applied at once with zero velocity, not a motion (a 5 mm step
-            at 5 ms is 1 m/s of leg motion).
+        module_mass_kg: mass of the module's carriage. Its position is prescribed (the robot's leg: the
+            plant sets the slide velocities every step so that it reaches the commanded position at the end
+            of the step), so that the rope and the housing move with a velocity the contact solver sees (a
+            teleported mocap body has none). Rope loads deflect it a little within a step; the next step's
+            velocity takes that back. Gravity-compensated. A numerical device, not the device's mass (1e4 kg
+            was tried and made the solver chaotic).
+        module_max_step_m: a commanded position farther than this from the present one (per step) is a
+            re-placement, applied at once with zero velocity, not a motion (5 mm per 5 ms step = 1 m/s).
+            The orientation is set directly (no angular velocity): no scenario turns the module while the
+            rope touches something.
     Lift:
         takeoff_speed_mps: ToV; at and above it the loop is airborne (paper rope: 2.6 m/s).
         lift_ramp_s: time for the lift factor to go 1 -> 0 (falling) or 0 -> 1 (rising).
@@ -103,9 +103,7 @@ class ChainParams:
     armature_kgm2: float = 1.0e-5
     drive_armature_factor: float = 1.0
     module_mass_kg: float = 1.0
-    module_inertia_kgm2: float = 100.0
     module_max_step_m: float = 0.005
-    module_max_step_rad: float = 0.02
     takeoff_speed_mps: float = 2.6
     lift_ramp_s: float = 0.2
     rope_friction: float = 0.3
@@ -130,8 +128,7 @@ class ChainParams:
             if value < 0:
                 raise ChainModelError(f"{f.name}: expected >= 0, got {value}")
         for name in ("rope_length_m", "rope_linear_density_kg_per_m", "rope_radius_m", "timestep_s",
-                     "takeoff_speed_mps", "guide_take_up_ratio", "module_mass_kg",
-                     "module_inertia_kgm2"):
+                     "takeoff_speed_mps", "guide_take_up_ratio", "module_mass_kg"):
             if getattr(self, name) <= 0:
                 raise ChainModelError(f"{name}: expected > 0, got {getattr(self, name)}")
         if not 0.0 < self.upper_branch_fraction < 1.0:
