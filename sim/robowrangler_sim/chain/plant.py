@@ -232,6 +232,9 @@ class ChainPlant:
         self._warning_badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
 
         self._module_max_step2_m2 = p.module_max_step_m ** 2
+        self._module_qpos_view = self.data.qpos[self._module_qpos:self._module_qpos + 3]  # views into MjData
+        self._module_qvel_view = self.data.qvel[self._module_dof:self._module_dof + 3]
+        self._module_dp_buf = np.zeros(3)
         self._inv_timestep_hz = 1.0 / p.timestep_s
         self._apply_inputs(initial)
         self._place_module()
@@ -327,12 +330,12 @@ class ChainPlant:
         (6 mm at 0.15 m/s), more than the rope's radius (docs/chain_model.md, "Rope on the floor").
         A commanded position farther away than module_max_step_m is a re-placement: applied at once, at
         rest."""
-        a, v, d = self._module_qpos, self._module_dof, self.data
-        dp = self._base_pos_target - d.qpos[a:a + 3]
+        dp = self._module_dp_buf
+        np.subtract(self._base_pos_target, self._module_qpos_view, out=dp)
         if dp @ dp > self._module_max_step2_m2:
             self._place_module()
             return
-        d.qvel[v:v + 3] = dp * self._inv_timestep_hz
+        np.multiply(dp, self._inv_timestep_hz, out=self._module_qvel_view)
 
     def _rest_angles(self) -> np.ndarray:
         """The loop at rest: collapsed into a doubled line along the launch axis, the upper branch out,
