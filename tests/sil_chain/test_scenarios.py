@@ -118,7 +118,8 @@ def test_door_handle_is_threaded_held_and_perturbed_runs_are_reported(native_bui
     assert held.mean_pull_force_n > 1.0  # the 5 cm pull loads the rope on the lever
     assert held.grasp_end == "STROKE_END" and held.guide_at_grasp_end_mm == pytest.approx(60.0, abs=1.0)
     # a perturbed rollout whose loop flies in a swung plane misses the lever: reported as lost, never hidden
-    missed = run_scenario("door_handle", seed=1, n_links=20, chain_noise_rad=0.05)
+    # (0.1 rad: with the out-of-plane damping of the airborne rope the 0.05 rad rollouts are all held)
+    missed = run_scenario("door_handle", seed=1, n_links=20, chain_noise_rad=0.1)
     assert missed.verdict in ("lost", "diverged")
     assert missed.secured is False or missed.diverged is not None
 

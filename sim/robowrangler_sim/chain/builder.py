@@ -122,10 +122,11 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
     parent = module
     for i in range(n):
         body = _sub(parent, "body", name=f"link_{i}", pos=(0, 0, 0) if i == 0 else (link_len, 0, 0))
-        common = dict(type="hinge", pos=(0, 0, 0), armature=params.armature_kgm2,
-                      damping=params.passive_damping_nms_per_rad)
-        _sub(body, "joint", name=f"inplane_{i}", axis=(0, -1, 0), **common)
-        _sub(body, "joint", name=f"outplane_{i}", axis=(0, 0, 1), **common)
+        common = dict(type="hinge", pos=(0, 0, 0), armature=params.armature_kgm2)
+        _sub(body, "joint", name=f"inplane_{i}", axis=(0, -1, 0), damping=params.passive_damping_nms_per_rad,
+             **common)
+        _sub(body, "joint", name=f"outplane_{i}", axis=(0, 0, 1),
+             damping=params.out_of_plane_damping_nms_per_rad, **common)
         upper = i < params.n_upper
         _sub(body, "geom", name=f"link_{i}", type="capsule", size=(r, link_len / 2), pos=(link_len / 2, 0, 0),
              euler=(0, math.pi / 2, 0), mass=params.link_mass_kg, solimp=rope_solimp, solmix="1000",

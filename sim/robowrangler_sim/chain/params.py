@@ -48,7 +48,13 @@ class ChainParams:
             stiff on 2e-5 kg links). 0 = tendon spring only.
     Numerics (stability choices, docs/chain_model.md):
         timestep_s: MuJoCo timestep.
-        passive_damping_nms_per_rad: passive damping on every hinge (implicit; stabilises free links).
+        passive_damping_nms_per_rad: passive damping on the in-plane hinges (implicit; stabilises free links).
+        out_of_plane_damping_nms_per_rad: passive damping on the out-of-plane hinges (stiffness stays 0, as
+            in the paper). Air drag on a rope that runs axially at U has a normal force linear in the swing
+            velocity, about 0.5 rho U (C_f pi d) per metre (DESIGN.md: C_f pi d = 5.4e-4 m): at 4 m/s,
+            1.3e-3 N s/m2, i.e. about 4e-4 N m s/rad for a 1 m arm swinging about a joint. 5e-4 stops the
+            loop plane from swinging on after every leg move (the door handle's perturbed rollouts: 9/9 held
+            instead of 4/9 with 1e-4); it does not restore the plane. docs/chain_model.md.
         armature_kgm2: rotor-like inertia added to every hinge (the links' own inertia is ~1e-8 kg m2).
         drive_armature_factor: driven joints get an extra armature of factor * lift * kd * timestep_s,
             the inertia their implicit drive damping has within one step, so that the contact solver
@@ -100,6 +106,7 @@ class ChainParams:
     closure_constraint_timeconst_s: float = 0.02
     timestep_s: float = 0.005
     passive_damping_nms_per_rad: float = 1.0e-4
+    out_of_plane_damping_nms_per_rad: float = 5.0e-4
     armature_kgm2: float = 1.0e-5
     drive_armature_factor: float = 1.0
     module_mass_kg: float = 1.0
