@@ -123,6 +123,19 @@ def test_firmware_grasp_reproduces_table_i(name: str, expected: str, native_buil
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("name", ["tuna_can", "sponge"])
+def test_firmware_grasp_secures_the_low_objects(name: str, native_build_dir: Path) -> None:
+    # 33 mm and 14 mm tall: the rope lying on the floor (not 10 mm above it) and the module moving with a real
+    # velocity (docs/chain_model.md) catch them; before, the pulled rope rode over them (rope touching 0-5 %)
+    out = run_scenario(name, seed=0, n_links=20)
+    assert out.diverged is None
+    assert out.verdict == "secured", (out.follow_ratio, out.touching_fraction, out.mean_pull_force_n)
+    assert out.touching_fraction >= 0.8 and out.follow_ratio >= 0.5
+    moved = out.trace[-1]["object_com_m"] - out.trace[0]["object_com_m"]
+    assert moved[0] < -0.1 and abs(moved[2]) < 2e-3  # dragged along the floor, not lifted onto the rope
+
+
+@pytest.mark.slow
 def test_door_handle_is_threaded_held_and_perturbed_runs_are_reported(native_build_dir: Path) -> None:
     held = run_scenario("door_handle", seed=0, n_links=20)
     assert held.verdict == "held" and held.diverged is None
@@ -131,7 +144,8 @@ def test_door_handle_is_threaded_held_and_perturbed_runs_are_reported(native_bui
     assert held.door_opening_deg > 10.0 and held.mean_pull_force_n > 9.4
     # a perturbed rollout whose loop flies in a swung plane misses the lever: nothing to hold, so RETRACT runs
     # to the stroke's end and the pull finds no handle in the loop: reported as lost, never hidden
-    missed = run_scenario("door_handle", seed=1, n_links=20, chain_noise_rad=0.05)
+    # (0.1 rad, seed 2: with the out-of-plane damping of the airborne rope the 0.05 rad rollouts are all held)
+    missed = run_scenario("door_handle", seed=2, n_links=20, chain_noise_rad=0.1)
     assert missed.verdict in ("lost", "diverged")
     assert missed.secured is False or missed.diverged is not None
     assert missed.grasp_end in ("STROKE_END", None)

@@ -15,7 +15,7 @@ from robowrangler_sim.chain.params import ChainParams
 def test_model_builds_with_two_hinges_per_link_and_drives_on_the_upper_branch(n_links):
     p = ChainParams(n_links=n_links)
     m = build_chain_model(p)
-    assert m.njnt == 2 * n_links and m.nv == 2 * n_links
+    assert m.njnt == 2 * n_links + 3 and m.nv == 2 * n_links + 3  # + the module's three slides
     axes = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j): m.jnt_axis[j] for j in range(m.njnt)}
     for i in range(n_links):
         np.testing.assert_allclose(axes[f"inplane_{i}"], [0, -1, 0])

@@ -32,8 +32,9 @@ def test_grasp_reproduces_the_table_i_outcome(default_table, name, secured):
         assert out.object_displacement_m[0] < -0.1
         assert out.touching_fraction > 0.8 and out.mean_pull_force_n > 0.05
     else:
-        # the rope lost the ball: out of contact for most of the judged pull
-        assert out.touching_fraction < 0.5
+        # the rope does not keep hold of the ball: it is knocked ahead (rolls on faster than the module
+        # moves) and the rope touches it in less than 80 % of the judged samples
+        assert out.touching_fraction < 0.8 and out.follow_ratio > 1.2
 
 
 def test_script_phases_drive_speed_guide_and_base():
@@ -58,7 +59,7 @@ def test_grasp_is_deterministic(default_table):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name, secured, min_agree", [("chips_can", True, 10), ("mug", True, 12),
+@pytest.mark.parametrize("name, secured, min_agree", [("chips_can", True, 11), ("mug", True, 12),
                                                       ("tennis_ball", False, 12)])
 def test_grasp_outcome_is_robust_to_placement_inclination_and_chain_size(default_table, name, secured, min_agree):
     from robowrangler_sim.chain.params import ChainParams

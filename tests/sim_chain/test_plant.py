@@ -110,7 +110,7 @@ def test_base_pose_moves_and_tilts_the_loop(table):
     plant.advance(_inputs(0, pos=(0.3, 0.2, 2.1)), duration_s=1.0)
     np.testing.assert_allclose(plant.loop_tip_pos_m() - tip0, [0.3, 0.2, 0.1], atol=0.01)
     plant.advance(_inputs(30, pos=(0.3, 0.2, 2.1)), duration_s=3.0)
-    assert base_inclination_rad(plant.data.mocap_quat[0]) == pytest.approx(math.radians(30))
+    assert base_inclination_rad(plant.module_quat_wxyz()) == pytest.approx(math.radians(30))
     ref = table.contour(30.0)
     assert point_to_polyline_m(plant.chain_points_loop_plane_m(), ref)[: plant.params.n_upper + 1].max() < 0.01
 

@@ -48,8 +48,9 @@ def test_plant_outputs_report_secured_and_rope_tension(table, name, secured):
     plant, base = grasp_scene(name, table=table, params=ChainParams(), script=script)
     tension_hold = None
     for k in range(int(round(script.duration_s / 0.05))):
-        phase, inputs = grasp_inputs(script, k * 0.05, base_pos_m=base)
-        plant.advance(inputs, duration_s=0.05)
+        for _ in range(10):  # the script's inputs at every 5 ms plant step (the leg moves continuously)
+            phase, inputs = grasp_inputs(script, plant.time_s, base_pos_m=base)
+            plant.step(inputs)
         out = plant.outputs()
         if phase == "hold":
             tension_hold = out.rope_tension_n

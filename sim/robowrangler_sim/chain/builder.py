@@ -4,7 +4,10 @@ Tree (names are the plant's API)::
 
     world
       floor                      optional plane at floor_height_m (contype 8)
-      module   (mocap body)      the manipulator base; its frame: x = launch axis, z = up, y = loop normal
+      module_carriage            slide joints module_x/y/z (world axes): the module's position, motion
+                                 prescribed by the plant (the robot's leg), with a real velocity
+        module                   the manipulator base, orientation set by the plant;
+                                 its frame: x = launch axis, z = up, y = loop normal
         module_housing (geom)    box behind the exit (contacts objects, not the chain)
         exit, return (sites)     guide exit (origin) and return point of the loop
         link_0                   joints inplane_0 (axis -y), outplane_0 (axis z); capsule geom link_0
@@ -70,7 +73,7 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
         params: the chain parameters.
         objects: objects placed in the scene.
         floor_height_m: z of a floor/table plane, or None for no floor.
-        module_pos_m: initial module (mocap) position, world frame, metres.
+        module_pos_m: initial module position, world frame, metres.
     Returns: MJCF XML string.
     """
     n = params.n_links
@@ -102,20 +105,28 @@ def build_chain_mjcf(params: ChainParams, *, objects: tuple[ObjectPlacement, ...
         _sub(world, "geom", name="floor", type="plane", size=(10, 10, 0.1), pos=(0, 0, floor_height_m),
              material="grid", friction=(params.floor_friction, 0.005, 0.0001), **_bits(FLOOR_BITS))
 
-    module = _sub(world, "body", name="module", mocap="true", pos=module_pos_m)
+    # the module translates on three world-aligned slide joints whose motion the plant prescribes (velocity
+    # set each step): unlike a mocap body it has a real velocity, which the contact solver sees; its
+    # orientation is the child body's quaternion, set by the plant (docs/chain_model.md, "Rope on the floor")
+    carriage = _sub(world, "body", name="module_carriage", pos=module_pos_m, gravcomp="1")
+    for axis, vec in (("x", (1, 0, 0)), ("y", (0, 1, 0)), ("z", (0, 0, 1))):
+        _sub(carriage, "joint", name=f"module_{axis}", type="slide", axis=vec)
+    _sub(carriage, "inertial", pos=(0, 0, 0), mass=params.module_mass_kg, diaginertia=(1e-3, 1e-3, 1e-3))
+    module = _sub(carriage, "body", name="module", pos=(0, 0, 0))
     hx, hy, hz = MODULE_HOUSING_HALF_M
     _sub(module, "geom", name="module_housing", type="box", size=(hx, hy, hz), pos=(-hx, 0, -0.01),
-         rgba=(0.25, 0.27, 0.3, 1), friction=(0.5, 0.005, 0.0001), **_bits(MODULE_BITS))
+         rgba=(0.25, 0.27, 0.3, 1), mass="0", friction=(0.5, 0.005, 0.0001), **_bits(MODULE_BITS))
     _sub(module, "site", name="exit", pos=(0, 0, 0), size=(0.004,), rgba=(0, 1, 0, 1))
     _sub(module, "site", name="return", pos=(0, 0, -0.02), size=(0.004,), rgba=(1, 0, 0, 1))
 
     parent = module
     for i in range(n):
         body = _sub(parent, "body", name=f"link_{i}", pos=(0, 0, 0) if i == 0 else (link_len, 0, 0))
-        common = dict(type="hinge", pos=(0, 0, 0), armature=params.armature_kgm2,
-                      damping=params.passive_damping_nms_per_rad)
-        _sub(body, "joint", name=f"inplane_{i}", axis=(0, -1, 0), **common)
-        _sub(body, "joint", name=f"outplane_{i}", axis=(0, 0, 1), **common)
+        common = dict(type="hinge", pos=(0, 0, 0), armature=params.armature_kgm2)
+        _sub(body, "joint", name=f"inplane_{i}", axis=(0, -1, 0), damping=params.passive_damping_nms_per_rad,
+             **common)
+        _sub(body, "joint", name=f"outplane_{i}", axis=(0, 0, 1),
+             damping=params.out_of_plane_damping_nms_per_rad, **common)
         upper = i < params.n_upper
         _sub(body, "geom", name=f"link_{i}", type="capsule", size=(r, link_len / 2), pos=(link_len / 2, 0, 0),
              euler=(0, math.pi / 2, 0), mass=params.link_mass_kg, solimp=rope_solimp, solmix="1000",

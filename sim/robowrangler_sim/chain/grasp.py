@@ -14,7 +14,12 @@ Script (all times in simulated seconds, GraspScript fields):
      the object and the floor.
   3. retract   (retract_s): the guide runs 0 -> ``retract_guide_mm`` at constant speed (loop shrinks).
   4. hold      (hold_s): guide kept; nothing moves.
-  5. pull      (pull_s): the module moves back by ``pull_m`` and up by ``lift_m`` (the robot's leg).
+  5. pull      (pull_s): the module moves back by ``pull_m`` and up by ``lift_m`` (the robot's leg);
+     0.3 m in 3 s (0.1 m/s): at 0.15 m/s the chips can and the mug sat at the judgement's margin in the
+     SIL (the soft closure lets the loop lengthen under their 0.7-1.2 N sliding force; docs/chain_model.md).
+
+The inputs are evaluated at every plant step (5 ms), as the SIL bridge does: the leg and the guide move
+continuously (jumps of a coarser sampling drive rope links into objects, docs/chain_model.md).
 
 Judgement (GraspOutcome.secured, secured.SecuredMonitor), over the second half of the pull (the
 first half takes up the slack between the loop and the object): the rope keeps hold of the object
@@ -54,7 +59,7 @@ class GraspScript:
     retract_s: float = 3.0
     retract_guide_mm: float = 180.0
     hold_s: float = 0.5
-    pull_s: float = 2.0
+    pull_s: float = 3.0
     pull_m: float = 0.3
     lift_m: float = 0.0
     follow_fraction: float = 0.5
@@ -186,9 +191,14 @@ def run_grasp(obj: ObjectSpec | str, *, table: ShapeTable, params: ChainParams |
     trace: list[dict] = []
     max_force = 0.0
     n = int(round(script.duration_s / sample_s))
+    h = params.timestep_s
     for k in range(n):
-        phase, inputs = grasp_inputs(script, k * sample_s, base_pos_m=base)
-        plant.advance(inputs, duration_s=sample_s)
+        # the inputs follow the script at every plant step (a guide and a leg that move continuously,
+        # not in sample_s jumps: a jump teleports links into the object, see docs/chain_model.md)
+        t_end = (k + 1) * sample_s
+        while plant.time_s + 0.5 * h < t_end:
+            phase, inputs = grasp_inputs(script, plant.time_s, base_pos_m=base)
+            plant.step(inputs)
         force = float(np.linalg.norm(plant.chain_object_net_force_n()[name]))
         max_force = max(max_force, force)
         com = plant.object_com_m(name)

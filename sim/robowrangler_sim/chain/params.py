@@ -48,11 +48,27 @@ class ChainParams:
             stiff on 2e-5 kg links). 0 = tendon spring only.
     Numerics (stability choices, docs/chain_model.md):
         timestep_s: MuJoCo timestep.
-        passive_damping_nms_per_rad: passive damping on every hinge (implicit; stabilises free links).
+        passive_damping_nms_per_rad: passive damping on the in-plane hinges (implicit; stabilises free links).
+        out_of_plane_damping_nms_per_rad: passive damping on the out-of-plane hinges (stiffness stays 0, as
+            in the paper). Air drag on a rope that runs axially at U has a normal force linear in the swing
+            velocity, about 0.5 rho U (C_f pi d) per metre (DESIGN.md: C_f pi d = 5.4e-4 m): at 4 m/s,
+            1.3e-3 N s/m2, i.e. about 4e-4 N m s/rad for a 1 m arm swinging about a joint. 5e-4 stops the
+            loop plane from swinging on after every leg move (the door handle's perturbed rollouts: 9/9 held
+            instead of 4/9 with 1e-4); it does not restore the plane. docs/chain_model.md.
         armature_kgm2: rotor-like inertia added to every hinge (the links' own inertia is ~1e-8 kg m2).
         drive_armature_factor: driven joints get an extra armature of factor * lift * kd * timestep_s,
             the inertia their implicit drive damping has within one step, so that the contact solver
             does not answer the huge drive torques with huge forces on the light links (0 = off).
+        module_mass_kg: mass of the module's carriage. Its position is prescribed (the robot's leg: the
+            plant sets the slide velocities every step so that it reaches the commanded position at the end
+            of the step), so that the rope and the housing move with a velocity the contact solver sees (a
+            teleported mocap body has none). Rope loads deflect it a little within a step; the next step's
+            velocity takes that back. Gravity-compensated. A numerical device, not the device's mass (1e4 kg
+            was tried and made the solver chaotic).
+        module_max_step_m: a commanded position farther than this from the present one (per step) is a
+            re-placement, applied at once with zero velocity, not a motion (5 mm per 5 ms step = 1 m/s).
+            The orientation is set directly (no angular velocity): no scenario turns the module while the
+            rope touches something.
     Lift:
         takeoff_speed_mps: ToV; at and above it the loop is airborne (paper rope: 2.6 m/s).
         lift_ramp_s: time for the lift factor to go 1 -> 0 (falling) or 0 -> 1 (rising).
@@ -60,7 +76,9 @@ class ChainParams:
         rope_friction: sliding friction of the rope links (MuJoCo takes the larger of a pair's values).
         floor_friction: sliding friction of the floor/table plane.
         rope_floor_clearance_m: the chain rests this far above the floor (contact margin of the explicit
-            chain-floor pairs), so that it meets objects above their bottom rim (see docs).
+            chain-floor pairs). 0: the rope lies on the floor and meets objects at their base. (It was
+            10 mm while the module was a teleported mocap body: the rope was then driven 2-6 mm into
+            objects and under their rims at floor level; docs/chain_model.md, "Rope on the floor".)
         contact_impedance_min, contact_impedance_max, contact_impedance_width_m: MuJoCo solimp of the
             rope's contacts (the rope's value dominates its pairs through solmix; objects, floor and
             module keep MuJoCo's default). MuJoCo scales a contact's softness with the effective mass it
@@ -88,12 +106,15 @@ class ChainParams:
     closure_constraint_timeconst_s: float = 0.02
     timestep_s: float = 0.005
     passive_damping_nms_per_rad: float = 1.0e-4
+    out_of_plane_damping_nms_per_rad: float = 5.0e-4
     armature_kgm2: float = 1.0e-5
     drive_armature_factor: float = 1.0
+    module_mass_kg: float = 1.0
+    module_max_step_m: float = 0.005
     takeoff_speed_mps: float = 2.6
     lift_ramp_s: float = 0.2
     rope_friction: float = 0.3
-    rope_floor_clearance_m: float = 0.01
+    rope_floor_clearance_m: float = 0.0
     contact_impedance_min: float = 0.99
     contact_impedance_max: float = 0.9999
     contact_impedance_width_m: float = 0.001
@@ -114,7 +135,7 @@ class ChainParams:
             if value < 0:
                 raise ChainModelError(f"{f.name}: expected >= 0, got {value}")
         for name in ("rope_length_m", "rope_linear_density_kg_per_m", "rope_radius_m", "timestep_s",
-                     "takeoff_speed_mps", "guide_take_up_ratio"):
+                     "takeoff_speed_mps", "guide_take_up_ratio", "module_mass_kg"):
             if getattr(self, name) <= 0:
                 raise ChainModelError(f"{name}: expected > 0, got {getattr(self, name)}")
         if not 0.0 < self.upper_branch_fraction < 1.0:

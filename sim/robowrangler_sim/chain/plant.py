@@ -9,8 +9,8 @@ A lockstep bridge drives it once per tick::
 
 Each step: the lift factor follows the rope speed (lift.py); the inclination phi is read from the base
 pose; the in-plane drive targets come from the shape table at phi (targets.py); the link length
-follows the loop length the guide leaves outside; the module (mocap) takes the base pose; MuJoCo
-steps; divergence raises ChainDivergenceError.
+follows the loop length the guide leaves outside; the module moves to the base pose with a real
+velocity (prescribed motion, see _move_module) and takes its orientation; MuJoCo steps; divergence raises ChainDivergenceError.
 
 Time: the plant owns its clock, ``time_s = steps * timestep_s``. ``advance(duration_s)`` runs the
 whole number of steps that brings the clock nearest to the requested end time (the remainder is
@@ -202,6 +202,11 @@ class ChainPlant:
         self._drive_dof = np.array([m.jnt_dofadr[m.actuator_trnid[a, 0]] for a in self._drive_act], dtype=int)
         self._base_armature = m.dof_armature[self._drive_dof].copy()
         self._closure_eq = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_EQUALITY, "closure_constraint")
+        self._module_qpos = int(m.jnt_qposadr[name(J, "module_x")])  # x, y, z slides are consecutive
+        self._module_dof = int(m.jnt_dofadr[name(J, "module_x")])
+        self._carriage_origin_m = m.body_pos[name(B, "module_carriage")].copy()
+        self._module_body = name(B, "module")
+        self._module_quat_applied = None
         self._has_contacts = floor_height_m is not None or bool(self.objects)
         self._floor_geom = name(G, "floor")
         self._module_geom = name(G, "module_housing")
@@ -226,7 +231,13 @@ class ChainPlant:
         self._force6 = np.zeros(6)
         self._warning_badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
 
+        self._module_max_step2_m2 = p.module_max_step_m ** 2
+        self._module_qpos_view = self.data.qpos[self._module_qpos:self._module_qpos + 3]  # views into MjData
+        self._module_qvel_view = self.data.qvel[self._module_dof:self._module_dof + 3]
+        self._module_dp_buf = np.zeros(3)
+        self._inv_timestep_hz = 1.0 / p.timestep_s
         self._apply_inputs(initial)
+        self._place_module()
         if airborne:
             # the whole chain (both branches) starts on the target contour
             q = self.targets.joint_targets(self._phi_rad, speed_index=self._speed_index(initial.rope_speed_mps))
@@ -250,8 +261,11 @@ class ChainPlant:
         p = self.params
         self._inputs = inputs
         self._inputs_applied = inputs
-        self.data.mocap_pos[0] = inputs.base_pos_m
-        self.data.mocap_quat[0] = inputs.base_quat_wxyz
+        self._base_pos_target = np.asarray(inputs.base_pos_m, dtype=float) - self._carriage_origin_m
+        quat = tuple(float(x) for x in inputs.base_quat_wxyz)
+        if quat != self._module_quat_applied:
+            self.model.body_quat[self._module_body] = quat
+            self._module_quat_applied = quat
         self._phi_rad = base_inclination_rad(np.asarray(inputs.base_quat_wxyz))
         self._loop_length_m = p.loop_length_m(inputs.guide_position_mm)
         self._set_link_length(self._loop_length_m / p.n_links)
@@ -302,6 +316,27 @@ class ChainPlant:
         if self._drive_act.size:
             self.data.ctrl[self._drive_act] = self._ctrl_targets[self._drive_joint]
 
+    def _place_module(self) -> None:
+        """Put the module at the commanded position at once, at rest (construction, re-placement)."""
+        a, v, d = self._module_qpos, self._module_dof, self.data
+        d.qpos[a:a + 3] = self._base_pos_target
+        d.qvel[v:v + 3] = 0.0
+
+    def _move_module(self) -> None:
+        """Prescribed module motion: the velocity that brings the module from its present position to the
+        commanded one in this step (constant over the step), so that the rope and the housing move with a
+        velocity the contact solver sees. A mocap body is teleported with zero velocity: a contact it
+        drives into an object then settles at a penetration of about 2 x solref time constant x speed
+        (6 mm at 0.15 m/s), more than the rope's radius (docs/chain_model.md, "Rope on the floor").
+        A commanded position farther away than module_max_step_m is a re-placement: applied at once, at
+        rest."""
+        dp = self._module_dp_buf
+        np.subtract(self._base_pos_target, self._module_qpos_view, out=dp)
+        if dp @ dp > self._module_max_step2_m2:
+            self._place_module()
+            return
+        np.multiply(dp, self._inv_timestep_hz, out=self._module_qvel_view)
+
     def _rest_angles(self) -> np.ndarray:
         """The loop at rest: collapsed into a doubled line along the launch axis, the upper branch out,
         the lower branch folded back under it to end at the return point."""
@@ -326,6 +361,7 @@ class ChainPlant:
             self._apply_inputs(inputs)
         self.lift_state.step(self._inputs.rope_speed_mps, self.params.timestep_s)
         self._apply_drives()
+        self._move_module()
         mujoco.mj_step(self.model, self.data)
         self._steps += 1
         self._check_divergence()
@@ -387,6 +423,18 @@ class ChainPlant:
         fwd[2] = 0.0
         fwd /= np.linalg.norm(fwd)
         return np.column_stack([pts @ fwd, pts[:, 2]])
+
+    def module_pos_m(self) -> np.ndarray:
+        """Module (exit point) position, world frame, shape (3,), metres."""
+        return self._carriage_origin_m + self.data.qpos[self._module_qpos:self._module_qpos + 3]
+
+    def module_velocity_mps(self) -> np.ndarray:
+        """Module linear velocity (world frame, m/s, shape (3,)): the commanded motion over the last step."""
+        return self.data.qvel[self._module_dof:self._module_dof + 3].copy()
+
+    def module_quat_wxyz(self) -> np.ndarray:
+        """Module orientation, shape (4,) (set directly from the inputs)."""
+        return self.model.body_quat[self._module_body].copy()
 
     def exit_pos_m(self) -> np.ndarray:
         return self.data.site_xpos[self._exit_site].copy()
@@ -487,7 +535,7 @@ class ChainPlant:
         chain_obj, module_obj, chain_floor = (contacts.chain_on_object_n, contacts.module_on_object_n,
                                               contacts.chain_on_floor_n)
         net = contacts.chain_net_on_object_n
-        base = self.data.mocap_pos[0].copy()
+        base = self.module_pos_m()
         for name, mon in self._monitors.items():
             mon.update(time_s=self.time_s, object_com_m=self.object_com_m(name), base_pos_m=base,
                        chain_force_n=float(np.linalg.norm(net[name])))
