@@ -43,11 +43,14 @@ def _paper(spec) -> str:
 def _why(o: ScenarioOutcome, spec) -> str:
     """What the figures say happened (a reading of the judged numbers, not a rule on the shape)."""
     if o.touching_fraction < 0.8 and (math.isnan(o.follow_ratio) or abs(o.follow_ratio) < 0.1):
-        return (f"it stayed where it was and the rope touched it in {100 * o.touching_fraction:.0f} % of the judged "
-                f"half of the pull (peak guide load {o.peak_guide_load_n:.2f} N): the loop lost it; the object is "
-                f"{1000 * spec.height_m:.2g} mm tall and the rope, resting on the floor, has a "
-                f"{1000 * ChainParams().rope_radius_m:g} mm radius: where the object is thinner than the rope's "
-                "radius the rope rides onto it (docs/chain_model.md, \"Rope on the floor\")")
+        lost = (f"it stayed where it was and the rope touched it in {100 * o.touching_fraction:.0f} % of the judged "
+                f"half of the pull (peak guide load {o.peak_guide_load_n:.2f} N): the loop lost it")
+        rope_radius_m = ChainParams().rope_radius_m
+        if spec.height_m < rope_radius_m:
+            return (f"{lost}; the object is {1000 * spec.height_m:.2g} mm tall and the rope, resting on the floor, has "
+                    f"a {1000 * rope_radius_m:g} mm radius: the edge meets the rope below its centre and the rope "
+                    "rides onto it (docs/chain_model.md, \"Rope on the floor\")")
+        return f"{lost} before the judged half of the pull ({1000 * spec.height_m:.2g} mm tall)"
     if o.follow_ratio > 1.2 and o.touching_fraction < 0.5:
         return "knocked ahead: it rolled on out of the rope's contact faster than the module moved"
     if o.follow_ratio >= 0.5 and o.touching_fraction < 0.8:
@@ -60,7 +63,10 @@ def _why(o: ScenarioOutcome, spec) -> str:
 
 
 def _fmt(x: float, spec: str = ".2f") -> str:
-    return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else format(x, spec)
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "-"
+    text = format(x, spec)
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text  # no "-0.0" for a rounded zero
 
 
 def markdown(sil: list[ScenarioOutcome], plant: list[dict], door: list[ScenarioOutcome], *, seed: int,
