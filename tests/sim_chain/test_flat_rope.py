@@ -11,18 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from robowrangler_sim.chain.default_table import load_default_shape_table
 from robowrangler_sim.chain.grasp import GraspScript, grasp_inputs, grasp_scene, run_grasp
 from robowrangler_sim.chain.params import ChainParams
 from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxyz
-
-
-@pytest.fixture(scope="module")
-def default_table(table):
-    try:
-        return load_default_shape_table()
-    except FileNotFoundError:
-        return table
 
 
 def test_relaxed_rope_rests_on_the_floor(default_table):

@@ -9,17 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robowrangler_sim.chain.default_table import load_default_shape_table
 from robowrangler_sim.chain.errors import ChainModelError
 from robowrangler_sim.chain.grasp import GraspScript, grasp_inputs, run_grasp
-
-
-@pytest.fixture(scope="module")
-def default_table(table):
-    try:
-        return load_default_shape_table()
-    except FileNotFoundError:
-        return table
 
 
 @pytest.mark.parametrize("name, secured", [("chips_can", True), ("mug", True), ("tennis_ball", False)])
