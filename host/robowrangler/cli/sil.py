@@ -198,8 +198,9 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
     path = outcome.firmware_path
     states = " -> ".join([path[0][0]] + [f"{to} ({cause})" for _, to, cause in path]) if path else "-"
     ctx.result(data, f"firmware state path: {states}\n"
-                     f"{name}: {outcome.verdict} (RETRACT ended: {outcome.grasp_end}, follow "
-                     f"{data['follow_ratio']}, rope touching {100 * outcome.touching_fraction:.0f} %, mean pull "
+                     f"{name}: {outcome.verdict} (RETRACT ended: {outcome.grasp_end}, "
+                     + ("" if outcome.kind == "door" else f"follow {data['follow_ratio']}, ")
+                     + f"rope touching {100 * outcome.touching_fraction:.0f} %, mean pull "
                      f"{outcome.mean_pull_force_n:.2f} N"
                      + ("" if data["door_opening_deg"] is None else f", door opened {outcome.door_opening_deg:.1f} deg")
                      + f"; {outcome.simulated_s:.1f} simulated s in "

@@ -120,12 +120,13 @@ def markdown(sil: list[ScenarioOutcome], plant: list[dict], door: list[ScenarioO
                      f"{p.get('outcome', '-')}, SIL {o.verdict}: {_why(o, spec)}.")
     lines += [
         "",
-        "Common to all grasps: RETRACT never ended on LOAD_SECURED, and for light free objects that is physics,",
+        "Common to the free-object grasps: RETRACT never ended on LOAD_SECURED, and for light objects that is physics,",
         "not a bug. The AX-12A feels the rope through an 8 mm-lead self-locking T8 screw of efficiency 0.35",
         "(plants/spindle.py): 1 N on the guide is 8 mm / 2 pi / 0.35 = 3.6 mN m at the servo, 0.24 % of its",
         "1.5 N m stall torque, against 0.8 % register noise (8 permille, 1 sigma) and 3.3 % screw friction",
         "(0.05 N m). A dragged 0.3 kg mug is about 1.5 N (0.36 %); the chain's load on the guide during RETRACT",
-        "stays near 0-1.6 N (peak column), far under the 5 % minimum threshold (6.9 N) and the default 12 %",
+        f"stays at {max(o.peak_guide_load_n for o in sil):.1f} N or less (peak column), far under the 5 % minimum "
+        "threshold (6.9 N) and the default 12 %",
         "(35.7 N). The loop lies around the object with slack: the 178 mm of guide (356 mm of rope) take up",
         "slack without closing the 2 m loop on a 4-8 cm object 0.6 m away, so RETRACT ends on STROKE_END and the",
         "grasp is made by the robot's pull, as in the plant-level script. The plant level retracts 180 mm in 3 s;",
