@@ -78,7 +78,7 @@ more than the 10.4 N square to the leaf at the bar) must be about what the firmw
 stay under the ~20-27 N at which the bar passes a link of the 2 ms chain. With 7 N m the door is still (within
 a degree) shut when RETRACT ends on LOAD_SECURED and the pull peaks near 18.5 N. A 9 N m closer (11.9 N) held
 here too, but its pull peaked near 21 N, at the edge: lost in the pull in 4 of 5 N = 20 rollouts with the
-flat-floor chain of branch flat (module on a prescribed free joint); 7 N m held in all of them. Heavier doors
+rope on the floor and the module moving with a real velocity (docs/chain_model.md); 7 N m held in all of them. Heavier doors
 (a 20 N m closer: 25.6 N) are outside what this chain model can open (docs/table_i.md)."""
 
 DOOR_PULL_M = 0.2
