@@ -30,6 +30,7 @@ from robowrangler_sim.chain.errors import ChainDivergenceError, ChainModelError
 from robowrangler_sim.chain.lift import LiftState
 from robowrangler_sim.chain.objects import ObjectPlacement
 from robowrangler_sim.chain.params import ChainParams
+from robowrangler_sim.chain.rope_contacts import RopeContact, rope_object_contacts
 from robowrangler_sim.chain.secured import SecuredMonitor
 from robowrangler_sim.chain.targets import ShapeTargets
 from robowrangler_sim.shape_table import ShapeTable
@@ -516,6 +517,13 @@ class ChainPlant:
                 module_obj[obj] += fn
         return ContactSummary(chain_on_object_n=chain_obj, module_on_object_n=module_obj, chain_on_floor_n=chain_floor,
                               chain_net_on_object_n=net)
+
+    def rope_contacts(self, name: str) -> list[RopeContact]:
+        """The rope's contacts with one object now: tilt, forces, friction use, slip (rope_contacts.py)."""
+        body = self._body(name)
+        geoms = {g for g, obj in self._geom_object.items() if obj == name}
+        return rope_object_contacts(self.model, self.data, link_geoms=self._link_geom, object_geoms=geoms,
+                                    object_body=body)
 
     def rope_tension_n(self) -> float:
         """Load on the closure, N: the constraint force when the closure constraint is active, else the
