@@ -48,8 +48,9 @@ def _why(o: ScenarioOutcome, spec) -> str:
         rope_radius_m = ChainParams().rope_radius_m
         if spec.height_m < rope_radius_m:
             return (f"{lost}; the object is {1000 * spec.height_m:.2g} mm tall and the rope, resting on the floor, has "
-                    f"a {1000 * rope_radius_m:g} mm radius: the edge meets the rope below its centre and the rope "
-                    "rides onto it (docs/chain_model.md, \"Rope on the floor\")")
+                    f"a {1000 * rope_radius_m:g} mm radius: the edge meets the rope below its axis, and the rope, "
+                    "sliding along the edge with its friction used up, rides onto it (docs/chain_model.md, "
+                    "\"The credit card\")")
         return f"{lost} before the judged half of the pull ({1000 * spec.height_m:.2g} mm tall)"
     if o.follow_ratio > 1.2 and o.touching_fraction < 0.5:
         return "knocked ahead: it rolled on out of the rope's contact faster than the module moved"
