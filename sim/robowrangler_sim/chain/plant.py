@@ -319,9 +319,8 @@ class ChainPlant:
 
     def _place_module(self) -> None:
         """Put the module at the commanded position at once, at rest (construction, re-placement)."""
-        a, v, d = self._module_qpos, self._module_dof, self.data
-        d.qpos[a:a + 3] = self._base_pos_target
-        d.qvel[v:v + 3] = 0.0
+        self._module_qpos_view[:] = self._base_pos_target
+        self._module_qvel_view[:] = 0.0
 
     def _move_module(self) -> None:
         """Prescribed module motion: the velocity that brings the module from its present position to the
@@ -427,11 +426,11 @@ class ChainPlant:
 
     def module_pos_m(self) -> np.ndarray:
         """Module (exit point) position, world frame, shape (3,), metres."""
-        return self._carriage_origin_m + self.data.qpos[self._module_qpos:self._module_qpos + 3]
+        return self._carriage_origin_m + self._module_qpos_view
 
     def module_velocity_mps(self) -> np.ndarray:
         """Module linear velocity (world frame, m/s, shape (3,)): the commanded motion over the last step."""
-        return self.data.qvel[self._module_dof:self._module_dof + 3].copy()
+        return self._module_qvel_view.copy()
 
     def module_quat_wxyz(self) -> np.ndarray:
         """Module orientation, shape (4,) (set directly from the inputs)."""
