@@ -21,6 +21,7 @@ from collections import deque
 from ctypes import CFUNCTYPE, POINTER, c_bool, c_size_t, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
 from dataclasses import dataclass, field
 
+from robowrangler.link_session import LinkSession
 from robowrangler.protocol import generated as proto
 
 U32 = 1 << 32
@@ -289,7 +290,8 @@ class CoreHarness:
         self._events: list[proto.Event] = []          # sent EVENT frames, in order (cache of hal.out)
         self._transitions: list[tuple[int, int, int, int]] = []
         self._telemetry: list[proto.Telemetry] = []
-        self._last_signed: tuple[int, int] = (-1, -1)  # (session, counter) of the newest signed frame sent
+        # a host's view of the core's signed frames: every one must be taken (tag, session, a growing counter)
+        self._host_view = LinkSession(TEST_KEY, session_id=SESSION_ID)
         self._max_seq: int | None = None  # highest seq sent so far (unwrapped)
         self._seq_holes: set[int] = set()
         self._callback_errors: list[Exception] = []  # raised in a HAL callback, re-raised by tick()  # seqs skipped by a reply that overtook a frame being signed
@@ -332,13 +334,11 @@ class CoreHarness:
 
             def checked(raw):
                 fr, msg = proto.decode_message(raw)  # the core must only emit well-formed frames
-                if fr.signed:  # as a host checks it: the tag, and a counter above every one before
-                    if not proto.tag_valid(fr, TEST_KEY):
-                        raise AssertionError(f"the core sent a frame with a bad tag: {msg}")
-                    if (fr.session_id, fr.counter) <= self._last_signed:
-                        raise AssertionError(f"the core's counter went back: {(fr.session_id, fr.counter)} after "
-                                             f"{self._last_signed} ({msg})")
-                    self._last_signed = (fr.session_id, fr.counter)
+                if fr.signed:  # as a host checks it (LinkSession): the tag, and a counter above every one before
+                    verdict = self._host_view.check(fr, msg)
+                    if not verdict.taken:
+                        raise AssertionError(f"a host would drop this frame of the core ({verdict.name}): session "
+                                             f"{fr.session_id}, counter {fr.counter} ({msg})")
                 self._check_numbering(fr.seq, msg)
                 hal.out.append(Out(self.t_us // 1000, channel, raw, fr, msg))
                 if channel == "send" and isinstance(msg, proto.Event):
