@@ -12,7 +12,7 @@ from cobs import cobs
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import MsgId, NackReason, State
 from robowrangler.transport_serial import encode_serial_frame
-from scripted_device import make
+from wire import make
 
 
 class PtyDevice:

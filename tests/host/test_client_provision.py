@@ -10,7 +10,7 @@ from pty_device import PtyDevice
 from robowrangler.client import Client
 from robowrangler.errors import CommandRefused, InvalidArgument
 from robowrangler.protocol.generated import MsgId, NackReason
-from scripted_device import ScriptedDevice
+from core_device import CoreDevice
 
 KEY = bytes(range(16))
 
@@ -45,13 +45,13 @@ def test_a_short_password_is_refused_by_the_device_and_not_echoed() -> None:
     assert info.value.reason == NackReason.OUT_OF_RANGE and "hunter2" not in str(info.value)
 
 
-def test_secrets_never_leave_over_wifi(device: ScriptedDevice) -> None:
-    with Client(device.url, **FAST) as rw:
+def test_secrets_never_leave_over_wifi(device: CoreDevice) -> None:
+    with Client(transport=device.transport(), key=device.key, **FAST) as rw:
         with pytest.raises(InvalidArgument, match="url: expected a serial:// link"):
             rw.provision(key=KEY)
         with pytest.raises(InvalidArgument, match="serial://"):
             rw.provision_status()
-    assert {m.NAME for _, m in device.received} <= {"HELLO", "HEARTBEAT"}
+    assert {f.msg_id for f in device.host_sent()} <= {MsgId.HELLO, MsgId.HEARTBEAT}
 
 
 def test_local_refusals_do_not_echo_the_password() -> None:

@@ -13,7 +13,7 @@ from robowrangler.protocol.generated import MsgId, State
 from robowrangler.transport import open_transport
 from robowrangler.transport_serial import SerialTransport, encode_serial_frame
 from pty_device import PtyDevice
-from scripted_device import make
+from wire import make
 
 
 @pytest.fixture
