@@ -10,7 +10,11 @@ Threads: a receiver thread decodes every frame and hands ACK/NACK to the waiting
 (msg_id, seq), PARAM_VALUE by parameter id, TELEMETRY to `latest_telemetry` and to every open
 `telemetry()` iterator, EVENT to `events`. Frames it cannot decode are counted in `stats`, never
 raised. A heartbeat thread sends HEARTBEAT at heartbeat_hz while connected (the device spins the
-rope down after heartbeat_timeout_s of silence).
+rope down after heartbeat_timeout_s of silence). Heartbeats are also kept on the device's clock: when a
+TELEMETRY sample says the device has heard nothing from the host for 1 / heartbeat_hz of its own time, the receiver
+sends one at once (at most one per such period of device time). So a device whose clock runs faster than
+the host's (a SIL paced above real time) or a heartbeat thread starved on a busy machine does not make the
+device spin the rope down while the host is otherwise keeping up.
 
 Retries: a command is retransmitted with the SAME seq and payload after each ack_timeout_s without an
 answer (the device answers a retransmission again but never executes it twice), at most `retries`
@@ -65,6 +69,7 @@ class ClientStats:
 
     frames_sent: int = 0
     heartbeats_sent: int = 0
+    device_clock_heartbeats: int = 0  # of those, sent because telemetry said the device heard none for a period
     commands_sent: int = 0
     retransmissions: int = 0
     send_errors: int = 0
@@ -174,6 +179,7 @@ class Client:
         self._last_event_seq: int | None = None
         self._latest: TelemetrySample | None = None
         self._first_telemetry = threading.Event()
+        self._device_heartbeat_s: float | None = None  # device time of the last heartbeat sent on its clock
         self._stats = ClientStats()
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
@@ -195,6 +201,7 @@ class Client:
         self._first_telemetry.clear()
         self._session_event.clear()
         self._session_info = None
+        self._device_heartbeat_s = None
         if self._key is not None:  # a new connection learns the session afresh (the counter keeps growing)
             self._link = LinkSession(self._key, clock_us=lambda: time.time_ns() // 1000)
         self._connected = True
@@ -686,6 +693,22 @@ class Client:
                 next_s = now
             self._stop.wait(next_s - now)
 
+    def _heartbeat_on_device_clock(self, sample: TelemetrySample) -> None:
+        """A heartbeat now if the device, by its own clock, has heard none for a heartbeat period."""
+        period_s = 1.0 / self.heartbeat_hz
+        last_s = self._device_heartbeat_s
+        if (not self._connected or sample.heartbeat_age_s < period_s
+                or (last_s is not None and 0.0 <= sample.time_s - last_s < period_s)):
+            return
+        self._device_heartbeat_s = sample.time_s
+        try:
+            self._send_new(gen.Heartbeat(units.s_to_ms_u32(time.monotonic())))
+        except NotConnected:
+            return
+        with self._lock:
+            self._stats.heartbeats_sent += 1
+            self._stats.device_clock_heartbeats += 1
+
     # ----------------------------------------------------------------- internals: receiving
 
     def _receive_loop(self) -> None:
@@ -806,6 +829,7 @@ class Client:
             waiter.event.set()
 
     def _on_telemetry(self, sample: TelemetrySample) -> None:
+        self._heartbeat_on_device_clock(sample)
         self._latest = sample
         with self._lock:
             self._stats.telemetry_received += 1

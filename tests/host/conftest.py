@@ -7,22 +7,16 @@ from pathlib import Path
 
 import pytest
 
-# core_device (here) and core_harness, rw_core_ctypes (the firmware core suite's) are imported by plain name from
-# the tests of this folder (also under importlib mode).
-# This folder goes first (its `conftest` is the one the tests import FAST from), the core suite's last.
+# The helpers of this folder (core_device, host_settings, wire, pty_device) and of the core suite (core_harness,
+# rw_core_ctypes) are imported by plain name from the tests (also under importlib mode); their names are unique.
 _HERE = Path(__file__).resolve().parent
-if str(_HERE) in sys.path:
-    sys.path.remove(str(_HERE))
-sys.path.insert(0, str(_HERE))
-if str(_HERE.parent / "firmware_core") not in sys.path:
-    sys.path.append(str(_HERE.parent / "firmware_core"))
+for _folder in (str(_HERE), str(_HERE.parent / "firmware_core")):
+    if _folder not in sys.path:
+        sys.path.insert(0, _folder)
 
 import rw_core_ctypes  # noqa: E402
 from core_device import CoreDevice  # noqa: E402
-
-# Short timeouts keep the suite fast; the logic under test is the same at any value.
-FAST = dict(ack_timeout_s=0.05, retries=3, connect_timeout_s=1.0, heartbeat_hz=20.0)
-QUICK_ARM = {"arm_hold_s": 0.2}  # the shortest ESC arming hold the core takes
+from host_settings import QUICK_ARM  # noqa: E402
 
 
 @pytest.fixture(scope="session")

@@ -14,7 +14,7 @@ from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.cli.main import main
 from robowrangler.client import Client
-from conftest import QUICK_ARM
+from host_settings import QUICK_ARM
 from core_device import CoreDevice, lose_messages
 from core_harness import TEST_KEY, FakeSpindle
 from robowrangler.protocol import generated as gen

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import FAST, QUICK_ARM
+from host_settings import FAST, QUICK_ARM
 from core_device import CoreDevice, lose_acks
 from core_harness import SESSION_ID, TEST_KEY
 from robowrangler.client import Client

@@ -10,7 +10,7 @@ import time
 
 import pytest
 
-from conftest import FAST, QUICK_ARM
+from host_settings import FAST, QUICK_ARM
 from core_device import CoreDevice, damage, lose_acks, lose_messages
 from robowrangler.client import Client
 from robowrangler.errors import CommandRefused, InvalidArgument, LinkTimeout, NotConnected, UnknownParameter

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from conftest import FAST
+from host_settings import FAST
 from core_device import CoreDevice
 from core_harness import FakeSpindle
 from robowrangler.client import Client

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import FAST
+from host_settings import FAST
 from pty_device import PtyDevice
 from robowrangler.client import Client
 from robowrangler.errors import CommandRefused, InvalidArgument

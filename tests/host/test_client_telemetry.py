@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from conftest import FAST, QUICK_ARM
+from host_settings import FAST, QUICK_ARM
 from core_device import CoreDevice, lose_messages
 from robowrangler.client import Client
 from robowrangler.errors import LinkTimeout, StateTimeout

@@ -4,7 +4,7 @@ The plant owns the clock: each tick the session sends the plant's sensor values 
 runs one control tick and answers with its ESC pulse, and the plant integrates [t, t + tick). Nothing
 depends on the wall clock, so the same seed and the same host frames at the same ticks give the same
 telemetry at any pacing. Pacing (``speedup``): 1.0 is real time, 10.0 ten times faster, None as fast
-as the machine goes.
+as the machine goes; a busy machine makes a paced session slower, never bursty (PACE_SLACK_S).
 """
 
 from __future__ import annotations
@@ -60,6 +60,10 @@ class SensorValues:
     limit_switch: bool = False
 
 
+PACE_SLACK_S = 0.02
+"""A paced session further behind the wall clock than this re-anchors its pacing: speedup is an upper bound,
+never a rate to catch up to (at most PACE_SLACK_S x speedup of simulated time runs unpaced)."""
+
 SensorFilter = Callable[[SensorValues], "SensorValues | None"]
 """Per tick, before the exchange: returns the values the firmware sees, or None = the firmware misses this tick."""
 ActuatorFilter = Callable[[int], int]
@@ -106,6 +110,9 @@ class SilSession:
             is used as given; a callable ``factory(spindle_params, *, seed) -> SpindlePlant`` (a SpindlePlant
             subclass itself, e.g. ``spindle=ChainLoadedSpindlePlant``) is called with the session's spindle_params
             and seed (so the register noise follows the session's seed).
+        tick_timeout_s: how often the lockstep checks that a slow firmware is still alive while it waits for a
+            tick's answer; a busy machine only makes the wait longer, only a firmware that exited (or stays
+            silent for minutes) ends the session (lockstep.LockstepLink).
 
     Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
     ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
@@ -124,7 +131,8 @@ class SilSession:
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
                  plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
                  state_file: str | Path | None = None,
-                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None) -> None:
+                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None,
+                 tick_timeout_s: float = 2.0) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
@@ -134,6 +142,9 @@ class SilSession:
         self.last_spindle_speed_raw = 0
         self.tick_us = tick_us
         self.speedup = speedup
+        if not (isinstance(tick_timeout_s, (int, float)) and tick_timeout_s > 0):
+            raise ValueError(f"tick_timeout_s: expected a positive number of seconds, got {tick_timeout_s!r}")
+        self.tick_timeout_s = float(tick_timeout_s)
         self.trace_every = trace_every
         self.trace: list[PlantSample] = []
         self.ticks = 0
@@ -171,13 +182,24 @@ class SilSession:
         return self.plant.time_us * 1e-6
 
     @property
+    def firmware_pid(self) -> int | None:
+        """The SIL firmware's process id (None before start)."""
+        return self._firmware.pid
+
+    @property
+    def lockstep(self) -> LockstepLink | None:
+        """The plant's end of the lockstep socket (None before start)."""
+        return self._link
+
+    @property
     def serial_path(self) -> str:
         """The SIL device's USB serial (a pseudo-terminal): pyserial opens it like /dev/ttyACM0."""
         return self._firmware.serial_path
 
     def start(self) -> SilSession:
         self._firmware.start()
-        self._link = LockstepLink(self._firmware.plant_port)
+        self._link = LockstepLink(self._firmware.plant_port, tick_timeout_s=self.tick_timeout_s,
+                                  alive=lambda: self._firmware.poll() is None)
         if self._provision_on_start:
             self.provision(key=self.key)
         return self
@@ -300,8 +322,10 @@ class SilSession:
         ahead_s = (self.plant.time_us - sim0_us) * 1e-6 / self.speedup - (now - wall0)
         if ahead_s > 0.002:
             time.sleep(ahead_s)
-        elif ahead_s < -0.5:
-            self._pace_origin = (now, self.plant.time_us)  # fell behind (machine busy): do not race to catch up
+        elif ahead_s < -PACE_SLACK_S:
+            # Behind: the machine is busy. The simulated clock waits for it instead of racing to catch up: a
+            # burst of simulated time would pass while the hosts beside it (their heartbeats) are just as slow.
+            self._pace_origin = (now, self.plant.time_us)
 
     def run_for(self, duration_s: float, *, host_frames_sent: Callable[[], int] | None = None) -> None:
         """Step for duration_s simulated seconds at the session's pacing."""
