@@ -297,6 +297,7 @@ class CoreHarness:
         self._telemetry: list[proto.Telemetry] = []
         # a host's view of the core's signed frames: every one must be taken (tag, session, a growing counter)
         self._host_view = LinkSession(TEST_KEY, session_id=SESSION_ID)
+        self._commit_key: bytes | None = None  # expect_commit(): the key signed frames may carry from this tick on
         self._max_seq: dict[str, int] = {}  # per link: highest seq sent so far
         self._seq_holes: dict[str, set[int]] = {"wifi": set(), "serial": set()}
         self._serial = bool(serial)
@@ -344,6 +345,10 @@ class CoreHarness:
                 fr, msg = proto.decode_message(raw)  # the core must only emit well-formed frames
                 if fr.signed:  # as a host checks it (LinkSession): the tag, and a counter above every one before
                     verdict = self._host_view.check(fr, msg)
+                    if not verdict.taken and self._commit_key is not None:  # a PROVISION_COMMIT in this tick
+                        self._host_view = LinkSession(self._commit_key, session_id=0)  # its new key and epoch
+                        self._commit_key = None
+                        verdict = self._host_view.check(fr, msg)
                     if not verdict.taken:
                         raise AssertionError(f"a host would drop this frame of the core ({verdict.name}): session "
                                              f"{fr.session_id}, counter {fr.counter} ({msg})")
@@ -418,6 +423,11 @@ class CoreHarness:
             self._callbacks += [_SpindleRead(spindle_read), _SpindleWrite(spindle_write)]
             self._spin = _HalSpindle(None, self._callbacks[-2], self._callbacks[-1])
             self._hal.spindle = ctypes.pointer(self._spin)
+
+    def expect_commit(self, key: bytes | None) -> None:
+        """A PROVISION_COMMIT reaches the core on the next tick: from then on its signed frames may carry a new
+        session (a new epoch) and, if one was staged, a new key (None: the key stays)."""
+        self._commit_key = self._host_view.key if key is None else bytes(key)
 
     def _check_numbering(self, seq: int, msg: proto.Message, link: str = "wifi") -> None:
         """Frames are numbered as they leave (a queued one when its signing begins): the next seq, or one more

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-# The helpers of this folder (core_device, host_settings, wire, pty_device) and of the core suite (core_harness,
+# The helpers of this folder (core_device, host_settings, wire) and of the core suite (core_harness,
 # rw_core_ctypes) are imported by plain name from the tests (also under importlib mode); their names are unique.
 _HERE = Path(__file__).resolve().parent
 for _folder in (str(_HERE), str(_HERE.parent / "firmware_core")):

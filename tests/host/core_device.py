@@ -11,7 +11,9 @@ signing and the freshness rules are the core's. What this file adds is the world
 - Plant: a perfect drive (the encoder turns at the setpoint of the latest TELEMETRY the core packed, as the
   harness's follow_setpoint does) and the harness's FakeSpindle (lead screw, end stops, an object to catch).
 - Links: the core's WiFi link (signed: the harness's flash holds TEST_KEY, session 1) and its USB serial link
-  (trusted, unsigned frames). A CoreTransport (transport()) or the UDP port (url) is attached to one of them.
+  (trusted, unsigned frames). CoreTransports (transport(link)) attach to either; the UDP port (url) to the
+  device's default link; a pseudo-terminal (open_pty(): COBS-framed like the board's USB serial) to the
+  serial link.
 - The network between host and device, not the device: `to_device` / `to_host` are lists of filters
   f(data) -> bytes | None applied to each datagram in that direction (None: lost), e.g. lose_acks().
 - Records: every datagram the host sent (host_frames, before the filters), the core's outputs (harness).
@@ -19,6 +21,7 @@ signing and the freshness rules are the core's. What this file adds is the world
 
 from __future__ import annotations
 
+import os
 import queue
 import socket
 import threading
@@ -28,7 +31,10 @@ from collections.abc import Callable
 
 from core_harness import TEST_KEY, CoreHarness, FakeSpindle, Out
 from robowrangler.protocol import generated as gen
+from cobs import cobs
+
 from robowrangler.transport import Transport
+from robowrangler.transport_serial import DELIMITER, encode_serial_frame
 
 TICK_US = 1000
 BEHIND_LIMIT_S = 0.02  # further behind the wall clock than this: re-anchor the pacing (never race)
@@ -37,10 +43,11 @@ Filter = Callable[[bytes], "bytes | list[bytes] | None"]
 
 
 class CoreTransport(Transport):
-    """A Transport whose far end is the CoreDevice's link (what a Client gets from CoreDevice.transport())."""
+    """A Transport whose far end is one of the CoreDevice's links (what a Client gets from CoreDevice.transport())."""
 
-    def __init__(self, device: CoreDevice) -> None:
-        self.url = device.url
+    def __init__(self, device: CoreDevice, link: str) -> None:
+        self.url = device.url if link == device.link else f"serial://core-device-{device.port}"
+        self.link = link
         self._device = device
         self._inbox: queue.Queue[bytes] = queue.Queue()
         self._closed = False
@@ -48,7 +55,7 @@ class CoreTransport(Transport):
     def send(self, frame: bytes) -> None:
         if self._closed:
             raise OSError("transport closed")
-        self._device.submit(bytes(frame), self)
+        self._device.submit(bytes(frame), self, link=self.link)
 
     def recv(self, timeout_s: float) -> bytes | None:
         try:
@@ -92,9 +99,11 @@ class CoreDevice:
         self.to_device: list[Filter] = []
         self.to_host: list[Filter] = []
         self.host_frames: list[bytes] = []  # every datagram a host sent, in order, before the filters
-        self._pending: deque[tuple[bytes, object]] = deque()
-        self._sender: object = None  # who sent the datagram the core reads this tick (its replies go back there)
-        self._peer: object = None    # where the core's own frames go (the last host it accepted)
+        self._pending: dict[str, deque[tuple[bytes, object]]] = {"wifi": deque(), "serial": deque()}
+        self._sender: dict[str, object] = {"wifi": None, "serial": None}  # who sent what the core reads this tick
+        self._peer: dict[str, object] = {"wifi": None, "serial": None}    # where the core's own frames go
+        self._pty: _PtyEnd | None = None
+        self._staged_key: bytes | None = None
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind(("127.0.0.1", 0))
         self._sock.setblocking(False)
@@ -111,6 +120,8 @@ class CoreDevice:
     def __exit__(self, *exc: object) -> None:
         self.halt()
         self._sock.close()
+        if self._pty is not None:
+            self._pty.close()
         if self.error is not None and exc[0] is None:
             raise self.error
 
@@ -128,31 +139,43 @@ class CoreDevice:
         if self._thread is not None:
             self._thread.join(timeout=5.0)
 
-    def transport(self) -> CoreTransport:
-        """A Transport to this device's link (one host at a time: the core answers whoever spoke last)."""
-        return CoreTransport(self)
+    def transport(self, link: str | None = None) -> CoreTransport:
+        """A Transport to one of the core's links (default: the device's link; one host per link at a time)."""
+        link = self.link if link is None else link
+        if link not in ("wifi", "serial"):
+            raise ValueError(f"link: expected 'wifi' or 'serial', got {link!r}")
+        return CoreTransport(self, link)
+
+    def open_pty(self) -> str:
+        """A pseudo-terminal on the core's serial link, COBS-framed as the board's USB serial; returns its path
+        (serial://PATH for a Client)."""
+        with self.lock:
+            if self._pty is None:
+                self._pty = _PtyEnd()
+            return self._pty.path
 
     # ------------------------------------------------------------------ host side
-    def submit(self, data: bytes, sender: object) -> None:
-        """A datagram from a host (a CoreTransport or a UDP address), read by the core on a coming tick."""
+    def submit(self, data: bytes, sender: object, *, link: str | None = None) -> None:
+        """A datagram from a host (a CoreTransport, a UDP address or the pty) for a link (default: the device's),
+        read by the core on a coming tick."""
         with self.lock:
             self.host_frames.append(data)
             datagrams = [data]
             for f in self.to_device:  # a filter may lose a datagram (None), change it, or add some (a list)
                 datagrams = [out for d in datagrams for out in _as_list(f(d))]
-            self._pending.extend((d, sender) for d in datagrams)
+            self._pending[self.link if link is None else link].extend((d, sender) for d in datagrams)
 
     def send_to_host(self, data: bytes) -> None:
         """Bytes on the wire towards the host the core talks to (as if from the device's address)."""
         with self.lock:
-            self._emit(bytes(data), self._peer)
+            self._emit(bytes(data), self._peer[self.link])
 
     def _emit(self, data: bytes, dest: object) -> None:
         datagrams = [data]
         for f in self.to_host:  # a filter may lose a datagram (None) or add some (a list)
             datagrams = [out for d in datagrams for out in _as_list(f(d))]
         for d in datagrams:
-            if isinstance(dest, CoreTransport):
+            if isinstance(dest, (CoreTransport, _PtyEnd)):
                 dest.deliver(d)
             elif dest is not None:
                 try:
@@ -189,20 +212,41 @@ class CoreDevice:
             except (BlockingIOError, OSError):
                 break
             self.submit(data, addr)
-        self._sender = None
-        if self._pending:  # the core reads at most one datagram per link and tick
-            data, self._sender = self._pending.popleft()
-            (h.hal.inbox if self.link == "wifi" else h.hal.serial_inbox).append(data)
+        if self._pty is not None:
+            for frame in self._pty.frames():
+                self.submit(frame, self._pty, link="serial")
+        for link, inbox in (("wifi", h.hal.inbox), ("serial", h.hal.serial_inbox)):
+            self._sender[link] = None
+            if self._pending[link]:  # the core reads at most one datagram per link and tick
+                data, self._sender[link] = self._pending[link].popleft()
+                inbox.append(data)
+                if link == "serial":
+                    self._watch_provisioning(data)
         tel = h.telemetry()
         if tel:  # a perfect drive: the rope runs at the latest setpoint
             h.encoder.speed_mps = tel[-1].rope_speed_setpoint_mmps / 1000.0
         before_out, before_accept = len(h.hal.out), h.hal.accept_peer_calls
         h.tick(TICK_US)
-        if self._sender is not None and (self.link == "serial" or h.hal.accept_peer_calls > before_accept):
-            self._peer = self._sender
+        if self._sender["wifi"] is not None and h.hal.accept_peer_calls > before_accept:
+            self._peer["wifi"] = self._sender["wifi"]
+        if self._sender["serial"] is not None:  # a cable has one far end
+            self._peer["serial"] = self._sender["serial"]
         for out in h.hal.out[before_out:]:
-            if out.link == self.link:
-                self._emit(out.raw, self._sender if out.channel == "reply" else self._peer)
+            self._emit(out.raw, self._sender[out.link] if out.channel == "reply" else self._peer[out.link])
+
+    def _watch_provisioning(self, data: bytes) -> None:
+        """The harness checks the core's signed frames with the core's key: follow a key staged and committed over
+        the serial link (the core answers NACK to a bad one, which changes nothing)."""
+        d = _decoded(data)
+        if d is None:
+            return
+        if isinstance(d[1], gen.ProvisionSetKey):
+            self._staged_key = bytes(d[1].key)
+        elif isinstance(d[1], gen.ProvisionCommit):
+            self.harness.expect_commit(self._staged_key)
+            if self._staged_key is not None and self.link == "wifi":
+                self.key = self._staged_key
+            self._staged_key = None
 
     # ------------------------------------------------------------------ records
     def host_sent(self, msg_id: int | None = None) -> list[gen.Frame]:
@@ -229,10 +273,11 @@ class CoreDevice:
                 names.append(gen.MESSAGES[o.msg.cmd_msg_id].NAME)
         return names
 
-    def outputs(self) -> list[Out]:
-        """The core's outputs so far on the attached link (a copy)."""
+    def outputs(self, link: str | None = None) -> list[Out]:
+        """The core's outputs so far on a link (default: the device's; a copy)."""
+        link = self.link if link is None else link
         with self.lock:
-            return [o for o in self.harness.hal.out if o.link == self.link]
+            return [o for o in self.harness.hal.out if o.link == link]
 
     def transitions(self) -> list[tuple[int, int, int, int]]:
         """(time_ms, from, to, cause) of every STATE_CHANGED the core sent."""
@@ -248,6 +293,41 @@ class CoreDevice:
     def time_s(self) -> float:
         """The device's simulated time."""
         return self.harness.t_us * 1e-6
+
+
+class _PtyEnd:
+    """The device's end of a pseudo-terminal: COBS frames, each ended by a zero byte (transport_serial.py)."""
+
+    def __init__(self) -> None:
+        self.master, self._slave = os.openpty()
+        os.set_blocking(self.master, False)
+        self.path = os.ttyname(self._slave)
+        self._buffer = b""
+
+    def frames(self) -> list[bytes]:
+        """The whole frames received since the last call (undecodable COBS chunks are dropped, as the HAL does)."""
+        try:
+            self._buffer += os.read(self.master, 4096)
+        except (BlockingIOError, OSError):
+            pass
+        *chunks, self._buffer = self._buffer.split(DELIMITER)
+        out = []
+        for chunk in chunks:
+            try:
+                out.append(cobs.decode(chunk))
+            except cobs.DecodeError:
+                continue
+        return out
+
+    def deliver(self, data: bytes) -> None:
+        try:
+            os.write(self.master, encode_serial_frame(data))
+        except OSError:
+            pass  # nobody has the port open: the bytes are lost
+
+    def close(self) -> None:
+        os.close(self.master)
+        os.close(self._slave)
 
 
 # ---- the network between them: filters for CoreDevice.to_device / to_host ----------------------------------

@@ -280,14 +280,12 @@ def test_a_bad_key_file_is_a_usage_error_that_does_not_echo_it(tmp_path, content
     assert missing.status == ExitStatus.USAGE and "readable file" in missing.stderr
 
 
-def test_provision_over_serial_generates_a_key_and_never_prints_it(tmp_path) -> None:
-    from pty_device import PtyDevice
-
+def test_provision_over_serial_generates_a_key_and_never_prints_it(core_lib, tmp_path) -> None:
     key_path = tmp_path / "link.key"
     password_path = tmp_path / "wifi.pw"
     password_path.write_text("correct horse\n")
-    with PtyDevice() as dev:
-        url = f"serial://{dev.port}"
+    with CoreDevice(core_lib, link="serial", provisioned=False) as dev:
+        url = f"serial://{dev.open_pty()}"
         run = wrangler("--url", url, "--json", "provision", "set", "--generate-key", str(key_path),
                        "--wifi-ssid", "lab", "--wifi-password-file", str(password_path))
         status = wrangler("--url", url, "provision", "status")
@@ -295,7 +293,7 @@ def test_provision_over_serial_generates_a_key_and_never_prints_it(tmp_path) -> 
     assert run.status == ExitStatus.OK, run.stderr
     assert run.json["key_set"] is True and run.json["wifi_ssid"] == "lab" and run.json["commits"] == 1
     key_hex = key_path.read_text().strip()
-    assert dev.stored_key == bytes.fromhex(key_hex) and dev.password == "correct horse"
+    assert bytes.fromhex(key_hex) in dev.harness.flash and b"correct horse" in dev.harness.flash  # the core's record
     assert oct(key_path.stat().st_mode & 0o777) == "0o600"
     for out in (run, status, again):
         assert key_hex not in out.stdout + out.stderr and "correct horse" not in out.stdout + out.stderr
