@@ -2,7 +2,8 @@
  * spindle calls inside the tick only post a write and take the reading of the previous request; after each
  * tick, the SIL's background step (sil_spindle_bus_service) serves the posted jobs as the board's background
  * loop does between ticks: each transaction takes transaction_us of bus time, as many as fit in one tick
- * period (a slower bus leaves the rest for later ticks, and the core steps without a reading: counted late).
+ * period (a transaction longer than what is left runs on into the next ticks and completes with the values of
+ * the tick it ends in; a slow bus makes the core step without a fresh reading: counted late / missing).
  * The write reaches the plant in this tick's SIL_ACTUATORS; the read answers with this tick's SIL_SENSORS,
  * or with no reply when the plant says the servo did not answer (a silent servo, or a reply lost on the bus:
  * plant_faults.SpindleReplyLoss). Relays only: no physics here. */
@@ -22,7 +23,8 @@ typedef struct sil_spindle_bus {
     rw_spindle_exchange exchange;
     uint32_t transaction_us; /* bus time of one transaction */
     uint32_t tick_us;        /* time the background step has between two ticks */
-    uint32_t carry_us;       /* bus time of a transaction begun in an earlier step, still running */
+    rw_spindle_job in_flight; /* the transaction on the bus (kind NONE: the bus is idle) */
+    uint32_t remaining_us;   /* its bus time still to run */
     uint16_t moving_speed_raw; /* the last value written to the servo (what the plant gets) */
 } sil_spindle_bus;
 

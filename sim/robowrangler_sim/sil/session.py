@@ -106,6 +106,9 @@ class SilSession:
             is used as given; a callable ``factory(spindle_params, *, seed) -> SpindlePlant`` (a SpindlePlant
             subclass itself, e.g. ``spindle=ChainLoadedSpindlePlant``) is called with the session's spindle_params
             and seed (so the register noise follows the session's seed).
+        spindle_bus_us: bus time of one spindle transaction in the firmware's bus model (rw_sil
+            --spindle-bus-us, firmware/hal/sil/sil_spindle_bus.h; None: its default, 350 us). The firmware
+            steps the spindle with the reading its bus side completed since the previous step, as on the board.
 
     Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
     ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
@@ -124,7 +127,8 @@ class SilSession:
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
                  plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
                  state_file: str | Path | None = None,
-                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None) -> None:
+                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None,
+                 spindle_bus_us: int | None = None) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
@@ -146,7 +150,7 @@ class SilSession:
         self._tmpdir = None if state_file is not None else tempfile.TemporaryDirectory(prefix="rw_sil_")
         self.state_file = Path(state_file) if state_file is not None else Path(self._tmpdir.name) / "flash.bin"
         self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s, tick_us=tick_us,
-                                         state_file=self.state_file)
+                                         state_file=self.state_file, spindle_bus_us=spindle_bus_us)
         self._link: LockstepLink | None = None
         self._actions: list[tuple[int, int, Callable[[], None]]] = []
         self._action_counter = itertools.count()
@@ -212,6 +216,11 @@ class SilSession:
             spindle_speed_raw=sensors.spindle_speed_raw, spindle_load_raw=sensors.spindle_load_raw,
             spindle_answered=sensors.spindle_answered, limit_switch=sensors.limit_switch,
         )
+
+    @property
+    def firmware_stderr(self) -> str:
+        """What the SIL firmware wrote on stderr, after stop() (its spindle bus counters among it)."""
+        return self._firmware.exit_stderr
 
     def stop(self) -> None:
         self._stop.set()
