@@ -71,7 +71,17 @@ void fill(rw_arduino_serial_link *link)
     if (want > space) {
         want = space;
     }
-    link->rx_len += Serial.readBytes(reinterpret_cast<char *>(link->rx + link->rx_len), want);
+    /* in chunks: the core's USB receive copies out of its ring buffer with interrupts masked, so a chunk
+     * bounds the masked time (RW_SERIAL_READ_CHUNK_BYTES, about 5 us) and with it the tick's entry latency */
+    while (want > 0u) {
+        const size_t chunk = want < RW_SERIAL_READ_CHUNK_BYTES ? want : RW_SERIAL_READ_CHUNK_BYTES;
+        const size_t got = Serial.readBytes(reinterpret_cast<char *>(link->rx + link->rx_len), chunk);
+        link->rx_len += got;
+        want -= got;
+        if (got < chunk) {
+            return;
+        }
+    }
 }
 
 /* Decode the first complete frame in rx into the queue (if it has room). */

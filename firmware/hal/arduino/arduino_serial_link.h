@@ -35,6 +35,9 @@ extern "C" {
 static const size_t RW_SERIAL_RX_BYTES = 256u;
 /* Encoded frames awaiting the host: three of the longest. */
 static const size_t RW_SERIAL_TX_BYTES = 3u * (RW_COBS_MAX_ENCODED(RW_MAX_FRAME_LEN) + 1u);
+/* Bytes taken from USB per read: ArduinoCore-samd copies them out of its ring buffer with interrupts masked
+ * (DoubleBufferedEPOutHandler::recv), so this bounds the longest masked section our loop causes. */
+static const size_t RW_SERIAL_READ_CHUNK_BYTES = 16u;
 /* One USB full-speed bulk packet carries 64 bytes; 63 keeps every write a single short packet. */
 static const size_t RW_SERIAL_PACKET_BYTES = 63u;
 
