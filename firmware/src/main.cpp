@@ -11,7 +11,7 @@
  * start arming on it) -> encoder, battery, LED, USB serial, spindle -> HAL wired -> the core's first tick,
  * which loads the configuration record through hal.config and writes it back with the boot counter raised ->
  * WiFi with the record's credentials (NINA reset and ready line awaited at most 2 s, then blocking at most
- * RW_LINK_BOOT_CONNECT_TIMEOUT_MS, watchdog fed) -> 1 kHz tick interrupt -> watchdog at its running period. */
+ * RW_LINK_BOOT_CONNECT_TIMEOUT_MS, watchdog fed) -> watchdog at its running period -> 1 kHz tick interrupt. */
 #include <Arduino.h>
 #include <string.h>
 
@@ -143,8 +143,8 @@ void setup()
     (void)rw_arduino_link_begin(&link, &core.state.config, RW_LINK_UDP_PORT);
     rw_arduino_board_report_begin(&report, millis());
 
+    (void)rw_arduino_watchdog_begin(RUN_WATCHDOG_MS); /* before the tick starts feeding it */
     rw_arduino_scheduler_begin(control_tick);
-    (void)rw_arduino_watchdog_begin(RUN_WATCHDOG_MS);
 }
 
 void loop()
