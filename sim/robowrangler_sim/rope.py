@@ -2,7 +2,7 @@
 
 The defaults are the paper's wool rope (0.221 g/m, 2 mm). Its axial skin-friction coefficient C_f is not
 measured: it is the calibration that makes the takeoff condition f_t(v*) = lambda g hold at the measured ToV,
-v* = 2.6 m/s, in standard air (DESIGN.md, "Facts"): C_f pi d = 2 lambda g / (rho v*^2). What the models then
+v* = 2.6 m/s, in standard air (docs/architecture.md, "One rope"): C_f pi d = 2 lambda g / (rho v*^2). What the models then
 predict (a takeoff speed independent of loop length and launch angle, the drag the drive carries) follows from
 that one number.
 """

@@ -107,7 +107,7 @@ def _is_real(value: object) -> bool:
 def rope_drag_force_n(params: DriveParams, rope_speed_mps: float) -> float:
     """Axial skin-friction air drag on the exposed rope, N, signed against the motion.
 
-    f_t = 0.5 rho C_f pi d v^2 per metre (DESIGN.md), times ``rope_exposed_length_m``.
+    f_t = 0.5 rho C_f pi d v^2 per metre (robowrangler_sim/rope.py), times ``rope_exposed_length_m``.
     """
     return params.rope_drag_coeff_n_s2_per_m2 * rope_speed_mps * abs(rope_speed_mps)
 

@@ -90,7 +90,7 @@ class DriveParams:
     esc_deadband_us: float = 10.0
     """Pulses up to min + deadband are zero throttle. Assumption (BLHeli: small zero-throttle zone)."""
     esc_arm_hold_us: int = 200_000
-    """Valid zero-throttle signal needed before the ESC arms (BLHeli_32: about 200 ms; DESIGN.md)."""
+    """Valid zero-throttle signal needed before the ESC arms (BLHeli_32: about 200 ms; docs/drive_plant.md)."""
     esc_lag_s: float = 0.003
     """First-order lag from the latched throttle to the applied duty (ESC input filtering and commutation
     update), on top of the up-to-one-frame latching delay. Assumption."""
