@@ -55,73 +55,28 @@ void pump(rw_arduino_serial_link *link)
     memmove(link->tx, link->tx + n, link->tx_len);
 }
 
-/* Move what USB has received into rx (at most its free space). */
-void fill(rw_arduino_serial_link *link)
+/* Received bytes into the deframer while the queue to the tick has room: each complete frame is decoded
+ * straight into a queue slot. Serial.read() takes one byte from the CDC receive buffer and never waits (-1:
+ * empty); the Arduino core copies it with interrupts masked, one byte, so the masked time stays a few cycles. */
+void receive(rw_arduino_serial_link *link)
 {
-    const int available = Serial.available();
-    if (available <= 0) {
-        return;
-    }
-    if (link->rx_len == RW_SERIAL_RX_BYTES) { /* no delimiter in a full buffer: drop the frame's bytes */
-        link->rx_overflow = true;
-        link->rx_len = 0u;
-    }
-    size_t want = static_cast<size_t>(available);
-    const size_t space = RW_SERIAL_RX_BYTES - link->rx_len;
-    if (want > space) {
-        want = space;
-    }
-    /* in chunks: the core's USB receive copies out of its ring buffer with interrupts masked, so a chunk
-     * bounds the masked time (RW_SERIAL_READ_CHUNK_BYTES, about 5 us) and with it the tick's entry latency */
-    while (want > 0u) {
-        const size_t chunk = want < RW_SERIAL_READ_CHUNK_BYTES ? want : RW_SERIAL_READ_CHUNK_BYTES;
-        const size_t got = Serial.readBytes(reinterpret_cast<char *>(link->rx + link->rx_len), chunk);
-        link->rx_len += got;
-        want -= got;
-        if (got < chunk) {
-            return;
-        }
-    }
-}
-
-/* Decode the first complete frame in rx into the queue (if it has room). */
-void decode_one(rw_arduino_serial_link *link)
-{
-    for (;;) {
-        const uint8_t *end = static_cast<const uint8_t *>(memchr(link->rx, 0, link->rx_len));
-        if (end == nullptr) {
-            return;
-        }
-        const size_t n = static_cast<size_t>(end - link->rx);
-        const bool overflow = link->rx_overflow;
-        if (n == 0u && !overflow) { /* back-to-back delimiters */
-            link->rx_len -= 1u;
-            memmove(link->rx, link->rx + 1u, link->rx_len);
-            continue;
-        }
+    for (size_t n = 0u; n < RW_SERIAL_RX_BYTES_PER_PASS; ++n) {
         rw_frame_queue_slot *slot = rw_frame_queue_reserve(&link->rx_frames);
         if (slot == nullptr) {
-            return; /* the tick has not taken the earlier ones: keep the bytes */
+            return; /* the tick has not taken the earlier ones: leave the bytes in USB */
         }
-        size_t len = 0u;
-        if (n != 0u && !overflow) {
-            len = rw_cobs_decode(link->rx, n, slot->bytes, sizeof slot->bytes);
+        const int byte = Serial.read();
+        if (byte < 0) {
+            return;
         }
-        link->rx_overflow = false;
-        link->rx_len -= n + 1u;
-        memmove(link->rx, link->rx + n + 1u, link->rx_len);
-        slot->addr = 0u;
-        slot->port = 0u;
-        if (len == 0u) {
-            ++link->bad_frames;
-            slot->bytes[0] = 0u; /* not a frame: the core refuses it (BAD_MAGIC) and counts it */
-            len = 1u;
-        } else {
-            ++link->frames_in;
+        const size_t len = rw_cobs_deframer_put(&link->deframer, static_cast<uint8_t>(byte), slot->bytes,
+                                                sizeof slot->bytes);
+        if (len != 0u) {
+            slot->addr = 0u;
+            slot->port = 0u;
+            slot->len = static_cast<uint16_t>(len);
+            rw_frame_queue_publish(&link->rx_frames);
         }
-        slot->len = static_cast<uint16_t>(len);
-        rw_frame_queue_publish(&link->rx_frames);
-        return;
     }
 }
 
@@ -178,6 +133,7 @@ void serial_accept_peer(void *ctx)
 void rw_arduino_serial_link_begin(rw_arduino_serial_link *link)
 {
     memset(link, 0, sizeof *link);
+    rw_cobs_deframer_reset(&link->deframer);
     rw_frame_queue_init(&link->rx_frames);
     rw_frame_queue_init(&link->tx_frames);
     Serial.begin(115200);
@@ -186,8 +142,7 @@ void rw_arduino_serial_link_begin(rw_arduino_serial_link *link)
 
 void rw_arduino_serial_link_service(rw_arduino_serial_link *link)
 {
-    fill(link);
-    decode_one(link);
+    receive(link);
     encode_one(link);
     pump(link);
 }

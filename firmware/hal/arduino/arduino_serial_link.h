@@ -6,9 +6,10 @@
  * The tick never touches USB: its recv takes decoded frames from a queue, its send puts frames in another
  * (core/rw_frame_queue.h). The background loop (rw_arduino_serial_link_service) does the USB side, never
  * waiting:
- *  - receive: the bytes `Serial.available()` reports are moved into rx (at most its free space) and one
- *    complete frame is decoded into the queue per pass (a malformed one goes in as a single 0 byte, "not a
- *    frame", which the core refuses and counts);
+ *  - receive: while the queue to the tick has room, received bytes are fed one at a time (Serial.read(), at
+ *    most RW_SERIAL_RX_BYTES_PER_PASS a pass) to the COBS deframer (core/rw_cobs_deframer.h), which decodes each
+ *    complete frame straight into the queue (a malformed one goes in as a single 0 byte, "not a frame", which
+ *    the core refuses and counts);
  *  - send: one queued frame per pass is encoded with its delimiter into tx, or dropped (counted) if it does
  *    not fit; tx leaves in USB packets of at most 63 bytes, one whenever the CDC IN endpoint's bank is free
  *    (checked on the USB registers before each Serial.write). On this core Serial.availableForWrite() always
@@ -25,19 +26,16 @@
 
 extern "C" {
 #include "rw_cobs.h"
+#include "rw_cobs_deframer.h"
 #include "rw_frame_queue.h"
 #include "rw_hal_link.h"
 #include "rw_protocol.h"
 }
 
-/* Encoded bytes awaiting their delimiter: more than the longest encoded frame, so a valid frame always
- * fits; a longer run without a delimiter is dropped up to the next delimiter and reported as not a frame. */
-static const size_t RW_SERIAL_RX_BYTES = 256u;
+/* Received bytes fed to the deframer per background pass at most (about 0.1 ms of work). */
+static const size_t RW_SERIAL_RX_BYTES_PER_PASS = 64u;
 /* Encoded frames awaiting the host: three of the longest. */
 static const size_t RW_SERIAL_TX_BYTES = 3u * (RW_COBS_MAX_ENCODED(RW_MAX_FRAME_LEN) + 1u);
-/* Bytes taken from USB per read: ArduinoCore-samd copies them out of its ring buffer with interrupts masked
- * (DoubleBufferedEPOutHandler::recv), so this bounds the longest masked section our loop causes. */
-static const size_t RW_SERIAL_READ_CHUNK_BYTES = 16u;
 /* One USB full-speed bulk packet carries 64 bytes; 63 keeps every write a single short packet. */
 static const size_t RW_SERIAL_PACKET_BYTES = 63u;
 
@@ -45,14 +43,10 @@ struct rw_arduino_serial_link {
     rw_frame_queue rx_frames; /* background -> tick: decoded frames */
     rw_frame_queue tx_frames; /* tick -> background: frames to encode and send */
     /* background side */
-    uint8_t rx[RW_SERIAL_RX_BYTES];
-    size_t rx_len;
-    bool rx_overflow;      /* the frame being received outgrew rx: skipped to its delimiter */
+    rw_cobs_deframer deframer; /* received bytes -> frames; counts good and bad frames */
     uint8_t tx[RW_SERIAL_TX_BYTES];
     size_t tx_len;
     uint8_t in_endpoint;   /* USB endpoint of the CDC bulk IN (found once USB is configured; 0 = not yet) */
-    uint32_t frames_in;    /* frames decoded and queued for the core */
-    uint32_t bad_frames;   /* malformed COBS or over-long frames (handed over as "not a frame") */
     uint32_t frames_out;   /* frames encoded for the host */
     uint32_t tx_dropped;   /* frames or notes dropped: tx full or nobody listening */
 };
