@@ -20,7 +20,7 @@ How the figure is built:
    work around the tick (counter read, micros() twice, the staged pulse applied first in the tick, the encoder
    latch, the watchdog feed), and what can delay or stretch the tick: interrupts of higher priority (encoder
    edges at 15,000 rpm, the spindle UART's bytes during a transaction), SysTick at equal priority, and the
-   longest sections that mask interrupts or the tick (the USB receive copy of one 16-byte chunk, the copy of
+   longest sections that mask interrupts or the tick (the USB receive copy of one byte, the copy of
    the tick statistics). USB is below the tick and never delays it.
    The ESC update is the staged pulse written to TCC1 first thing in the tick: its jitter is the spread of the
    tick's entry delay (interrupt latency) plus the spread of the few cycles before the write, whatever the
@@ -75,7 +75,7 @@ ENCODER_ISR_CYCLES = 150  # EIC_Handler's loop over one enabled line, the callba
 UART_ISR_CYCLES = 100  # SERCOM5_Handler -> Uart::IrqHandler: one byte to or from the ring buffer
 SYSTICK_ISR_CYCLES = 45  # equal priority to the tick: a running one finishes first
 # Longest sections that keep the tick out.
-USB_RX_CHUNK_MASKED_CYCLES = 16 * 12 + 30  # DoubleBufferedEPOutHandler::recv of one 16-byte chunk, PRIMASK set
+USB_RX_CHUNK_MASKED_CYCLES = 1 * 12 + 30  # DoubleBufferedEPOutHandler::recv of the one byte Serial.read() takes, PRIMASK set
 STATS_COPY_MASKED_CYCLES = 40  # rw_arduino_scheduler_stats: TC3 disabled in the NVIC for four loads
 CONFIG_COPY_MASKED_CYCLES = 350  # a PROVISION_COMMIT's record copy (272 bytes): DISARMED only, not in flight
 
@@ -99,7 +99,7 @@ NINA_RX_CALLS = (("availData", 8, 8), ("getRemoteData (remoteIP)", 8, 14), ("get
 NINA_TX_CALLS = (("startClient", 20, 8), ("insertDataBuf", 12, 8), ("sendUdpData", 8, 8))  # + datagram in insertDataBuf
 NINA_POLL_CALLS = (("getConnectionStatus", 8, 8),)
 DATAGRAM_BYTES = 93  # RW_MAX_FRAME_LEN: the longest frame
-USB_PASS_CYCLES = 16 * 12 * 8 + 2000 + 63 * 4  # fill (chunks), one COBS decode, one encode, one 63-byte packet
+USB_PASS_CYCLES = 64 * 90 + 2000 + 63 * 4  # 64 bytes through Serial.read + the deframer, one encode, one packet
 
 
 def us(cycles: float) -> float:
@@ -254,22 +254,26 @@ def main() -> None:
               f"{'ESC jitter us':>14}{'  if written in the tick: at us':>32}")
     print(header)
     print("-" * len(header))
-    ok = True
+    missed = []
     in_tick_min = min(p.esc_write_cycles for p in paths)
     for p in paths:
         t_us = tick_duration_us(p.tick_cycles)
         in_tick_us = us(p.esc_write_cycles * FLASH_FACTOR) + esc_best
-        ok &= t_us < TICK_US and jitter < JITTER_TARGET_US
+        # a tick past its period delays the next one's entry, and with it the next ESC update, by the excess
+        path_jitter = jitter + max(0.0, t_us - TICK_US)
+        if t_us >= TICK_US or path_jitter >= JITTER_TARGET_US:
+            missed.append(p.name)
         print(f"{p.name:<40}{p.tick_cycles:>9}{t_us:>14.0f}{t_us / TICK_US:>10.0%}{esc_best:>6.1f}-{esc_worst:<4.1f}"
-              f"{jitter:>13.1f}{in_tick_us:>28.0f}")
+              f"{path_jitter:>13.1f}{in_tick_us:>28.0f}")
+    ok = not missed
     spread_in_tick = us((max(p.esc_write_cycles for p in paths) - in_tick_min) * FLASH_FACTOR) + jitter
     print()
     print(f"ESC update: the pulse staged by the previous tick is written first in the handler, {esc_best:.1f}-"
           f"{esc_worst:.1f} us after the period boundary on every path: jitter {jitter:.1f} us (target "
-          f"< {JITTER_TARGET_US:.0f} us). Written where the core computes it, the spread over these paths would be "
+          f"< {JITTER_TARGET_US:.0f} us), more only after a tick that ran past its period. Written where the core computes it, the spread over these paths would be "
           f"{spread_in_tick:.0f} us (the command path's tag check and ACK come first).")
     print(f"Entry delay, worst: {latency_worst:.1f} us = the longest section keeping the tick out "
-          f"(USB receive chunk {USB_RX_CHUNK_MASKED_CYCLES} cycles; SysTick {SYSTICK_ISR_CYCLES}) + encoder and UART "
+          f"(USB receive of one byte {USB_RX_CHUNK_MASKED_CYCLES} cycles; SysTick {SYSTICK_ISR_CYCLES}) + encoder and UART "
           "interrupts arriving meanwhile.")
     print(f"Not in flight: a PROVISION_COMMIT (DISARMED only) copies the record with the tick masked "
           f"({us(CONFIG_COPY_MASKED_CYCLES * FLASH_FACTOR):.1f} us) and its flash save runs inside the tick (erase + "
@@ -318,7 +322,8 @@ def main() -> None:
     print("  the watchdog (reset 250 ms later).")
     print()
     print(f"verdict: {'meets' if ok else 'MISSES'} the target: no tick over its {TICK_US} us period, ESC update "
-          f"jitter < {JITTER_TARGET_US:.0f} us on every path")
+          f"jitter < {JITTER_TARGET_US:.0f} us on every path" + ("" if ok else f" (missed on: {', '.join(missed)}; a "
+          "tick past its period is counted in tick_overruns and delays the next tick's ESC update by the excess)"))
 
 
 if __name__ == "__main__":
