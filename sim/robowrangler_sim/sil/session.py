@@ -137,6 +137,9 @@ class SilSession:
         tick_timeout_s: how often the lockstep checks that a slow firmware is still alive while it waits for a
             tick's answer; a busy machine only makes the wait longer, only a firmware that exited (or stays
             silent for minutes) ends the session (lockstep.LockstepLink).
+        spindle_bus_us: bus time of one spindle transaction in the firmware's bus model (rw_sil
+            --spindle-bus-us, firmware/hal/sil/sil_spindle_bus.h; None: its default, 350 us). The firmware
+            steps the spindle with the reading its bus side completed since the previous step, as on the board.
 
     Each tick the session composes the plants through the contract only: the drive gets DriveInputs (the
     firmware's ESC pulse after the actuator filters, the scene's ``loads``, the rope exposed = the spindle's
@@ -163,6 +166,7 @@ class SilSession:
                  state_file: str | Path | None = None,
                  drive: Plant | Callable[..., Plant] | None = None,
                  spindle: Plant | Callable[..., Plant] | None = None,
+                 spindle_bus_us: int | None = None,
                  tick_timeout_s: float = 2.0) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
@@ -192,7 +196,7 @@ class SilSession:
         self._tmpdir = None if state_file is not None else tempfile.TemporaryDirectory(prefix="rw_sil_")
         self.state_file = Path(state_file) if state_file is not None else Path(self._tmpdir.name) / "flash.bin"
         self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s, tick_us=tick_us,
-                                         state_file=self.state_file)
+                                         state_file=self.state_file, spindle_bus_us=spindle_bus_us)
         self._link: LockstepLink | None = None
         self._actions: list[tuple[int, int, Callable[[], None]]] = []
         self._action_counter = itertools.count()
@@ -273,6 +277,11 @@ class SilSession:
             spindle_speed_raw=sensors.spindle_speed_raw, spindle_load_raw=sensors.spindle_load_raw,
             spindle_answered=sensors.spindle_answered, limit_switch=sensors.limit_switch,
         )
+
+    @property
+    def firmware_stderr(self) -> str:
+        """What the SIL firmware wrote on stderr, after stop() (its spindle bus counters among it)."""
+        return self._firmware.exit_stderr
 
     def stop(self) -> None:
         self._stop.set()
