@@ -1,0 +1,23 @@
+"""esc_latency: the ESC acts on the pulse of d seconds ago (transport/filter delay beyond the frame latch)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robowrangler_sim.diagnose.candidates.base import Candidate
+from robowrangler_sim.diagnose.parameters import ParamSpec
+from robowrangler_sim.plants import drive_batch as db
+
+
+class EscLatency(Candidate):
+    effect_id = "esc_latency"
+    law = "u_esc(t) = u_cmd(t - d)"
+    channels = ("rope_speed_mps", "motor_rpm", "battery_v")
+    regime = "every speed step: accelerating and decelerating"
+    params = (ParamSpec("delay_s", db.TH_LATENCY, "s", 0.0, 0.05, 0.005),)
+    neutral = {db.TH_LATENCY: 0.0}
+    separating_measurement = "ESC pulse and motor speed at 1 kHz around a step (the recordings' 1 kHz bursts)"
+    confused_with = ("esc_lag_s", "inertia_kg_m2")
+
+    def start_points(self, theta: np.ndarray) -> np.ndarray:
+        return np.arange(0.001, 0.041, 0.003)[:, None]
