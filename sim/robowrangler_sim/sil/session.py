@@ -106,6 +106,8 @@ class SilSession:
             is used as given; a callable ``factory(spindle_params, *, seed) -> SpindlePlant`` (a SpindlePlant
             subclass itself, e.g. ``spindle=ChainLoadedSpindlePlant``) is called with the session's spindle_params
             and seed (so the register noise follows the session's seed).
+        model: a drive model file written by `wrangler diagnose` (model.json) or a DiagnosedModel: its refitted
+            DriveParams drive the plant and its effect terms act through the filters and tick hooks below.
 
     Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
     ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
@@ -124,7 +126,16 @@ class SilSession:
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
                  plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
                  state_file: str | Path | None = None,
-                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None) -> None:
+                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None,
+                 model=None) -> None:
+        diagnosed = None
+        if model is not None:  # a drive model file written by `wrangler diagnose` (or a DiagnosedModel)
+            from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
+
+            if drive_params is not None:
+                raise ValueError("model: expected either model or drive_params, got both")
+            diagnosed = model if isinstance(model, DiagnosedModel) else load_model(model)
+            drive_params = diagnosed.sil_drive_params()
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
@@ -155,6 +166,9 @@ class SilSession:
         self._stop = threading.Event()
         self._error: BaseException | None = None
         self._pace_origin: tuple[float, int] | None = None
+        self.model = diagnosed
+        if diagnosed is not None:
+            diagnosed.install(self)
 
     # ---------------------------------------------------------------------------------------------
     @property
