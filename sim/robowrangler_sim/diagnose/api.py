@@ -12,7 +12,7 @@ import numpy as np
 
 from robowrangler_sim.diagnose.candidates import LIBRARY, Candidate
 from robowrangler_sim.diagnose.errors import UnknownEffectError
-from robowrangler_sim.diagnose.fit import ModelFitter
+from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
 from robowrangler_sim.diagnose.locate import Locator, spans_mask
 from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
 from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
@@ -182,8 +182,8 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
         _progress(progress, f"fitting {cand.effect_id}")
         theta_c = cand.apply_neutral(nominal.theta_)
         fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
-            replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, starts=cand.start_points(theta_c),
-            bounds_ref=theta_base)
+            replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, starts=cand.start_grid(theta_c)[1],
+            start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
         r_c = _residuals(data, fitter.prediction_)
         sc = score_model(cand.effect_id, len(NOMINAL_REFIT) + len(cand.params), r_c, weights, fit_mask,
                          block_id, heldout_blocks, n_eff)
@@ -191,7 +191,8 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
         fits[cand.effect_id] = (cand, fitter, sc, load_mask)
         cand_rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
                           "heldout_rms": sc.heldout_rms,
-                          "params": {p.name: round(p.value, 6) for p in fitter.params_[-len(cand.params):]}})
+                          "params": {p.name: round(p.value, 6) for p in fitter.params_
+                                     if p.name in {s.name for s in cand.params}}})
     timings["candidates_s"] = time.perf_counter() - t1
 
     # --- select
@@ -230,7 +231,8 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
                     _progress(progress, f"fitting {best} + {second}")
                     pair = ModelFitter(list(NOMINAL_REFIT) + list(fits[best][0].params) + list(cand2.params),
                                        weights=weights).fit(replay, theta_p, fit_mask=fit_mask, load_mask=mask2,
-                                                            starts=cand2.start_points(theta_p),
+                                                            starts=cand2.start_grid(theta_p)[1],
+                                                            start_columns=cand2.start_grid(theta_p)[0],
                                                             bounds_ref=theta_base)
                     r_p = _residuals(data, pair.prediction_)
                     sp = score_model(f"{best}+{second}", len(pair.specs), r_p, weights, fit_mask, block_id,
@@ -243,7 +245,10 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
                         chosen_fit, chosen_score, chosen_mask = pair, sp, mask2
     timings["select_s"] = time.perf_counter() - t1
 
-    # --- findings
+    # --- findings (intervals of the chosen effects' parameters widened by a jackknife over the fit samples)
+    if verdict == "missing_physics":
+        _progress(progress, "intervals (jackknife)")
+        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params})
     r_after = _residuals(data, chosen_fit.prediction_)
     effects_out: list[EffectFinding] = []
     if verdict == "missing_physics":

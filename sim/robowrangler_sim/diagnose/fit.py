@@ -65,8 +65,11 @@ class ModelFitter:
         return np.concatenate(parts, axis=1)
 
     def fit(self, replay, theta_base: np.ndarray, *, fit_mask: np.ndarray, load_mask: np.ndarray | None = None,
-            starts: np.ndarray | None = None, bounds_ref: np.ndarray | None = None) -> ModelFitter:
-        """bounds_ref: the theta row relative bounds refer to (the model as given; default theta_base)."""
+            starts: np.ndarray | None = None, start_columns: list[int] | None = None,
+            bounds_ref: np.ndarray | None = None) -> ModelFitter:
+        """fit_mask: (S,) samples in the fit; load_mask: (T,) external-load weight per tick; starts: (G, k) grid of
+        start values for the theta columns start_columns (evaluated in one batch, the best one starts the
+        solver); bounds_ref: the theta row relative bounds refer to (the model as given; default theta_base)."""
         ref = theta_base if bounds_ref is None else bounds_ref
         data = replay.data
         measured = {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v}
@@ -82,11 +85,12 @@ class ModelFitter:
             return self._resid(pred, measured, fit_mask)
 
         if starts is not None and len(starts):
-            # the candidate's own parameters come last in specs order; fill them from the grid
-            grid = np.repeat(x0[None, :], len(starts), axis=0)
+            # starts: (G, k) values of the parameters in theta columns start_columns
             own = np.asarray(starts, dtype=float)
-            k = own.shape[1]
-            grid[:, -k:] = np.clip(own / scales[-k:], lo[-k:], hi[-k:])
+            cols = list(start_columns) if start_columns is not None else [s.column for s in self.specs[-own.shape[1]:]]
+            idx = [next(j for j, s in enumerate(self.specs) if s.column == c) for c in cols]
+            grid = np.repeat(x0[None, :], len(starts), axis=0)
+            grid[:, idx] = np.clip(own / scales[idx], lo[idx], hi[idx])
             grid = np.vstack([x0[None, :], grid])
             costs = np.sum(huber(simulate(grid), self.huber_scale), axis=1)
             x0 = grid[int(np.argmin(costs))]
@@ -123,13 +127,24 @@ class ModelFitter:
         r = r * np.sqrt(wr)
         s2 = float(r @ r) / max(n - p, 1)
         inflation = 1.0 / min(effective_fraction(r[: n // len(self.weights)]), 1.0)
-        try:
-            cov = np.linalg.pinv(J.T @ J) * s2 * inflation
-            sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
-        except np.linalg.LinAlgError:
-            sd = np.full(p, np.inf)
+        # parameters the residual does not move (a threshold never crossed, a term with no effect) are not
+        # determined: their interval is the whole bound range, and they leave the covariance of the others
+        col = np.linalg.norm(J, axis=0)
+        live = col > 1e-9 * max(float(col.max()), 1e-300)
+        sd = np.full(p, np.inf)
+        if live.any():
+            try:
+                Jl = J[:, live]
+                cov = np.linalg.inv(Jl.T @ Jl) * s2 * inflation
+                sd[live] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+            except np.linalg.LinAlgError:
+                pass
+        self.jac_col_norm_ = col
+        self.sd_ = sd
+        self._ci_inputs = (replay, theta_base, fit_mask, load_mask, ref, lo, hi, scales)
         theta = self._rows(theta_base, x[None, :])[0]
         self.theta_ = theta
+        self.x_ = x
         self.params_ = [FittedParam(s.name, s.unit, float(x[j] * s.scale),
                                     (float(max(lo[j], x[j] - 1.96 * sd[j]) * s.scale),
                                      float(min(hi[j], x[j] + 1.96 * sd[j]) * s.scale)),
@@ -140,3 +155,31 @@ class ModelFitter:
         self.cost_ = float(np.sum(huber(fun(x), self.huber_scale)))
         self.n_fit_ = n
         return self
+
+
+def jackknife_intervals(fitter: ModelFitter, names: set[str], *, parts: int = 5, max_nfev: int = 8) -> None:
+    """Widen the intervals of the named parameters by a delete-one-part jackknife over interleaved parts of
+    the fit samples (refits from the solution): sd = max(Gauss-Newton sd, jackknife sd). The jackknife sees
+    what the Gauss-Newton interval cannot: a loss that is bumpy in the parameter or a law that fits some
+    steps better than others. Updates fitter.params_ in place."""
+    replay, theta_base, fit_mask, load_mask, ref, lo, hi, scales = fitter._ci_inputs
+    idx = np.flatnonzero(fit_mask)
+    estimates = []
+    for k in range(parts):
+        mask = fit_mask.copy()
+        block = (np.arange(idx.size) // 25) % parts == k
+        mask[idx[block]] = False
+        sub = ModelFitter(fitter.specs, weights=fitter.weights, max_nfev=max_nfev, huber_scale=fitter.huber_scale)
+        sub.fit(replay, fitter.theta_, fit_mask=mask, load_mask=load_mask, bounds_ref=ref)
+        estimates.append(sub.x_)
+    est = np.asarray(estimates)
+    sd_jack = np.sqrt((parts - 1) / parts * np.sum((est - est.mean(axis=0)) ** 2, axis=0))
+    new = []
+    for j, p in enumerate(fitter.params_):
+        if p.name in names:
+            sd = max(float(fitter.sd_[j]), float(sd_jack[j]))
+            x = fitter.x_[j]
+            p = FittedParam(p.name, p.unit, p.value, (float(max(lo[j], x - 1.96 * sd) * scales[j]),
+                                                     float(min(hi[j], x + 1.96 * sd) * scales[j])), p.start)
+        new.append(p)
+    fitter.params_ = new

@@ -64,6 +64,11 @@ class Candidate(ABC):
                          for s in self.params])
         return np.asarray(rows)
 
+    def start_grid(self, theta: np.ndarray) -> tuple[list[int], np.ndarray]:
+        """(theta columns, (G, len(columns)) values) of the batched start search; default: this candidate's
+        own parameters at start_points. A candidate whose look-alike is a nominal parameter searches both."""
+        return [s.column for s in self.params], self.start_points(theta)
+
     def apply_neutral(self, theta: np.ndarray) -> np.ndarray:
         out = theta.copy()
         for col, value in self.neutral.items():

@@ -19,5 +19,11 @@ class EscLatency(Candidate):
     separating_measurement = "ESC pulse and motor speed at 1 kHz around a step (the recordings' 1 kHz bursts)"
     confused_with = ("esc_lag_s", "inertia_kg_m2")
 
+    def start_grid(self, theta: np.ndarray) -> tuple[list[int], np.ndarray]:
+        # delay and the ESC's duty lag trade against each other at telemetry rate: search them together
+        lags = theta[db.TH_ESC_LAG] * np.array([0.35, 0.6, 1.0, 1.4, 1.9])
+        grid = np.array([[d, lag] for d in np.arange(0.0, 0.0405, 0.001) for lag in lags])
+        return [db.TH_LATENCY, db.TH_ESC_LAG], grid
+
     def start_points(self, theta: np.ndarray) -> np.ndarray:
-        return np.arange(0.001, 0.041, 0.003)[:, None]
+        return np.arange(0.0, 0.0405, 0.0005)[:, None]  # 0.5 ms grid: the loss is bumpy in d (step edges)

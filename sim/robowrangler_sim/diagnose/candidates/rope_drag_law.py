@@ -24,4 +24,4 @@ class RopeDragLaw(Candidate):
 
     def start_points(self, theta: np.ndarray) -> np.ndarray:
         k0 = theta[db.TH_DRAG_K]
-        return np.array([[k0 * f, n] for f, n in itertools.product((0.5, 1.0, 3.0, 10.0), (1.0, 1.5, 2.5, 3.0))])
+        return np.array([[k0 * f, n] for f, n in itertools.product((0.5, 2.0, 8.0, 30.0), (1.0, 1.5, 2.5, 3.0))])
