@@ -12,6 +12,7 @@ Two seed sets: `dev` (the seeds looked at while building the engine) and `heldou
 run); both are printed separately.
 
 Run:  uv run python bench/bench_diagnose.py [--quick] [--workers 2] [--address ADDR] [--json OUT]
+      uv run python bench/bench_diagnose.py --speed     (a 60 s recording, whole library: wall time per stage)
 """
 
 from __future__ import annotations
@@ -164,6 +165,28 @@ def _table(rows: list[dict], title: str) -> None:
     print(f"  diagnose wall time per recording: median {np.median(walls):.1f} s, max {max(walls):.1f} s")
 
 
+def speed(duration_s: float = 60.0) -> None:
+    """One 60 s recording (latency effect) against the whole library: wall time and each stage's share."""
+    from robowrangler_sim.diagnose import diagnose
+    from robowrangler_sim.diagnose.proof.generator import generate_recording
+    from robowrangler_sim.diagnose.proof.truth_effects import LatencyTruth
+
+    with tempfile.TemporaryDirectory() as work:
+        path = Path(work) / "speed.mcap"
+        generate_recording(path, seed=4242, duration_s=duration_s,
+                           effect=LatencyTruth("esc_latency", {"delay_s": 0.008}, delay_s=0.008, jitter_s=0.001))
+        diagnose(path, effects=["esc_latency"])  # JIT caches warm
+        t0 = time.perf_counter()
+        res = diagnose(path)
+        wall = time.perf_counter() - t0
+    print(f"\n== speed: a {duration_s:.0f} s recording against the whole library: {wall:.1f} s wall "
+          f"({res.verdict}: {res.first_line})")
+    total = res.timings_s["total_s"]
+    for k, v in res.timings_s.items():
+        if k != "total_s":
+            print(f"  {k:18s} {v:6.1f} s  {v / total:5.0%}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="plain cases and 4 effect-free runs per set only")
@@ -171,7 +194,11 @@ def main() -> None:
     ap.add_argument("--address", default=None, help="Ray cluster address (default: a local one)")
     ap.add_argument("--duration", type=float, default=10.0, help="recording length, s")
     ap.add_argument("--json", default=None, help="write every row as JSON here")
+    ap.add_argument("--speed", action="store_true", help="only the 60 s speed figure")
     args = ap.parse_args()
+    if args.speed:
+        speed()
+        return
 
     import ray
 

@@ -125,3 +125,39 @@ def test_bad_inputs_are_refused(recordings, tmp_path):
                                "drive_params": {"wheel_radius_mm": 15}}))
     with pytest.raises(ModelMismatchError, match="wheel_radius_mm"):
         load_model(bad)
+
+
+def test_cli_verb_exit_statuses_and_json(recordings, tmp_path):
+    import io
+
+    from robowrangler.cli.environment import Environment
+    from robowrangler.cli.main import main
+
+    def run(*argv):
+        env = Environment(stdout=io.StringIO(), stderr=io.StringIO(), environ={})
+        return int(main(list(argv), env)), env.stdout.getvalue(), env.stderr.getvalue()
+
+    code, out, err = run("diagnose", str(recordings["clean"].path), "--effects", "esc_latency,wheel_slip",
+                         "--out", str(tmp_path / "rep"), "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["verdict"] == "none" and doc["effects"] == []
+    assert (tmp_path / "rep" / "report.html").exists() and (tmp_path / "rep" / "model.json").exists()
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(b"garbage")
+    code, out, err = run("diagnose", str(bad))
+    assert code == 1 and "not a readable recording" in err and out == ""
+    code, _, err = run("diagnose", str(recordings["clean"].path), "--effects", "no_such_effect")
+    assert code == 2 and "no_such_effect" in err
+
+
+def test_coverage_names_the_regimes_and_effects_a_slow_run_cannot_test(tmp_path):
+    pulse = np.full(5000, 1000.0)
+    pulse[400:1600], pulse[1600:2800], pulse[2800:4000] = 1060.0, 1120.0, 1090.0  # never above ~4 m/s
+    rec = tmp_path / "slow.mcap"
+    generate_recording(rec, effect=None, seed=5, duration_s=5.0, pulse_us=pulse)
+    res = diagnose(rec, effects=["rope_drag_law"])
+    assert res.verdict == "none"
+    assert "speed_band:> 8 m/s" in res.coverage["not_visited"]
+    assert [d["id"] for d in res.coverage["effects_not_tested"]] == ["rope_drag_law"]
+    assert next(c for c in res.candidates if c["id"] == "rope_drag_law")["status"] == "not_tested"

@@ -163,6 +163,8 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     t1 = time.perf_counter()
     fits: dict[str, tuple[Candidate, ModelFitter, ModelScore, np.ndarray | None]] = {}
     not_ident: list[dict] = []
+    untested: list[dict] = []
+    cov = coverage(labels)
     cand_rows: list[dict] = [{"id": "nominal_refit", "status": "base", "heldout_rms": score_nom.heldout_rms,
                               "fit_rms": score_nom.fit_rms}]
     for cand in candidates:
@@ -171,6 +173,12 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
             not_ident.append({"id": cand.effect_id, "reason": ident.reason,
                               "separating_measurement": ident.separating_measurement})
             cand_rows.append({"id": cand.effect_id, "status": "not_identifiable", "reason": ident.reason})
+            continue
+        visited = set(cov["visited"])
+        if cand.needs_regimes and not visited.intersection(cand.needs_regimes):
+            untested.append({"id": cand.effect_id, "needs_one_of": list(cand.needs_regimes)})
+            cand_rows.append({"id": cand.effect_id, "status": "not_tested",
+                              "reason": f"the recording never visits {' or '.join(cand.needs_regimes)}"})
             continue
         load_mask = None
         if cand.uses_located_spans:
@@ -281,7 +289,8 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     return DiagnosisResult(
         recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
         nominal_refit=nominal_refit, unexplained_fraction=unexplained,
-        coverage={**coverage(labels), "effects_not_testable": [d["id"] for d in not_ident if "candidates" not in d]},
+        coverage={**cov, "effects_not_testable": [d["id"] for d in not_ident if "candidates" not in d],
+                  "effects_not_tested": untested},
         located=located, candidates=cand_rows, model=model_out, timings_s=timings,
         series={"time_s": data.time_s, "speed_mps": data.speed_mps, "battery_v": data.battery_v,
                 "pulse_us": data.pulse_us[data.sample_ticks.clip(max=data.pulse_us.size - 1)],

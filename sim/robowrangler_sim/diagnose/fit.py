@@ -157,7 +157,7 @@ class ModelFitter:
         return self
 
 
-def jackknife_intervals(fitter: ModelFitter, names: set[str], *, parts: int = 5, max_nfev: int = 8) -> None:
+def jackknife_intervals(fitter: ModelFitter, names: set[str], *, parts: int = 4, max_nfev: int = 5) -> None:
     """Widen the intervals of the named parameters by a delete-one-part jackknife over interleaved parts of
     the fit samples (refits from the solution): sd = max(Gauss-Newton sd, jackknife sd). The jackknife sees
     what the Gauss-Newton interval cannot: a loss that is bumpy in the parameter or a law that fits some

@@ -49,6 +49,9 @@ class Candidate(ABC):
     separating_measurement: str = ""
     confused_with: tuple[str, ...] = ()
     uses_located_spans: bool = False
+    needs_regimes: tuple[str, ...] = ()
+    """Regime labels (regimes.py, "kind:label") of which the recording must visit at least one for the effect to
+    show; a recording that visits none cannot test it (reported under coverage)."""
 
     def identifiable(self, data) -> Identifiability:
         """Can this recording show the effect at all? Default: yes."""

@@ -19,6 +19,7 @@ class BatterySag(Candidate):
     params = (ParamSpec("polarisation_resistance_ohm", db.TH_POL_R, "Ohm", 0.0, 0.3, 0.03),
               ParamSpec("polarisation_time_constant_s", db.TH_POL_TAU, "s", 0.02, 30.0, 1.0))
     neutral = {db.TH_POL_R: 0.0, db.TH_POL_TAU: 1.0}
+    needs_regimes = ("motion:accelerating",)
     separating_measurement = "battery current (a shunt) with the voltage during a load step"
     confused_with = ("battery_internal_resistance_ohm",)
 

@@ -19,6 +19,7 @@ class EscDeadband(Candidate):
     params = (ParamSpec("deadband_us", db.TH_DEADBAND, "us", 0.0, 150.0, 20.0),
               ParamSpec("hysteresis_us", db.TH_HYST, "us", 0.0, 80.0, 10.0))
     neutral = {db.TH_HYST: 0.0}
+    needs_regimes = ("speed_band:rest",)
     separating_measurement = "a slow pulse ramp up from the minimum and back down (throttle sweep at rest)"
     confused_with = ("coulomb_friction_n", "low_speed_friction")
 

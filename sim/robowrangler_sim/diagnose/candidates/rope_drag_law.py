@@ -19,6 +19,7 @@ class RopeDragLaw(Candidate):
     params = (ParamSpec("rope_drag_coeff_n_s2_per_m2", db.TH_DRAG_K, "N s^2/m^2", 1e-5, 0.05, 1e-3),
               ParamSpec("drag_exponent", db.TH_DRAG_EXP, "1", 0.5, 4.0, 2.0))
     neutral = {db.TH_DRAG_EXP: 2.0}
+    needs_regimes = ("speed_band:5-8 m/s", "speed_band:> 8 m/s")
     separating_measurement = "steady holds at several well-spaced speeds (speed sweep), or rope tension at the guide"
     confused_with = ("viscous_friction_n_s_per_m", "low_speed_friction")
 
