@@ -1,9 +1,10 @@
 """The library's effect laws put into a SilSession through its seams (the model file's effects, in the SIL).
 
 Actuator filter: esc_latency (the pulse of d seconds ago) and esc_deadband's hysteresis (stays at zero throttle
-until min + w + h once stopped). Tick hook: rope_drag_law (the plant's own k v |v| drag switched off by
-rope_exposed_length_m = 0 and the power law applied as external_rope_load_n), low_speed_friction (Stribeck),
-external_rope_load (over its spans, plant time) and battery_sag (a polarisation voltage as extra aux current).
+until min + w + h once stopped). Tick hook, through the session's ``loads`` (the plant contract's inputs):
+rope_drag_law (the plant's own k v |v| drag switched off by rope_exposed_length_m = 0 and the power law applied
+as external_rope_load_n), low_speed_friction (Stribeck), external_rope_load (over its spans, plant time) and
+battery_sag (a polarisation voltage as extra aux current).
 """
 
 from __future__ import annotations
@@ -48,24 +49,24 @@ def install_effects(session, model) -> None:
     if drag_n is None and not strib and not ext and not sag:
         return
     k = p.rope_drag_coeff_n_s2_per_m2
-    base_aux = session.plant.battery_aux_current_a
+    base_aux = p.battery_aux_current_a
     pol = {"v": 0.0}
 
     def hook(s) -> None:
-        plant = s.plant
-        v = abs(plant.rope_speed_mps)
+        out = s.drive_out
+        v = abs(out.rope_speed_mps)
         f = 0.0
         if drag_n is not None:
-            plant.rope_exposed_length_m = 0.0
+            s.loads.rope_exposed_length_m = 0.0
             f += k * V_REF_MPS ** 2 * (v / V_REF_MPS) ** drag_n
         if strib:
             f += strib["stribeck_force_n"] * math.exp(-(v / strib["stribeck_speed_mps"]) ** 2)
         if ext and any(a <= s.time_s <= b for a, b in model.external_load_spans_s):
             f += ext
-        plant.external_rope_load_n = max(0.0, f)
+        s.loads.external_rope_load_n = max(0.0, f)
         if sag:
-            i = plant.battery_current_a - plant.battery_aux_current_a + base_aux
+            i = out.battery_current_a - out.battery_aux_current_a + base_aux
             r, tau = sag["polarisation_resistance_ohm"], sag["polarisation_time_constant_s"]
             pol["v"] = r * i + (pol["v"] - r * i) * math.exp(-tick_s / tau)
-            plant.battery_aux_current_a = base_aux + max(0.0, pol["v"]) / p.battery_internal_resistance_ohm
+            s.loads.battery_aux_current_a = base_aux + max(0.0, pol["v"]) / p.battery_internal_resistance_ohm
     session.tick_hooks.append(hook)
