@@ -151,7 +151,9 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     # --- locate
     t1 = time.perf_counter()
     loc = Locator().fit(data.time_s, r_nom)
-    loc_signed = Locator(signed=True).fit(data.time_s, {"rope_speed_mps": r_nom["rope_speed_mps"]})
+    # the spans an effect may use are located on the fit samples only (the held-out ones judge it later)
+    loc_signed = Locator(signed=True, bridge_s=BLOCK_S).fit(data.time_s[fit_mask],
+                                                            {"rope_speed_mps": r_nom["rope_speed_mps"][fit_mask]})
     below = [(s.t0_s, s.t1_s) for s in loc_signed.spans_ if s.sign < 0]
     located = [{"channel": s.channel, "span_s": [round(s.t0_s, 3), round(s.t1_s, 3)],
                 "significance": round(s.significance, 2),

@@ -30,11 +30,11 @@ def _windows(n: int, w: int) -> list[tuple[int, int]]:
     return [(k, min(n, k + w)) for k in range(0, n, w) if min(n, k + w) - k >= max(3, w // 2)]
 
 
-def _merge(flags: list[tuple[int, int, float, int]], t: np.ndarray, channel: str) -> list[Span]:
+def _merge(flags: list[tuple[int, int, float, int]], t: np.ndarray, channel: str, bridge_s: float) -> list[Span]:
     spans: list[Span] = []
     for a, b, sig, sign in flags:
         t0, t1 = float(t[a]), float(t[b - 1])
-        if spans and spans[-1].t1_s >= t0 - 1.5 * (t[1] - t[0]) and spans[-1].sign == sign:
+        if spans and spans[-1].t1_s >= t0 - bridge_s and spans[-1].sign == sign:
             last = spans[-1]
             spans[-1] = Span(channel, last.t0_s, t1, max(last.significance, sig), sign)
         else:
@@ -45,15 +45,18 @@ def _merge(flags: list[tuple[int, int, float, int]], t: np.ndarray, channel: str
 class Locator:
     """Estimator: fit(t_s, residuals) -> spans_ (list of Span), window_stat_ per channel.
 
-    Args: window_s: window length; alpha: family-wise false-flag rate per channel; signed: one-sided mean test.
+    Args: window_s: window length; alpha: family-wise false-flag rate per channel; signed: one-sided mean test;
+    bridge_s: flagged windows this close are one span (bridges the held-out blocks when only fit samples are given).
     """
 
-    def __init__(self, *, window_s: float = 0.4, alpha: float = 0.01, signed: bool = False) -> None:
+    def __init__(self, *, window_s: float = 0.4, alpha: float = 0.01, signed: bool = False,
+                 bridge_s: float = 0.0) -> None:
         if window_s <= 0 or not 0 < alpha < 1:
             raise ValueError(f"window_s > 0 and 0 < alpha < 1 expected, got {window_s}, {alpha}")
         self.window_s = window_s
         self.alpha = alpha
         self.signed = signed
+        self.bridge_s = bridge_s
 
     def fit(self, t_s: np.ndarray, residuals: dict[str, np.ndarray]) -> Locator:
         dt = float(np.median(np.diff(t_s)))
@@ -86,7 +89,7 @@ class Locator:
                 if sig > 1.0:
                     flags.append((i0, i1, sig, sign))
             self.window_stat_[channel] = stat_list
-            self.spans_.extend(_merge(flags, t_s, channel))
+            self.spans_.extend(_merge(flags, t_s, channel, self.bridge_s + 1.5 * dt))
         return self
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from robowrangler_sim.diagnose.errors import ModelMismatchError
 from robowrangler_sim.plants import DriveParams, DriveParamsError
 from robowrangler_sim.plants import drive_batch as db
+from robowrangler_sim.rope import RopeParams
 
 FORMAT = "robowrangler.drive_model"
 FORMAT_VERSION = 1
@@ -54,7 +55,8 @@ def params_from_theta(base: DriveParams, theta: np.ndarray) -> DriveParams:
         motor_viscous_friction_nm_s_per_rad=p.motor_viscous_friction_nm_s_per_rad * f_visc,
         nip_viscous_n_s_per_m=p.nip_viscous_n_s_per_m * f_visc,
         rotor_inertia_kg_m2=p.rotor_inertia_kg_m2 * f_j, wheel_inertia_kg_m2=p.wheel_inertia_kg_m2 * f_j,
-        rope_cf_pi_d_m=p.rope_cf_pi_d_m * theta[db.TH_DRAG_K] / th0[db.TH_DRAG_K],
+        rope=dataclasses.replace(p.rope, skin_friction_coeff=p.rope.skin_friction_coeff * theta[db.TH_DRAG_K]
+                                 / th0[db.TH_DRAG_K]),
         battery_internal_resistance_ohm=float(theta[db.TH_BATT_R]),
         battery_open_circuit_v=float(theta[db.TH_BATT_OCV]), esc_lag_s=float(theta[db.TH_ESC_LAG]),
         esc_deadband_us=float(theta[db.TH_DEADBAND]))
@@ -142,8 +144,11 @@ def load_model(path: str | Path) -> DiagnosedModel:
     if unknown:
         raise ModelMismatchError(f"model file {path}: unknown drive_params {', '.join(unknown)}")
     try:
+        rope = dp.get("rope", {})
+        if isinstance(rope, dict):
+            dp = {**dp, "rope": RopeParams(**rope)} if rope else {k: v for k, v in dp.items() if k != "rope"}
         params = DriveParams(**dp)
-    except (DriveParamsError, TypeError) as err:
+    except (DriveParamsError, TypeError, ValueError) as err:
         raise ModelMismatchError(f"model file {path}: drive_params: {err}") from err
     effects = doc.get("effects", {})
     for eid, values in effects.items():

@@ -29,8 +29,7 @@ TOV_MPS = 2.6
 # class estimates a real unit differs on (the nominal refit's business, not missing physics)
 PERTURBED_FIELDS = ("motor_resistance_ohm", "esc_resistance_ohm", "motor_coulomb_friction_nm",
                     "motor_viscous_friction_nm_s_per_rad", "guide_friction_n", "nip_friction_n",
-                    "nip_viscous_n_s_per_m", "battery_internal_resistance_ohm", "rotor_inertia_kg_m2",
-                    "rope_cf_pi_d_m")
+                    "nip_viscous_n_s_per_m", "battery_internal_resistance_ohm", "rotor_inertia_kg_m2")
 
 
 @dataclass(frozen=True)
@@ -47,13 +46,16 @@ class TruthCase:
 
 
 def perturbed_params(rng: np.random.Generator, *, low: float = 0.03, high: float = 0.10) -> DriveParams:
-    """DriveParams with each class estimate off by 3-10 % (random sign), battery OCV off by up to 3 %."""
+    """DriveParams with each class estimate and the rope's skin friction off by 3-10 % (random sign), battery OCV
+    off by up to 3 %."""
     base = DriveParams()
     changes = {}
     for name in PERTURBED_FIELDS:
         frac = rng.uniform(low, high) * rng.choice((-1.0, 1.0))
         changes[name] = getattr(base, name) * (1.0 + frac)
     changes["battery_open_circuit_v"] = base.battery_open_circuit_v * (1.0 + rng.uniform(-0.03, 0.03))
+    frac = rng.uniform(low, high) * rng.choice((-1.0, 1.0))  # the rope's skin friction (its air drag)
+    changes["rope"] = dataclasses.replace(base.rope, skin_friction_coeff=base.rope.skin_friction_coeff * (1.0 + frac))
     return dataclasses.replace(base, **changes)
 
 
