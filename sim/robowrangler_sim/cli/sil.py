@@ -76,6 +76,8 @@ def _sil_modules():
               metavar="SECONDS", help="Stop after this much simulated time (default: until Ctrl-C).")
 @click.option("--state-file", default=None, metavar="PATH",
               help="The SIL device's flash (key, parameters, boot counter); default: a temporary one.")
+@click.option("--model", "model_file", default=None, metavar="FILE", type=click.Path(exists=True, dir_okay=False),
+              help="Drive model written by `wrangler diagnose` (model.json): refitted parameters and effect terms.")
 @click.option("--scenario", "scenario", type=ScenarioName(), default=None,
               help="Run a wrangling scenario with the firmware in the loop instead of serving a device: the "
                    "rope chain (MuJoCo) is the plant; the simulation judges the grasp. Unpaced.")
@@ -90,7 +92,7 @@ def _sil_modules():
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
                 duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
-                render_dir: str | None, viewer: bool) -> None:
+                render_dir: str | None, viewer: bool, model_file: str | None = None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
@@ -117,7 +119,7 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     sil_pkg, _ = _sil_modules()
     try:
         session = sil_pkg.SilSession(speedup=None if unpaced else speedup, seed=seed, cmd_port=cmd_port,
-                                     trace_every=0, key=ctx.key, state_file=state_file)
+                                     trace_every=0, key=ctx.key, state_file=state_file, model=model_file)
         session.start()
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc

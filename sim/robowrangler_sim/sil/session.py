@@ -134,6 +134,9 @@ class SilSession:
             a temporary folder removed at stop().
         spindle: the spindle plant the firmware's servo bus drives, as ``drive`` (SpindleInputs -> SpindleOutputs;
             None builds a SpindlePlant(spindle_params, seed=seed), so the register noise follows the seed).
+        model: a drive model file written by `wrangler diagnose` (model.json) or a DiagnosedModel: its refitted
+            DriveParams drive the plant and its effect terms act through the actuator filters, ``loads`` and a
+            tick hook (robowrangler_sim.diagnose.sil_effects).
         tick_timeout_s: how often the lockstep checks that a slow firmware is still alive while it waits for a
             tick's answer; a busy machine only makes the wait longer, only a firmware that exited (or stays
             silent for minutes) ends the session (lockstep.LockstepLink).
@@ -167,7 +170,15 @@ class SilSession:
                  drive: Plant | Callable[..., Plant] | None = None,
                  spindle: Plant | Callable[..., Plant] | None = None,
                  spindle_bus_us: int | None = None,
-                 tick_timeout_s: float = 2.0) -> None:
+                 tick_timeout_s: float = 2.0, model=None) -> None:
+        diagnosed = None
+        if model is not None:  # a drive model file written by `wrangler diagnose` (or a DiagnosedModel)
+            from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
+
+            if drive_params is not None or drive is not None:
+                raise ValueError("model: expected either model or drive_params/drive, got both")
+            diagnosed = model if isinstance(model, DiagnosedModel) else load_model(model)
+            drive_params = diagnosed.sil_drive_params()
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
@@ -205,6 +216,9 @@ class SilSession:
         self._stop = threading.Event()
         self._error: BaseException | None = None
         self._pace_origin: tuple[float, int] | None = None
+        self.model = diagnosed
+        if diagnosed is not None:
+            diagnosed.install(self)
 
     # ---------------------------------------------------------------------------------------------
     @property
