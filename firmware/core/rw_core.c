@@ -154,6 +154,8 @@ void rw_core_init(rw_core *core)
     core->state.state = RW_STATE_DISARMED;
     core->state.peer_link = RW_LINK_WIFI; /* until a host is heard, the WiFi HAL drops what has no peer */
     core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
+    core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
+    rw_burst_reset(&core->state.burst);
 }
 
 /* Bindings hand rw_config_set_params the core's address for its parameter values. */
@@ -450,8 +452,15 @@ static void control(rw_core *core, float dt_s, bool speed_tick)
     /* measured_mps is this speed, as a float (the estimator step's return) */
     int32_t u_q16 = rw_pi_controller_step(&core->state.pi, setpoint_q16,
                                           rw_mt_speed_estimator_rope_mps_q16(&core->state.speed), ff_q16, dt_s);
-    uint16_t pulse = rw_throttle_map_pulse_us(&core->state.throttle, u_q16);
-    core->state.pulse_us = pulse < esc_min ? esc_min : pulse;
+    /* at the timer's resolution (1/3 us); its whole microseconds are what rw_throttle_map_pulse_us gives */
+    uint16_t pulse_third = rw_throttle_map_pulse_third_us(&core->state.throttle, u_q16);
+    uint16_t pulse = rw_throttle_map_third_us_to_us(pulse_third);
+    if (pulse < esc_min) {
+        pulse = esc_min;
+        pulse_third = (uint16_t)(3u * esc_min);
+    }
+    core->state.pulse_us = pulse;
+    core->state.pulse_third_us = pulse_third;
 }
 
 static uint8_t spindle_flags(const rw_spindle *sp)
@@ -551,6 +560,10 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
         .rx_auth_failed = c->rx_auth_failed,
         .rx_replayed = c->rx_replayed,
         .tx_dropped = rw_outbox_dropped(&core->state.outbox),
+        .esc_pulse_third_us = core->state.pulse_third_us,
+        .spindle_moving_speed_raw = core->state.spindle.state.moving_speed_raw,
+        .encoder_counts = core->state.encoder_counts,
+        .encoder_edge_us = core->state.encoder_edge_us,
     };
     /* encoded straight into its outbox slot (no copy); a full outbox drops it (counted), as a push would */
     rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_TELEMETRY);
@@ -558,6 +571,22 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
         size_t len = rw_msg_telemetry_encode(&msg, 0u, slot->bytes, sizeof slot->bytes); /* numbered when it leaves */
         rw_outbox_commit(&core->state.outbox, slot, RW_OUTBOX_TELEMETRY, len);
     }
+}
+
+/* The next BURST_DATA frame into the outbox when it is empty and nothing is being signed; true if packed. */
+static bool queue_burst_frame(rw_core *core)
+{
+    if (rw_outbox_peek(&core->state.outbox) != NULL || rw_signer_busy(&core->state.signer)) {
+        return false;
+    }
+    rw_msg_burst_data msg;
+    rw_burst_next_frame(&core->state.burst, &msg);
+    rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_BURST);
+    if (slot != NULL) {
+        size_t len = rw_msg_burst_data_encode(&msg, 0u, slot->bytes, sizeof slot->bytes); /* numbered when it leaves */
+        rw_outbox_commit(&core->state.outbox, slot, RW_OUTBOX_BURST, len);
+    }
+    return true;
 }
 
 /* round(1000 / telemetry_rate_hz) ms, computed once per rate (a float division is ~350 instructions). */
@@ -646,6 +675,15 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
 
     /* 1. sensors: the encoder every tick (supervision watches its count), the estimator on speed ticks */
     rw_encoder_sample enc = hal->encoder->read(hal->encoder->ctx);
+    /* for TELEMETRY and bursts: edges since boot and the latest edge's time on the uptime clock (us), so what
+     * the host sees does not depend on where the HAL's counters and tick clock started */
+    if (!core->state.encoder_origin_set) {
+        core->state.encoder_origin_set = true;
+        core->state.encoder_boot_counts = enc.counts;
+    }
+    const uint32_t uptime_us = core->state.uptime_ms * 1000u + core->state.uptime_rem_us;
+    core->state.encoder_counts = enc.counts - core->state.encoder_boot_counts;
+    core->state.encoder_edge_us = uptime_us - (now_us - enc.last_edge_us);
     uint32_t counts_delta = enc.counts - core->state.speed.state.last_count;
     bool primed = core->state.speed.state.primed;
     float speed_dt_s = 0.0f;
@@ -693,7 +731,22 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
     }
     control(core, speed_dt_s, speed_tick);
-    hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
+    if (core->state.pulse_third_us / 3u != core->state.pulse_us) { /* a state set the whole-us minimum */
+        core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
+    }
+    if (hal->esc->write_pulse_third_us != NULL) {
+        hal->esc->write_pulse_third_us(hal->esc->ctx, core->state.pulse_third_us);
+    } else { /* whole microseconds only: that is the pulse the ESCs get */
+        core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
+        hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
+    }
+    if (rw_burst_capturing(&core->state.burst)) {
+        const rw_burst_sample sample = { .encoder_counts = (uint16_t)core->state.encoder_counts,
+                                         .encoder_edge_us = (uint16_t)core->state.encoder_edge_us,
+                                         .esc_pulse_third_us = core->state.pulse_third_us,
+                                         .battery_mv = battery_mv };
+        rw_burst_record(&core->state.burst, core->state.uptime_ms, uptime_us, dt_us, &sample);
+    }
 
     /* 5. telemetry, then at most one datagram out per tick */
     const bool telemetry_tick = !speed_tick && telemetry_due;
@@ -704,5 +757,11 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         late_ms = late_ms <= RW_CORE_SCHEDULE_MAX_HOLD_MS ? late_ms : 0u;
         core->state.telemetry_due_ms = core->state.uptime_ms + telemetry_period_ms(core) - late_ms;
     }
-    send_queued(core, hal, sent, !speed_tick && !telemetry_tick && !spindle_ran);
+    bool idle_tick = !speed_tick && !telemetry_tick && !spindle_ran;
+    if (idle_tick && rw_burst_streaming(&core->state.burst)) {
+        /* one BURST_DATA frame into an empty outbox (after telemetry, events, replies); this tick's work is the
+         * pack, as a telemetry tick's is, so it signs nothing */
+        idle_tick = !queue_burst_frame(core);
+    }
+    send_queued(core, hal, sent, idle_tick);
 }

@@ -50,6 +50,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rw_burst.h"
 #include "rw_config.h"
 #include "rw_duplicate_cache.h"
 #include "rw_hal.h"
@@ -81,8 +82,10 @@
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
 /* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
  * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
- * and what finishing it costs (the last two blocks, four finalization rounds, the send). */
-#define RW_CORE_MAC_TICK_BUDGET 8u
+ * and what finishing it costs (the last two blocks, four finalization rounds, the send). A full 64-byte
+ * payload (TELEMETRY, BURST_DATA: 73 bytes + session id = 9 fixed blocks) is then signed and sent in two idle
+ * ticks: 4 + 5 blocks, then 4 blocks' finish. */
+#define RW_CORE_MAC_TICK_BUDGET 9u
 #define RW_CORE_MAC_BEGIN_COST 4u
 #define RW_CORE_MAC_FINISH_COST 4u
 
@@ -161,6 +164,12 @@ typedef struct rw_core {
         float battery_v;
         uint16_t battery_mv;
         uint16_t pulse_us;
+        uint16_t pulse_third_us;  /* the same pulse in thirds of a microsecond (what a TCC1 HAL outputs) */
+        uint32_t encoder_counts;  /* edges since the first tick (TELEMETRY, burst samples) */
+        uint32_t encoder_edge_us; /* the latest edge's time on the uptime clock, us (wraps) */
+        uint32_t encoder_boot_counts; /* the HAL's count at the first tick */
+        bool encoder_origin_set;
+        rw_burst burst;           /* burst capture (BURST_START, rw_burst.h): last, it is the big one */
     } state;
 } rw_core;
 

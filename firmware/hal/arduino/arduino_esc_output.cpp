@@ -34,6 +34,11 @@ void write_esc(void *ctx, uint16_t pulse_us)
     rw_arduino_esc_output_write_us(static_cast<rw_arduino_esc_output *>(ctx), pulse_us);
 }
 
+void write_esc_third(void *ctx, uint16_t pulse_third_us)
+{
+    rw_arduino_esc_output_write_third_us(static_cast<rw_arduino_esc_output *>(ctx), pulse_third_us);
+}
+
 } // namespace
 
 bool rw_arduino_esc_output_begin(rw_arduino_esc_output *esc, uint16_t min_us, uint16_t max_us)
@@ -44,6 +49,7 @@ bool rw_arduino_esc_output_begin(rw_arduino_esc_output *esc, uint16_t min_us, ui
     esc->min_us = min_us;
     esc->max_us = max_us;
     esc->pulse_us = min_us;
+    esc->pulse_counts = static_cast<uint32_t>(min_us) * TCC_COUNTS_PER_US;
     esc->out_of_range = 0u;
 
     /* GCLK0 -> TCC0/TCC1 clock channel (the APB clock of TCC1 is enabled by the core's init()). */
@@ -82,7 +88,7 @@ void rw_arduino_esc_output_write_us(rw_arduino_esc_output *esc, uint16_t pulse_u
         us = esc->max_us;
         ++esc->out_of_range;
     }
-    if (us == esc->pulse_us) {
+    if (static_cast<uint32_t>(us) * TCC_COUNTS_PER_US == esc->pulse_counts) {
         return; /* nothing to do: saves two synchronised register writes per tick */
     }
     const uint32_t counts = static_cast<uint32_t>(us) * TCC_COUNTS_PER_US;
@@ -94,6 +100,33 @@ void rw_arduino_esc_output_write_us(rw_arduino_esc_output *esc, uint16_t pulse_u
     tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
     TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
     esc->pulse_us = us;
+    esc->pulse_counts = counts;
+}
+
+void rw_arduino_esc_output_write_third_us(rw_arduino_esc_output *esc, uint16_t pulse_third_us)
+{
+    uint32_t counts = pulse_third_us; /* TCC1 counts 1/3 us: the pulse is exactly this many counts */
+    const uint32_t lo = static_cast<uint32_t>(esc->min_us) * TCC_COUNTS_PER_US;
+    const uint32_t hi = static_cast<uint32_t>(esc->max_us) * TCC_COUNTS_PER_US;
+    if (counts < lo) {
+        counts = lo;
+        ++esc->out_of_range;
+    } else if (counts > hi) {
+        counts = hi;
+        ++esc->out_of_range;
+    }
+    if (counts == esc->pulse_counts) {
+        return; /* nothing to do: saves two synchronised register writes per tick */
+    }
+    tcc1_sync(TCC_SYNCBUSY_CTRLB);
+    TCC1->CTRLBSET.reg = TCC_CTRLBSET_LUPD;
+    tcc1_sync(TCC_SYNCBUSY_CTRLB | TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
+    TCC1->CCB[0].reg = counts;
+    TCC1->CCB[1].reg = counts;
+    tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
+    TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
+    esc->pulse_counts = counts;
+    esc->pulse_us = static_cast<uint16_t>((counts + 1u) / TCC_COUNTS_PER_US);
 }
 
 rw_hal_esc_output rw_arduino_esc_output_hal(rw_arduino_esc_output *esc)
@@ -101,5 +134,6 @@ rw_hal_esc_output rw_arduino_esc_output_hal(rw_arduino_esc_output *esc)
     rw_hal_esc_output hal;
     hal.ctx = esc;
     hal.write_pulse_us = write_esc;
+    hal.write_pulse_third_us = write_esc_third;
     return hal;
 }

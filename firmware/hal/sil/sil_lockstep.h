@@ -18,6 +18,7 @@ typedef struct sil_lockstep {
     bool has_plant;
     rw_msg_sil_sensors sensors; /* latest */
     uint16_t esc_pulse_us;      /* latest output */
+    uint16_t esc_pulse_third_us; /* the same, thirds of a microsecond (the timer's resolution) */
     uint16_t spindle_moving_speed_raw; /* latest output */
     uint32_t bad_datagrams;
     uint16_t tx_seq;
