@@ -377,6 +377,14 @@ class Client:
         switch), position 0 there. Returns when accepted; telemetry spindle_flags gets HOMED when done."""
         return State(self._command(gen.Home()).state)
 
+    def start_burst(self, samples: int) -> State:
+        """BURST_START: the device samples every control tick (1 kHz) for `samples` ticks (1..1000), then streams
+        them as BURST_DATA (a recorder writes them to /device/burst). Refused (NackError) while a burst is
+        captured or streamed (BURST_BUSY) or for a size out of range (OUT_OF_RANGE, detail = the maximum)."""
+        if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= 0xFFFF:
+            raise InvalidArgument("samples", "an integer 1..1000 (the device's burst buffer)", samples)
+        return State(self._command(gen.BurstStart(samples)).state)
+
     # ----------------------------------------------------------------- provisioning (USB serial only)
 
     def provision_status(self) -> ProvisionStatus:
