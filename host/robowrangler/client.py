@@ -82,6 +82,7 @@ class ClientStats:
     telemetry_dropped: int = 0
     events_received: int = 0
     events_lost: int = 0
+    burst_frames: int = 0  # BURST_DATA frames received (a recorder on the transport keeps their content)
     unexpected_messages: int = 0
     auth_failures: int = 0
     replayed: int = 0  # signed device frames dropped as stale (an older session or a counter already seen)
@@ -753,6 +754,9 @@ class Client:
             self._on_telemetry(TelemetrySample.from_wire(msg, received_s=received_s))
         elif msg_id == MsgId.EVENT:
             self._on_event(DeviceEvent.from_wire(msg, received_s=received_s))
+        elif msg_id == MsgId.BURST_DATA:
+            with self._lock:
+                self._stats.burst_frames += 1
         else:
             with self._lock:
                 self._stats.unexpected_messages += 1
