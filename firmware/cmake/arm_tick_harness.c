@@ -88,7 +88,7 @@ static void fake_esc_write(void *ctx, uint16_t pulse_us)
 static void fake_esc_write_third(void *ctx, uint16_t pulse_third_us)
 {
     (void)ctx;
-    harness_pulse_us = (uint16_t)((pulse_third_us + 1u) / 3u);
+    harness_pulse_us = (uint16_t)(((pulse_third_us + 1u) * 21846u) >> 16); /* as the board's HAL: no division */
 }
 
 static size_t fake_link_recv(void *ctx, uint8_t *buf, size_t cap)

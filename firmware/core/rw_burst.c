@@ -27,27 +27,6 @@ uint8_t rw_burst_start(rw_burst *b, uint16_t samples, int32_t *detail)
     return 0u;
 }
 
-void rw_burst_record(rw_burst *b, uint32_t uptime_ms, uint32_t uptime_us, uint32_t dt_us, const rw_burst_sample *sample)
-{
-    if (b->state.phase != RW_BURST_CAPTURING) {
-        return;
-    }
-    const uint16_t i = b->state.captured;
-    if (i == 0u) {
-        b->state.start_time_ms = uptime_ms;
-        b->state.start_time_us = uptime_us;
-        b->state.tick_us = dt_us > 65535u ? 65535u : (uint16_t)dt_us;
-    } else if (i == 1u) {
-        const uint32_t tick_us = uptime_us - b->state.start_time_us;
-        b->state.tick_us = tick_us > 65535u ? 65535u : (uint16_t)tick_us;
-    }
-    b->state.samples[i] = *sample;
-    b->state.captured = (uint16_t)(i + 1u);
-    if (b->state.captured >= b->state.count) {
-        b->state.phase = RW_BURST_STREAMING;
-    }
-}
-
 void rw_burst_next_frame(rw_burst *b, rw_msg_burst_data *msg)
 {
     memset(msg, 0, sizeof *msg);

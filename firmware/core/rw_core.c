@@ -576,7 +576,7 @@ static void queue_telemetry(rw_core *core, const rw_hal *hal)
 /* The next BURST_DATA frame into the outbox when it is empty and nothing is being signed; true if packed. */
 static bool queue_burst_frame(rw_core *core)
 {
-    if (rw_outbox_peek(&core->state.outbox) != NULL || rw_signer_busy(&core->state.signer)) {
+    if (rw_signer_busy(&core->state.signer) || rw_outbox_peek(&core->state.outbox) != NULL) {
         return false;
     }
     rw_msg_burst_data msg;
@@ -731,7 +731,8 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
     }
     control(core, speed_dt_s, speed_tick);
-    if (core->state.pulse_third_us / 3u != core->state.pulse_us) { /* a state set the whole-us minimum */
+    /* a state that stops the rope set only the whole-microsecond minimum: its thirds follow */
+    if (rw_throttle_map_third_us_to_us(core->state.pulse_third_us) != core->state.pulse_us) {
         core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
     }
     if (hal->esc->write_pulse_third_us != NULL) {

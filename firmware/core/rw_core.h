@@ -21,6 +21,9 @@
  *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
  *   5. telemetry at telemetry_rate_hz; one queued frame to the peer (over a keyed WiFi link: signed over idle
  *      ticks first, see below)
+ *   burst (BURST_START, rw_burst.h): while capturing, every tick stores its sample (encoder, the pulse it wrote,
+ *      battery) after step 4; once captured, an idle tick with an empty outbox and nothing being signed packs
+ *      one BURST_DATA frame instead of signing (its pack costs what a telemetry pack does)
  *
  * Schedule: the calls alternate between two kinds of tick, so that the expensive periodic jobs never
  * share a tick (the worst-case tick is one job plus the per-tick work, not their sum; on the M0+ every
@@ -84,9 +87,10 @@
  * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
  * and what finishing it costs (the last two blocks, four finalization rounds, the send). A full 64-byte
  * payload (TELEMETRY, BURST_DATA: 73 bytes + session id = 9 fixed blocks) is then signed and sent in two idle
- * ticks: 4 + 5 blocks, then 4 blocks' finish. */
+ * ticks: begin + 4 blocks, then 5 blocks + finish; each under 10 % of a 1 kHz tick on the M0+
+ * (bench/bench_tick_instructions.py). */
 #define RW_CORE_MAC_TICK_BUDGET 9u
-#define RW_CORE_MAC_BEGIN_COST 4u
+#define RW_CORE_MAC_BEGIN_COST 5u
 #define RW_CORE_MAC_FINISH_COST 4u
 
 typedef struct rw_core_counters {

@@ -126,7 +126,7 @@ void rw_arduino_esc_output_write_third_us(rw_arduino_esc_output *esc, uint16_t p
     tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
     TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
     esc->pulse_counts = counts;
-    esc->pulse_us = static_cast<uint16_t>((counts + 1u) / TCC_COUNTS_PER_US);
+    esc->pulse_us = static_cast<uint16_t>(((counts + 1u) * 21846u) >> 16); /* / 3 rounded, no division on the M0+ */
 }
 
 rw_hal_esc_output rw_arduino_esc_output_hal(rw_arduino_esc_output *esc)
