@@ -46,6 +46,9 @@ WHEEL_RADIUS_M = 0.015
 LOOP_TARGET_UM = 150_000  # far from home: the spindle keeps moving while the ticks are profiled
 SCHEDULE_TICKS = 200  # ten telemetry periods (20 ms at 50 Hz), twenty spindle periods (10 ms)
 PHASES = 20  # a received datagram at each of this many consecutive ticks (one telemetry period)
+# The SAMD21 runs its flash at 48 MHz with one wait state, partly hidden by its cache: real cycles lie between
+# the modelled count and this factor times it (DESIGN.md); the budget is checked against the upper bound too.
+FLASH_WAIT_FACTOR = 1.5
 
 
 def group_of(func: str) -> str:
@@ -79,7 +82,8 @@ MAC_ROOTS = ("rw_frame_tag_valid", "rw_frame_sign", "rw_signer_begin", "rw_signe
 TICK_PARTS = (
     ("speed", "rw_pi_controller_step"),
     ("spindle", "rw_spindle_step"),
-    ("telemetry pack", "rw_msg_telemetry_encode"),
+    ("telemetry pack", "rw_msg_telemetry_pack"),
+    ("battery", "rw_throttle_map_prepare_battery"),
     ("mac begin", "rw_signer_begin"),
     ("mac absorb", "rw_signer_absorb"),
     ("mac finish+send", "rw_signer_finish"),
@@ -174,7 +178,7 @@ def profile_row(name: str, p: "ah.CallProfile") -> str:
     us = p.cycles / CPU_HZ * 1e6
     mac_cycles = sum(p.inclusive_cycles[r] for r in MAC_ROOTS)
     return (f"{name:<34}{p.instructions:>8}{p.cycles:>8}{us:>8.1f}{p.cycles / cycles_per_tick:>9.1%}"
-            f"{1.5 * p.cycles / cycles_per_tick:>9.1%}{p.stack_bytes:>8}{mac_cycles:>8}")
+            f"{FLASH_WAIT_FACTOR * p.cycles / cycles_per_tick:>9.1%}{p.stack_bytes:>8}{mac_cycles:>8}")
 
 
 def print_breakdown(title: str, p: "ah.CallProfile") -> None:
@@ -275,10 +279,14 @@ def main() -> None:
         print(profile_row(f"{label} (x{len(profiles)})", worst))
     mean_cycles = sum(p.cycles for _, p in cycle) / len(cycle)
     print(f"{'mean over the cycle':<34}{'':>8}{mean_cycles:>8.0f}{mean_cycles / CPU_HZ * 1e6:>8.1f}"
-          f"{mean_cycles / cycles_per_tick:>9.1%}{1.5 * mean_cycles / cycles_per_tick:>9.1%}")
+          f"{mean_cycles / cycles_per_tick:>9.1%}{FLASH_WAIT_FACTOR * mean_cycles / cycles_per_tick:>9.1%}")
     verdict = "meets" if worst_periodic.cycles < 0.1 * cycles_per_tick else "MISSES"
     print(f"worst periodic tick: '{worst_label}', {worst_periodic.cycles} cycles = "
           f"{worst_periodic.cycles / cycles_per_tick:.1%} at 1 kHz: {verdict} the 10 % target")
+    worst_1_5 = FLASH_WAIT_FACTOR * worst_periodic.cycles
+    verdict_1_5 = "meets" if worst_1_5 < 0.1 * cycles_per_tick else "MISSES"
+    print(f"worst periodic tick with one flash wait state (x{FLASH_WAIT_FACTOR}): {worst_1_5:.0f} cycles = "
+          f"{worst_1_5 / cycles_per_tick:.1%} at 1 kHz: {verdict_1_5} the 10 % target")
 
     print("\n3. a 1000-sample burst: 1,000 ticks sampling, then 200 ticks of its stream (nothing received)")
     print(header)

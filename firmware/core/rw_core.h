@@ -58,25 +58,19 @@
 #include "rw_duplicate_cache.h"
 #include "rw_hal.h"
 #include "rw_load_monitor.h"
-#include "rw_mt_speed_estimator.h"
 #include "rw_outbox.h"
 #include "rw_params.h"
-#include "rw_pi_controller.h"
 #include "rw_protocol.h"
-#include "rw_ramp.h"
 #include "rw_signer.h"
+#include "rw_speed_loop.h"
 #include "rw_spindle.h"
-#include "rw_throttle_map.h"
 #include "rw_tov_guard.h"
 
+/* The tick period the controllers are prepared for (rw_core_apply_params), microseconds: the board's and the
+ * SIL's. Any other period works the same, at the cost of converting gains for it on the tick. */
+#define RW_CORE_TICK_US 1000u
 /* Under this measured speed the rope counts as stopped (spin-down done, DISARM allowed). */
 #define RW_CORE_STOPPED_MPS 0.15f
-/* Airborne, the setpoint approaches the guard speed exponentially with this time constant (s), at least
- * RW_CORE_GUARD_APPROACH_MIN_MPS2: a step down to the guard then lands on it without undershooting. */
-#define RW_CORE_GUARD_APPROACH_S 0.4f
-#define RW_CORE_GUARD_APPROACH_MIN_MPS2 0.5f
-/* Over this setpoint an encoder silence of four edge periods holds the throttle (a stale reading). */
-#define RW_CORE_ENCODER_HOLD_MIN_MPS 1.0f
 /* Throttle above idle, for the encoder-silence check: the ESC pulse is more than this over esc_min_us. */
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
 /* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
@@ -92,6 +86,9 @@
 #define RW_CORE_MAC_TICK_BUDGET 9u
 #define RW_CORE_MAC_BEGIN_COST 5u
 #define RW_CORE_MAC_FINISH_COST 4u
+/* An idle tick that also refreshes the feed-forward's battery factor (one float division, ~500 cycles) signs
+ * this much less. */
+#define RW_CORE_MAC_BATTERY_COST 2u
 
 typedef struct rw_core_counters {
     uint16_t rx_ok;
@@ -114,11 +111,8 @@ typedef struct rw_core {
     rw_params params; /* public: read through rw_params_get; set through PARAM_SET or rw_core_set_param */
     uint32_t reset_cause; /* public: the board's reset reason, set before the first tick (BOOT event arg) */
     struct {
-        rw_mt_speed_estimator speed;
-        rw_pi_controller pi;
-        rw_ramp ramp;
-        rw_throttle_map throttle;
-        rw_tov_guard guard;
+        rw_speed_loop loop;       /* the rope speed loop: estimator, ramp, PI, throttle map (rw_speed_loop.h) */
+        rw_tov_guard guard;       /* airborne setpoints and loop collapse (supervisor) */
         rw_spindle spindle;
         rw_load_monitor load_monitor; /* load loss of the flying rope (rw_core_load_loss.c) */
         rw_duplicate_cache duplicates;
@@ -152,18 +146,11 @@ typedef struct rw_core {
         bool grasp_pending;       /* GRASP: RELAX goes on to RETRACT once the rope has stopped */
         bool speed_tick_next;     /* schedule: the next call is a speed tick (see the schedule above) */
         uint32_t speed_dt_us;     /* time since the last speed tick, microseconds */
-        uint32_t tick_dt_us_memo; /* dt_us the value below was computed for (the tick period repeats) */
-        float tick_dt_s_memo;     /* min(dt_us 1e-6, max control step), seconds */
-        uint32_t speed_dt_us_memo;
-        float speed_dt_s_memo;
-        float telemetry_rate_hz_memo; /* the rate telemetry_period_ms was computed for (0: none yet) */
-        uint32_t telemetry_period_ms; /* round(1000 / telemetry_rate_hz) */
-        float ff_battery_v;       /* the battery voltage the feed-forward uses (refreshed on idle ticks) */
+        uint32_t telemetry_period_ms; /* round(1000 / telemetry_rate_hz) (rw_core_apply_params) */
         uint16_t tx_seq[2];       /* next seq per link: [0] WiFi, [1] USB serial (rw_core_take_seq) */
         uint16_t last_cmd_seq;
 
         float target_mps;         /* commanded rope speed */
-        float setpoint_mps;       /* ramped setpoint */
         float measured_mps;
         float battery_v;
         uint16_t battery_mv;

@@ -23,10 +23,9 @@ void rw_core_load_loss_apply_params(rw_core *core)
 {
     const rw_params *p = &core->params;
     rw_load_monitor_config *c = &core->state.load_monitor.cfg;
-    rw_load_monitor_set_drive(&core->state.load_monitor, RW_CORE_DRIVE_MOTOR_COUNT,
-                              rw_params_get(p, RW_PARAM_MOTOR_KV_RPM_PER_V),
-                              rw_params_get(p, RW_PARAM_DRIVE_RESISTANCE_OHM),
-                              rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M));
+    c->n_per_v = rw_load_monitor_n_per_v(RW_CORE_DRIVE_MOTOR_COUNT, rw_params_get(p, RW_PARAM_MOTOR_KV_RPM_PER_V),
+                                         rw_params_get(p, RW_PARAM_DRIVE_RESISTANCE_OHM),
+                                         rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M));
     c->drop_n = rw_params_get(p, RW_PARAM_LOAD_LOSS_DROP_N);
     c->time_s = rw_params_get(p, RW_PARAM_LOAD_LOSS_TIME_S);
     rw_load_monitor_prepare(&core->state.load_monitor, RW_CORE_LOAD_CHECK_DT_S);
@@ -37,10 +36,11 @@ void rw_core_load_loss_step(rw_core *core)
     const float dt_s = RW_CORE_LOAD_CHECK_DT_S;
     const uint8_t st = core->state.state;
     /* "at its target" in the ramp's own Q16.16 (the float target, 15000 mm/s x 0.001, is 15.000001 m/s) */
-    const bool steady = st == RW_STATE_AIRBORNE && rw_ramp_at_target(&core->state.ramp, core->state.target_mps) &&
-                        core->state.pi.state.saturation == 0;
-    if (!rw_load_monitor_step(&core->state.load_monitor, steady, rw_pi_controller_integral(&core->state.pi),
-                              core->state.ff_battery_v, dt_s)) {
+    const rw_speed_loop *loop = &core->state.loop;
+    const bool steady = st == RW_STATE_AIRBORNE && rw_ramp_at_target(&loop->ramp, core->state.target_mps) &&
+                        loop->pi.state.saturation == 0;
+    if (!rw_load_monitor_step(&core->state.load_monitor, steady, rw_pi_controller_integral(&loop->pi),
+                              rw_speed_loop_battery_v(loop), dt_s)) {
         return;
     }
     float drop_mn = rw_load_monitor_drop_n(&core->state.load_monitor) * 1000.0f;

@@ -35,11 +35,11 @@
 #define RW_DEFAULT_BATTERY_NOMINAL_V 11.1f
 /** ESC pulse for zero throttle: the ESC's minimum, never output below it, microseconds. */
 #define RW_DEFAULT_ESC_PULSE_MIN_US ((uint16_t)RW_PARAM_DEFAULT_ESC_MIN_US)
-/** ESC pulse for full throttle, microseconds. */
-#define RW_DEFAULT_ESC_PULSE_MAX_US 2000u
-/** Hard bounds every configured ESC pulse range must lie in, microseconds. */
-#define RW_ESC_PULSE_LIMIT_LOW_US 1000u
-#define RW_ESC_PULSE_LIMIT_HIGH_US 2000u
+/** ESC pulse for full throttle, microseconds (the protocol's top, from the spec). */
+#define RW_DEFAULT_ESC_PULSE_MAX_US RW_ESC_PULSE_MAX_US
+/** Hard bounds every configured ESC pulse range must lie in, microseconds (the spec's ESC_PULSE_MIN/MAX_US). */
+#define RW_ESC_PULSE_LIMIT_LOW_US RW_ESC_PULSE_MIN_US
+#define RW_ESC_PULSE_LIMIT_HIGH_US RW_ESC_PULSE_MAX_US
 
 /* ---- Rope speed loop ---------------------------------------------------------------------------- */
 

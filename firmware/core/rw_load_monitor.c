@@ -20,7 +20,6 @@ void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg)
 void rw_load_monitor_init(rw_load_monitor *m, const rw_load_monitor_config *cfg)
 {
     m->cfg = *cfg;
-    memset(m->state.drive_memo, 0, sizeof m->state.drive_memo);
     rw_lowpass_config lp = { .tau_s = cfg->filter_tau_s };
     rw_lowpass_init(&m->state.load, &lp);
     lp.tau_s = cfg->reference_tau_s;
@@ -29,6 +28,7 @@ void rw_load_monitor_init(rw_load_monitor *m, const rw_load_monitor_config *cfg)
     rw_lowpass_init(&m->state.rise, &lp);
     lp.tau_s = cfg->battery_tau_s;
     rw_lowpass_init(&m->state.battery, &lp);
+    rw_load_monitor_prepare(m, 0.0f);
     rw_load_monitor_reset(m);
 }
 
@@ -42,18 +42,13 @@ void rw_load_monitor_reset(rw_load_monitor *m)
     m->state.drop_s = 0.0f;
 }
 
-/* The filters follow the configuration's time constants (public fields, may change between steps). */
-static void follow_config(rw_load_monitor *m)
+void rw_load_monitor_prepare(rw_load_monitor *m, float dt_s)
 {
+    m->state.active = rw_f32_positive(m->cfg.drop_n) && rw_load_monitor_config_is_valid(&m->cfg);
     m->state.load.cfg.tau_s = m->cfg.filter_tau_s;
     m->state.reference.cfg.tau_s = m->cfg.reference_tau_s;
     m->state.rise.cfg.tau_s = m->cfg.rise_tau_s;
     m->state.battery.cfg.tau_s = m->cfg.battery_tau_s;
-}
-
-void rw_load_monitor_prepare(rw_load_monitor *m, float dt_s)
-{
-    follow_config(m);
     rw_lowpass_prepare(&m->state.load, dt_s);
     rw_lowpass_prepare(&m->state.reference, dt_s);
     rw_lowpass_prepare(&m->state.rise, dt_s);
@@ -69,17 +64,6 @@ float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resis
     /* Kt = 60 / (2 pi kv) N m/A; F = n Kt I / r with I = V / R */
     float kt_nm_per_a = 60.0f / (6.2831853f * kv_rpm_per_v);
     return motor_count * kt_nm_per_a / (resistance_ohm * wheel_radius_m);
-}
-
-void rw_load_monitor_set_drive(rw_load_monitor *m, float motor_count, float kv_rpm_per_v, float resistance_ohm,
-                               float wheel_radius_m)
-{
-    const float args[4] = { motor_count, kv_rpm_per_v, resistance_ohm, wheel_radius_m };
-    float *memo = m->state.drive_memo;
-    if (memcmp(args, memo, sizeof args) != 0 || !(m->cfg.n_per_v > 0.0f)) {
-        memcpy(memo, args, sizeof args);
-        m->cfg.n_per_v = rw_load_monitor_n_per_v(motor_count, kv_rpm_per_v, resistance_ohm, wheel_radius_m);
-    }
 }
 
 /* The filters are the core's Q16.16 low-pass (rw_lowpass.h); forces in N and volts fit Q16.16 with 1.5e-5
@@ -116,14 +100,13 @@ bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)
 bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float battery_v, float dt_s)
 {
     const rw_load_monitor_config *c = &m->cfg;
-    if (!steady || !rw_f32_positive(c->drop_n) || !rw_load_monitor_config_is_valid(c) || !rw_f32_finite(integral) ||
-        !rw_f32_finite(battery_v) || !rw_f32_positive_finite(dt_s)) {
+    if (!steady || !m->state.active || !rw_f32_finite(integral) || !rw_f32_finite(battery_v) ||
+        !rw_f32_positive_finite(dt_s)) {
         if (m->state.steady || m->state.reported) {
             rw_load_monitor_reset(m);
         }
         return false;
     }
-    follow_config(m);
     if (!m->state.steady) { /* a new steady spell: start from here */
         m->state.steady = true;
         m->state.steady_s = 0.0f;

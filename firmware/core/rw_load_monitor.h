@@ -60,7 +60,7 @@ typedef struct rw_load_monitor_config {
 } rw_load_monitor_config;
 
 typedef struct rw_load_monitor {
-    rw_load_monitor_config cfg; /**< public, may be changed between steps */
+    rw_load_monitor_config cfg; /**< public; after a change call rw_load_monitor_prepare */
     struct {
         rw_lowpass load;      /**< filtered load estimate, N */
         rw_lowpass reference; /**< reference level, N (its filter: falls, reference_tau_s) */
@@ -70,26 +70,23 @@ typedef struct rw_load_monitor {
         bool reported;        /**< the loss was reported (once per steady spell) */
         float steady_s;       /**< time steady, s (saturates past settle_s) */
         float drop_s;         /**< time the drop has exceeded drop_n, s */
-        float drive_memo[4];  /**< the rw_load_monitor_set_drive arguments n_per_v was computed for */
+        bool active;          /**< the configuration is valid and drop_n > 0 (prepared) */
     } state;                  /**< private history */
 } rw_load_monitor;
 
-/** Copies cfg and resets. */
+/** Copies cfg, prepares for no step in particular and resets. */
 void rw_load_monitor_init(rw_load_monitor *m, const rw_load_monitor_config *cfg);
 /** Fills cfg with the reference rig's values (n_per_v for 1250 rpm/V, 0.085 ohm, 15 mm; drop 1.0 N, 0.1 s). */
 void rw_load_monitor_config_defaults(rw_load_monitor_config *cfg);
 /** Forget the learnt levels: the next steady step starts learning. */
 void rw_load_monitor_reset(rw_load_monitor *m);
-/** The filters' coefficients for steps of dt_s, computed now (four float divisions) so that steps with this dt_s
- *  do none; call after changing the configuration. */
+/** Converts cfg for steps of dt_s: the filters' time constants and coefficients (four float divisions, so that
+ *  steps of this dt_s do none) and whether the monitor is on; call it after changing cfg (the core does, from
+ *  rw_core_apply_params). */
 void rw_load_monitor_prepare(rw_load_monitor *m, float dt_s);
 /** n_per_v for motor_count motors of kv_rpm_per_v behind resistance_ohm each, on wheels of wheel_radius_m;
  *  0 when an argument is not finite and > 0. */
 float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resistance_ohm, float wheel_radius_m);
-/** cfg.n_per_v = rw_load_monitor_n_per_v(...), computed only when an argument changed (a division and three
- *  products, ~1,400 instructions on the M0+, saved on every parameter change that is not one of these). */
-void rw_load_monitor_set_drive(rw_load_monitor *m, float motor_count, float kv_rpm_per_v, float resistance_ohm,
-                               float wheel_radius_m);
 /**
  * One speed-loop step. steady: airborne at a setpoint that is not moving, PI not saturated (else the monitor
  * restarts and returns false). integral: the speed PI's integral term (throttle fraction); battery_v: the

@@ -13,9 +13,7 @@
 void rw_lowpass_init(rw_lowpass *f, const rw_lowpass_config *cfg)
 {
     f->cfg = *cfg;
-    f->state.alpha_q20 = RW_LOWPASS_ALPHA_ONE_Q20;
-    f->state.alpha_tau_s = 0.0f;
-    f->state.alpha_dt_s = 0.0f;
+    rw_lowpass_prepare(f, 0.0f);
     rw_lowpass_reset(f);
 }
 
@@ -39,18 +37,18 @@ bool rw_lowpass_config_is_valid(const rw_lowpass_config *cfg)
     return rw_f32_finite(cfg->tau_s) && rw_f32_ge(cfg->tau_s, 0.0f);
 }
 
+/* dt / (tau + dt) in Q20, at least 2^-20, for tau_s and dt_s both finite and > 0 (one float division). */
+static int32_t alpha_q20_of(float tau_s, float dt_s)
+{
+    const int32_t alpha_q20 = rw_f32_to_q16(dt_s / (tau_s + dt_s) * 16.0f); /* Q16 of 16 alpha = Q20 */
+    return alpha_q20 < 1 ? 1 : (alpha_q20 > RW_LOWPASS_ALPHA_ONE_Q20 ? RW_LOWPASS_ALPHA_ONE_Q20 : alpha_q20);
+}
+
 void rw_lowpass_prepare(rw_lowpass *f, float dt_s)
 {
-    const float tau_s = f->cfg.tau_s;
-    if (!rw_f32_positive_finite(dt_s) || !rw_f32_positive_finite(tau_s)) {
-        return;
-    }
-    if (!rw_f32_same(tau_s, f->state.alpha_tau_s) || !rw_f32_same(dt_s, f->state.alpha_dt_s)) {
-        const int32_t alpha_q20 = rw_f32_to_q16(dt_s / (tau_s + dt_s) * 16.0f); /* Q16 of 16 alpha = Q20 */
-        f->state.alpha_q20 = alpha_q20 < 1 ? 1 : (alpha_q20 > RW_LOWPASS_ALPHA_ONE_Q20 ? RW_LOWPASS_ALPHA_ONE_Q20 : alpha_q20);
-        f->state.alpha_tau_s = tau_s;
-        f->state.alpha_dt_s = dt_s;
-    }
+    const bool usable = rw_f32_positive_finite(dt_s) && rw_f32_positive_finite(f->cfg.tau_s);
+    f->state.alpha_q20 = usable ? alpha_q20_of(f->cfg.tau_s, dt_s) : RW_LOWPASS_ALPHA_ONE_Q20;
+    f->state.prepared_dt_s = usable ? dt_s : 0.0f;
 }
 
 /*
@@ -60,8 +58,8 @@ void rw_lowpass_prepare(rw_lowpass *f, float dt_s)
  *     y[k]  = y[k-1] + alpha * (x[k] - y[k-1])                 (y kept in Q32, so no dead band)
  * tau_s <= 0 (or not finite): y[k] = x[k] (pass-through).
  * dt_s <= 0 or not finite: y[k] = y[k-1] (the sample is ignored).
- * alpha is computed once per (tau_s, dt_s) pair and kept (a division is ~350 instructions on the M0+;
- * the tick has a fixed dt); the step itself is integer arithmetic.
+ * alpha is computed by rw_lowpass_prepare for the step the caller makes (a division is ~350 instructions on
+ * the M0+; the tick has a fixed dt); a step of another dt computes its own. The step is integer arithmetic.
  */
 int32_t rw_lowpass_step(rw_lowpass *f, int32_t x_q16, float dt_s)
 {
@@ -73,13 +71,13 @@ int32_t rw_lowpass_step(rw_lowpass *f, int32_t x_q16, float dt_s)
         rw_lowpass_reset_to(f, x_q16);
         return x_q16;
     }
-    rw_lowpass_prepare(f, dt_s);
-    if (f->state.alpha_q20 == RW_LOWPASS_ALPHA_ONE_Q20) { /* dt far beyond tau */
+    const int32_t alpha_q20 = rw_f32_same(dt_s, f->state.prepared_dt_s) ? f->state.alpha_q20 : alpha_q20_of(tau_s, dt_s);
+    if (alpha_q20 == RW_LOWPASS_ALPHA_ONE_Q20) { /* dt far beyond tau */
         rw_lowpass_reset_to(f, x_q16);
         return x_q16;
     }
     int64_t e = (int64_t)x_q16 * 65536 - f->state.y_q32;
     e = e > RW_LOWPASS_MAX_STEP_Q32 ? RW_LOWPASS_MAX_STEP_Q32 : (e < -RW_LOWPASS_MAX_STEP_Q32 ? -RW_LOWPASS_MAX_STEP_Q32 : e);
-    f->state.y_q32 += (e * f->state.alpha_q20) >> 20;
+    f->state.y_q32 += (e * alpha_q20) >> 20;
     return rw_lowpass_output_q16(f);
 }

@@ -71,11 +71,7 @@ static uint32_t two_pi_r_q32(float r_m)
 /* The filtered rope speed, m/s Q16.16: 2 pi r x the filtered rev/s, rounded; 0 for an invalid radius. */
 static int32_t rope_q16_of(const rw_mt_speed_estimator *e)
 {
-    const float r_m = e->cfg.wheel_radius_m;
-    if (!rw_f32_positive_finite(r_m)) {
-        return 0;
-    }
-    const uint32_t k = rw_f32_same(r_m, e->state.two_pi_r_radius_m) ? e->state.two_pi_r_q32 : two_pi_r_q32(r_m);
+    const uint32_t k = e->state.two_pi_r_q32;
     const int32_t rev_q16 = rw_lowpass_output_q16(&e->state.filter);
     if (rev_q16 <= 0) {
         return 0;
@@ -88,11 +84,19 @@ static int32_t rope_q16_of(const rw_mt_speed_estimator *e)
 void rw_mt_speed_estimator_init(rw_mt_speed_estimator *e, const rw_mt_speed_estimator_config *cfg)
 {
     e->cfg = *cfg;
-    e->state.two_pi_r_q32 = 0u;
-    e->state.two_pi_r_radius_m = 0.0f;
     const rw_lowpass_config filter_cfg = {.tau_s = cfg->filter_tau_s};
     rw_lowpass_init(&e->state.filter, &filter_cfg);
+    rw_mt_speed_estimator_prepare(e, 0.0f);
     rw_mt_speed_estimator_reset(e);
+}
+
+void rw_mt_speed_estimator_prepare(rw_mt_speed_estimator *e, float dt_s)
+{
+    e->state.valid = rw_mt_speed_estimator_config_is_valid(&e->cfg);
+    const float r_m = e->cfg.wheel_radius_m;
+    e->state.two_pi_r_q32 = rw_f32_positive_finite(r_m) ? two_pi_r_q32(r_m) : 0u;
+    e->state.filter.cfg.tau_s = e->cfg.filter_tau_s;
+    rw_lowpass_prepare(&e->state.filter, dt_s);
 }
 
 void rw_mt_speed_estimator_config_defaults(rw_mt_speed_estimator_config *cfg)
@@ -180,7 +184,7 @@ bool rw_mt_speed_estimator_is_stale(const rw_mt_speed_estimator *e)
 float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint32_t edge_us,
                                  uint32_t now_us, float dt_s)
 {
-    if (!rw_mt_speed_estimator_config_is_valid(&e->cfg)) {
+    if (!e->state.valid) {
         e->state.rope_mps_q16 = 0;
         return 0.0f;
     }
@@ -192,11 +196,6 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
         return rw_f32_from_q16(e->state.rope_mps_q16);
     }
 
-    e->state.filter.cfg.tau_s = e->cfg.filter_tau_s; /* cfg is public: follow a changed tau */
-    if (!rw_f32_same(e->cfg.wheel_radius_m, e->state.two_pi_r_radius_m)) {
-        e->state.two_pi_r_q32 = two_pi_r_q32(e->cfg.wheel_radius_m);
-        e->state.two_pi_r_radius_m = e->cfg.wheel_radius_m;
-    }
     const uint32_t dn = count - e->state.last_count;
     int32_t n_q16 = e->state.raw_rev_per_s_q16;
 

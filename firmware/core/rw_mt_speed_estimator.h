@@ -33,7 +33,7 @@ typedef struct rw_mt_speed_estimator_config {
 } rw_mt_speed_estimator_config;
 
 typedef struct rw_mt_speed_estimator {
-    rw_mt_speed_estimator_config cfg; /**< public, may be changed between steps */
+    rw_mt_speed_estimator_config cfg; /**< public; after a change call rw_mt_speed_estimator_prepare */
     struct {
         uint32_t last_count;   /**< edge count at the last measured edge */
         uint32_t last_edge_us; /**< timestamp of that edge, microseconds */
@@ -41,14 +41,18 @@ typedef struct rw_mt_speed_estimator {
         rw_lowpass filter;     /**< low-pass on raw_rev_per_s_q16, tau = filter_tau_s */
         bool primed;           /**< a reference edge has been latched since reset */
         bool stale;            /**< no measured edge interval since reset, or silent > timeout_us */
-        uint32_t two_pi_r_q32; /**< 2 pi wheel_radius_m, metres Q32, for two_pi_r_radius_m (computed once) */
-        float two_pi_r_radius_m; /**< the wheel_radius_m two_pi_r_q32 belongs to (0: none yet) */
+        bool valid;            /**< rw_mt_speed_estimator_config_is_valid(cfg) (prepared) */
+        uint32_t two_pi_r_q32; /**< 2 pi wheel_radius_m, metres Q32; 0 for an invalid radius (prepared) */
         int32_t rope_mps_q16;  /**< filtered rope speed, m/s Q16.16 (2 pi r x the filtered rev/s) */
     } state;                   /**< private history */
 } rw_mt_speed_estimator;
 
-/** Copies cfg and resets. */
+/** Copies cfg, prepares for no step in particular and resets. */
 void rw_mt_speed_estimator_init(rw_mt_speed_estimator *e, const rw_mt_speed_estimator_config *cfg);
+/** Converts cfg for steps of dt_s (the validity, 2 pi r in Q32, the filter's coefficient): call it after
+ *  changing cfg (the core does, from rw_core_apply_params). A step of another dt_s filters with its own
+ *  coefficient (rw_lowpass_prepare). */
+void rw_mt_speed_estimator_prepare(rw_mt_speed_estimator *e, float dt_s);
 /** Fills cfg with the defaults of rw_defaults.h (64 counts/rev, 15 mm wheel, ...). */
 void rw_mt_speed_estimator_config_defaults(rw_mt_speed_estimator_config *cfg);
 /** Speed 0, stale, no reference: the next step only latches count and edge time. */

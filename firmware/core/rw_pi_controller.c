@@ -17,15 +17,7 @@
 void rw_pi_controller_init(rw_pi_controller *c, const rw_pi_controller_config *cfg)
 {
     c->cfg = *cfg;
-    c->state.kp_q24 = 0;
-    c->state.ki_dt_q32 = 0;
-    c->state.memo_kp = 0.0f;
-    c->state.memo_ki_per_s = 0.0f;
-    c->state.memo_dt_s = 0.0f;
-    c->state.out_min_q16 = rw_f32_to_q16(cfg->out_min);
-    c->state.out_max_q16 = rw_f32_to_q16(cfg->out_max);
-    c->state.memo_out_min = cfg->out_min;
-    c->state.memo_out_max = cfg->out_max;
+    rw_pi_controller_prepare(c, 0.0f);
     rw_pi_controller_reset(c);
 }
 
@@ -47,8 +39,8 @@ void rw_pi_controller_reset(rw_pi_controller *c)
     c->state.integral_q32 = 0;
     c->state.saturation = 0;
     /* Keep the held output inside the limits when 0 is not (e.g. out_min = 0.1). */
-    const int32_t lo = rw_f32_to_q16(c->cfg.out_min);
-    const int32_t hi = rw_f32_to_q16(c->cfg.out_max);
+    const int32_t lo = c->state.out_min_q16;
+    const int32_t hi = c->state.out_max_q16;
     c->state.output_q16 = lo > 0 ? lo : (hi < 0 ? hi : 0);
 }
 
@@ -75,6 +67,30 @@ static uint32_t gain_fixed(float x, float max, float scale)
     return (uint32_t)(limited * scale + 0.5f);
 }
 
+/* ki_per_s dt_s in Q32, saturated at RW_PI_MAX_KI_DT (dt_s finite and > 0). */
+static int64_t ki_dt_q32_of(float ki_per_s, float dt_s)
+{
+    const float ki_dt = ki_per_s * dt_s;
+    return (int64_t)gain_fixed(rw_f32_finite(ki_dt) ? ki_dt : RW_PI_MAX_KI_DT, RW_PI_MAX_KI_DT, 4294967296.0f);
+}
+
+void rw_pi_controller_prepare(rw_pi_controller *c, float dt_s)
+{
+    const rw_pi_controller_config *cfg = &c->cfg;
+    c->state.valid = rw_pi_controller_config_is_valid(cfg);
+    const bool usable = c->state.valid && rw_f32_positive_finite(dt_s);
+    c->state.kp_q24 = c->state.valid ? (int32_t)gain_fixed(cfg->kp, RW_PI_MAX_KP, 16777216.0f) : 0;
+    c->state.ki_dt_q32 = usable ? ki_dt_q32_of(cfg->ki_per_s, dt_s) : 0;
+    c->state.prepared_dt_s = usable ? dt_s : 0.0f;
+    c->state.out_min_q16 = c->state.valid ? rw_f32_to_q16(cfg->out_min) : 0;
+    c->state.out_max_q16 = c->state.valid ? rw_f32_to_q16(cfg->out_max) : 0;
+}
+
+void rw_pi_controller_set_out_min_q16(rw_pi_controller *c, int32_t out_min_q16)
+{
+    c->state.out_min_q16 = out_min_q16 < c->state.out_max_q16 ? out_min_q16 : c->state.out_max_q16;
+}
+
 /*
  * Continuous law:   u(t) = ff(t) + kp * e(t) + ki * integral(e dt),   e = setpoint - measurement
  * Discrete law (forward-Euler integral, step k, dt = dt_s), all in fixed point:
@@ -94,35 +110,19 @@ static uint32_t gain_fixed(float x, float max, float scale)
  *     ff so that a feed-forward beyond a limit does not force the integral to the opposite sign).
  *     u[k] = clamp(ff[k] + p[k] + I[k], out_min, out_max)           (I[k] rounded to Q16)
  * Bad input: dt_s <= 0 or not finite, a non-finite config, or out_min > out_max (invalid config, see
- * rw_pi_controller_config_is_valid) -> u[k] = u[k-1] and nothing is integrated. Sums run in 64 bits
+ * rw_pi_controller_config_is_valid, as prepared) -> u[k] = u[k-1] and nothing is integrated. Sums run in 64 bits
  * with the error saturated at +-32768 units, kp at 127 and ki_per_s dt_s at 0.49: nothing overflows,
  * whatever the Q16 inputs.
- * kp and ki_per_s * dt_s are converted once per (kp) and (ki_per_s, dt_s) and kept.
+ * kp, ki_per_s * dt_s and the limits are converted by rw_pi_controller_prepare, not here.
  */
 int32_t rw_pi_controller_step(rw_pi_controller *c, int32_t setpoint_q16, int32_t measurement_q16,
                               int32_t feed_forward_q16, float dt_s)
 {
-    const rw_pi_controller_config *cfg = &c->cfg;
-    if (!rw_f32_positive_finite(dt_s) || !rw_f32_finite(cfg->out_min) || !rw_f32_finite(cfg->out_max) ||
-        !rw_f32_le(cfg->out_min, cfg->out_max) || !rw_f32_finite(cfg->kp) || !rw_f32_finite(cfg->ki_per_s)) {
+    if (!c->state.valid || !rw_f32_positive_finite(dt_s)) {
         return c->state.output_q16;
     }
-    if (!rw_f32_same(cfg->kp, c->state.memo_kp)) {
-        c->state.kp_q24 = (int32_t)gain_fixed(cfg->kp, RW_PI_MAX_KP, 16777216.0f);
-        c->state.memo_kp = cfg->kp;
-    }
-    if (!rw_f32_same(cfg->ki_per_s, c->state.memo_ki_per_s) || !rw_f32_same(dt_s, c->state.memo_dt_s)) {
-        const float ki_dt = cfg->ki_per_s * dt_s;
-        c->state.ki_dt_q32 = (int64_t)gain_fixed(rw_f32_finite(ki_dt) ? ki_dt : RW_PI_MAX_KI_DT, RW_PI_MAX_KI_DT, 4294967296.0f);
-        c->state.memo_ki_per_s = cfg->ki_per_s;
-        c->state.memo_dt_s = dt_s;
-    }
-    if (!rw_f32_same(cfg->out_min, c->state.memo_out_min) || !rw_f32_same(cfg->out_max, c->state.memo_out_max)) {
-        c->state.out_min_q16 = rw_f32_to_q16(cfg->out_min);
-        c->state.out_max_q16 = rw_f32_to_q16(cfg->out_max);
-        c->state.memo_out_min = cfg->out_min;
-        c->state.memo_out_max = cfg->out_max;
-    }
+    const int64_t ki_dt_q32 =
+        rw_f32_same(dt_s, c->state.prepared_dt_s) ? c->state.ki_dt_q32 : ki_dt_q32_of(c->cfg.ki_per_s, dt_s);
     const int32_t out_min = c->state.out_min_q16;
     const int32_t out_max = c->state.out_max_q16;
     const int64_t wide_error = (int64_t)setpoint_q16 - measurement_q16;
@@ -132,7 +132,7 @@ int32_t rw_pi_controller_step(rw_pi_controller *c, int32_t setpoint_q16, int32_t
     /* 32 x 32 -> 64-bit products inline (rw_mul_s32_s64): kp_q24 and ki_dt_q32 are under 2^31 */
     const int64_t p = (rw_mul_s32_s64(c->state.kp_q24, error) + (1 << 23)) >> 24; /* |p| < 2^38 */
     const int64_t ff = feed_forward_q16;
-    int64_t integral = c->state.integral_q32 + (rw_mul_s32_s64((int32_t)c->state.ki_dt_q32, error) >> 16);
+    int64_t integral = c->state.integral_q32 + (rw_mul_s32_s64((int32_t)ki_dt_q32, error) >> 16);
     const int64_t unsaturated = ff + p + ((integral + 32768) >> 16);
     if (unsaturated > out_max && error > 0) {
         /* conditional integration: only up to the limit, never backwards */

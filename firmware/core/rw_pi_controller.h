@@ -4,7 +4,8 @@
  *
  * In the rope speed loop: setpoint and measurement in m/s, output and feed-forward a throttle
  * fraction, kp in throttle per (m/s), ki_per_s in throttle per (m/s * s). The step runs in Q16.16 fixed
- * point (values x 65536 in an int32, range +-32768); the config stays float (converted when it changes).
+ * point (values x 65536 in an int32, range +-32768); the config stays float, converted by
+ * rw_pi_controller_prepare when it changes (never in the step).
  * Portable core module: no Arduino header, no heap, reads no clock (dt_s comes in).
  */
 #ifndef RW_PI_CONTROLLER_H
@@ -26,25 +27,30 @@ typedef struct rw_pi_controller_config {
 } rw_pi_controller_config;
 
 typedef struct rw_pi_controller {
-    rw_pi_controller_config cfg; /**< public, may be changed between steps */
+    rw_pi_controller_config cfg; /**< public; after a change call rw_pi_controller_prepare */
     struct {
         int64_t integral_q32; /**< integral term, output units Q32 (already multiplied by ki_per_s) */
         int32_t output_q16;   /**< last output, output units Q16, always within the limits */
         int8_t saturation;    /**< +1: last output at out_max, -1: at out_min, 0: inside */
-        int32_t kp_q24;       /**< kp, Q24 (computed once per kp, not per step) */
-        int64_t ki_dt_q32;    /**< ki_per_s * dt_s, Q32, for the gain and dt_s below */
-        float memo_kp;        /**< the kp kp_q24 belongs to */
-        float memo_ki_per_s;  /**< the gain ki_dt_q32 belongs to */
-        float memo_dt_s;      /**< the dt_s ki_dt_q32 belongs to (0: none yet) */
-        int32_t out_min_q16;  /**< out_min, Q16 (computed once per limit, not per step) */
-        int32_t out_max_q16;  /**< out_max, Q16 */
-        float memo_out_min;   /**< the limits the two above belong to */
-        float memo_out_max;
-    } state;                  /**< private history */
+        bool valid;           /**< rw_pi_controller_config_is_valid(cfg), as prepared */
+        int32_t kp_q24;       /**< kp, Q24 (prepared) */
+        int64_t ki_dt_q32;    /**< ki_per_s * prepared_dt_s, Q32 (prepared) */
+        float prepared_dt_s;  /**< the step ki_dt_q32 is for (0: none; every step converts its own) */
+        int32_t out_min_q16;  /**< the lower limit in force, Q16: out_min prepared, or rw_pi_controller_set_out_min_q16 */
+        int32_t out_max_q16;  /**< out_max, Q16 (prepared) */
+    } state;                  /**< private: history and the prepared gains */
 } rw_pi_controller;
 
-/** Copies cfg and resets. */
+/** Copies cfg, prepares for no step in particular and resets. */
 void rw_pi_controller_init(rw_pi_controller *c, const rw_pi_controller_config *cfg);
+/** Converts cfg for steps of dt_s: kp to Q24, ki_per_s dt_s to Q32, the limits to Q16, the validity (float
+ *  arithmetic, once). Call it after changing cfg (the core does, from rw_core_apply_params). A step of that
+ *  dt_s costs integer arithmetic only; a step of another dt_s converts its ki_per_s dt_s itself (same result).
+ *  dt_s <= 0 or not finite: for no step in particular. */
+void rw_pi_controller_prepare(rw_pi_controller *c, float dt_s);
+/** A lower output limit that moves at run time (the speed loop's airborne floor), Q16, in force from the
+ *  next step until the next prepare or call; kept at or under the upper limit. */
+void rw_pi_controller_set_out_min_q16(rw_pi_controller *c, int32_t out_min_q16);
 /** Fills cfg with the rope speed loop defaults of rw_defaults.h. */
 void rw_pi_controller_config_defaults(rw_pi_controller_config *cfg);
 /** Integral term and output back to 0 (0 brought into the limits), saturation cleared. */

@@ -10,12 +10,7 @@
 void rw_ramp_init(rw_ramp *r, const rw_ramp_config *cfg)
 {
     r->cfg = *cfg;
-    r->state.step_up_q32 = 0;
-    r->state.step_up_rate_per_s = 0.0f;
-    r->state.step_up_dt_s = 0.0f;
-    r->state.step_down_q32 = 0;
-    r->state.step_down_rate_per_s = 0.0f;
-    r->state.step_down_dt_s = 0.0f;
+    rw_ramp_prepare(r, 0.0f);
     rw_ramp_reset(r);
 }
 
@@ -57,7 +52,7 @@ bool rw_ramp_config_is_valid(const rw_ramp_config *cfg)
 
 /* rate * dt_s in Q32 (the Q16 part plus the rounded remainder, both by the bit-pattern conversion: no
  * float -> int64 conversion, which would link double-precision code), at least 2^-32; INT64_MAX (no limit)
- * for a rate <= 0, not finite, or a step beyond the Q16 range. Once per (rate, dt_s). */
+ * for a rate <= 0, not finite, or a step beyond the Q16 range. In rw_ramp_prepare (or a step of another dt_s). */
 static int64_t step_q32(float rate_per_s, float dt_s)
 {
     if (!rw_f32_positive_finite(rate_per_s)) {
@@ -73,6 +68,14 @@ static int64_t step_q32(float rate_per_s, float dt_s)
     return total < 1 ? 1 : total;
 }
 
+void rw_ramp_prepare(rw_ramp *r, float dt_s)
+{
+    const bool usable = rw_f32_positive_finite(dt_s);
+    r->state.step_up_q32 = usable ? step_q32(r->cfg.rate_up_per_s, dt_s) : INT64_MAX;
+    r->state.step_down_q32 = usable ? step_q32(r->cfg.rate_down_per_s, dt_s) : INT64_MAX;
+    r->state.prepared_dt_s = usable ? dt_s : 0.0f;
+}
+
 /*
  * Discrete law (per step of dt_s seconds), in integers (Q32: units x 2^32):
  *     d    = target - y[k-1]
@@ -81,8 +84,7 @@ static int64_t step_q32(float rate_per_s, float dt_s)
  * so the output reaches the target exactly (no overshoot, no chatter) and moves by exactly one step
  * while it is further away than that. A rate <= 0 or not finite: no limit in that direction
  * (y[k] = target). dt_s <= 0 or not finite: y[k] = y[k-1].
- * The steps are computed once per (rate, dt_s), for each direction when the ramp first moves that way,
- * and kept (a caller that changes the fall rate while rising pays nothing for it).
+ * The steps come from rw_ramp_prepare for the dt_s the caller steps with; another dt_s converts its own.
  */
 int32_t rw_ramp_step(rw_ramp *r, int32_t target_q16, float dt_s)
 {
@@ -92,22 +94,13 @@ int32_t rw_ramp_step(rw_ramp *r, int32_t target_q16, float dt_s)
     const int64_t target = (int64_t)target_q16 * 65536;
     const int64_t y = r->state.y_q32;
     const int64_t d = target - y; /* |d| < 2^48 */
+    const bool prepared = rw_f32_same(dt_s, r->state.prepared_dt_s);
     if (d > 0) {
-        const float rate_up = r->cfg.rate_up_per_s;
-        if (!rw_f32_same(dt_s, r->state.step_up_dt_s) || !rw_f32_same(rate_up, r->state.step_up_rate_per_s)) {
-            r->state.step_up_q32 = step_q32(rate_up, dt_s);
-            r->state.step_up_rate_per_s = rate_up;
-            r->state.step_up_dt_s = dt_s;
-        }
-        r->state.y_q32 = d > r->state.step_up_q32 ? y + r->state.step_up_q32 : target;
+        const int64_t step = prepared ? r->state.step_up_q32 : step_q32(r->cfg.rate_up_per_s, dt_s);
+        r->state.y_q32 = d > step ? y + step : target;
     } else if (d < 0) {
-        const float rate_down = r->cfg.rate_down_per_s;
-        if (!rw_f32_same(dt_s, r->state.step_down_dt_s) || !rw_f32_same(rate_down, r->state.step_down_rate_per_s)) {
-            r->state.step_down_q32 = step_q32(rate_down, dt_s);
-            r->state.step_down_rate_per_s = rate_down;
-            r->state.step_down_dt_s = dt_s;
-        }
-        r->state.y_q32 = -d > r->state.step_down_q32 ? y - r->state.step_down_q32 : target;
+        const int64_t step = prepared ? r->state.step_down_q32 : step_q32(r->cfg.rate_down_per_s, dt_s);
+        r->state.y_q32 = -d > step ? y - step : target;
     }
     return rw_ramp_output_q16(r);
 }

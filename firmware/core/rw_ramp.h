@@ -20,21 +20,21 @@ typedef struct rw_ramp_config {
 } rw_ramp_config;
 
 typedef struct rw_ramp {
-    rw_ramp_config cfg; /**< public, may be changed between steps */
+    rw_ramp_config cfg; /**< public; after a change call rw_ramp_prepare */
     struct {
-        int64_t y_q32;          /**< last output, units Q32 (the output: rounded to Q16.16) */
-        int64_t step_up_q32;    /**< rate_up_per_s * dt_s, Q32, for the rate and dt_s below (computed once;
-                                     INT64_MAX: no limit) */
-        float step_up_rate_per_s; /**< the rate step_up_q16 belongs to */
-        float step_up_dt_s;       /**< the dt_s step_up_q16 belongs to (0: none yet) */
-        int64_t step_down_q32;  /**< rate_down_per_s * dt_s, Q32, for the rate and dt_s below */
-        float step_down_rate_per_s;
-        float step_down_dt_s;
-    } state;                /**< private history */
+        int64_t y_q32;         /**< last output, units Q32 (the output: rounded to Q16.16) */
+        int64_t step_up_q32;   /**< rate_up_per_s * prepared_dt_s, Q32 (INT64_MAX: no limit) */
+        int64_t step_down_q32; /**< rate_down_per_s * prepared_dt_s, Q32 (INT64_MAX: no limit) */
+        float prepared_dt_s;   /**< the step the two above are for (0: none; every step computes its own) */
+    } state;                /**< private: history and the prepared steps */
 } rw_ramp;
 
-/** Copies cfg and resets the output to 0. */
+/** Copies cfg, prepares for no step in particular and resets the output to 0. */
 void rw_ramp_init(rw_ramp *r, const rw_ramp_config *cfg);
+/** Converts the rates for steps of dt_s (rate x dt_s in Q32, float arithmetic once): call it after changing
+ *  cfg (the core does, from rw_core_apply_params). A step of that dt_s then costs integer arithmetic only; a
+ *  step of another dt_s converts for itself (same result). dt_s <= 0 or not finite: for no step. */
+void rw_ramp_prepare(rw_ramp *r, float dt_s);
 /** Fills cfg with the rope speed setpoint ramp defaults of rw_defaults.h, (m/s) per second. */
 void rw_ramp_config_defaults(rw_ramp_config *cfg);
 /** Output back to 0. */

@@ -19,6 +19,7 @@ void rw_throttle_map_init(rw_throttle_map *m, const rw_throttle_map_config *cfg)
 {
     m->cfg = *cfg;
     memset(&m->state, 0, sizeof m->state);
+    rw_throttle_map_prepare(m);
 }
 
 void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg)
@@ -57,30 +58,30 @@ static float rope_m_per_min_at_full_throttle(float two_pi_r_kv_value, float batt
 
 void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v)
 {
-    const float kv = m->cfg.kv_rpm_per_v;
-    const float r_m = m->cfg.wheel_radius_m;
-    const bool constants_changed =
-        !rw_f32_same(kv, m->state.memo_kv_rpm_per_v) || !rw_f32_same(r_m, m->state.memo_wheel_radius_m);
-    if (constants_changed) {
-        m->state.two_pi_r_kv = two_pi_r_kv(kv, r_m);
-        m->state.memo_kv_rpm_per_v = kv;
-        m->state.memo_wheel_radius_m = r_m;
-    }
-    if (constants_changed || !rw_f32_same(battery_v, m->state.memo_battery_v)) {
-        const float full_m_per_min = rope_m_per_min_at_full_throttle(m->state.two_pi_r_kv, battery_v);
-        /* one soft-float division, once per battery voltage */
-        m->state.throttle_per_mps = rw_f32_positive(full_m_per_min) ? RW_S_PER_MIN_F / full_m_per_min : 0.0f;
-        const float per_mps = m->state.throttle_per_mps;
-        m->state.throttle_per_mps_q24 = rw_f32_lt(per_mps, RW_THROTTLE_MAX_PER_MPS)
-                                            ? (int32_t)(per_mps * 16777216.0f + 0.5f)
-                                            : (int32_t)(RW_THROTTLE_MAX_PER_MPS * 16777216.0f);
-        m->state.memo_battery_v = battery_v;
-    }
+    const float full_m_per_min = rope_m_per_min_at_full_throttle(m->state.two_pi_r_kv, battery_v);
+    /* one soft-float division, once per battery voltage */
+    m->state.throttle_per_mps = rw_f32_positive(full_m_per_min) ? RW_S_PER_MIN_F / full_m_per_min : 0.0f;
+    const float per_mps = m->state.throttle_per_mps;
+    m->state.throttle_per_mps_q24 = rw_f32_lt(per_mps, RW_THROTTLE_MAX_PER_MPS)
+                                        ? (int32_t)(per_mps * 16777216.0f + 0.5f)
+                                        : (int32_t)(RW_THROTTLE_MAX_PER_MPS * 16777216.0f);
+    m->state.battery_v = battery_v;
+}
+
+static void effective_range_us(const rw_throttle_map *m, uint16_t *lo_us, uint16_t *hi_us);
+
+void rw_throttle_map_prepare(rw_throttle_map *m)
+{
+    m->state.two_pi_r_kv = two_pi_r_kv(m->cfg.kv_rpm_per_v, m->cfg.wheel_radius_m);
+    effective_range_us(m, &m->state.pulse_lo_us, &m->state.pulse_hi_us);
+    rw_throttle_map_prepare_battery(m, m->state.battery_v);
 }
 
 int32_t rw_throttle_map_feed_forward(rw_throttle_map *m, int32_t rope_mps_q16, float battery_v)
 {
-    rw_throttle_map_prepare_battery(m, battery_v);
+    if (!rw_f32_same(battery_v, m->state.battery_v)) {
+        rw_throttle_map_prepare_battery(m, battery_v);
+    }
     const int32_t per_mps_q24 = m->state.throttle_per_mps_q24;
     if (rope_mps_q16 <= 0 || per_mps_q24 <= 0) {
         return 0;
@@ -94,8 +95,7 @@ float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle,
     if (!rw_f32_finite(throttle) || !(throttle > 0.0f)) {
         return 0.0f;
     }
-    const float full_m_per_min =
-        rope_m_per_min_at_full_throttle(two_pi_r_kv(m->cfg.kv_rpm_per_v, m->cfg.wheel_radius_m), battery_v);
+    const float full_m_per_min = rope_m_per_min_at_full_throttle(m->state.two_pi_r_kv, battery_v);
     return (throttle > 1.0f ? 1.0f : throttle) * full_m_per_min / RW_S_PER_MIN_F;
 }
 
@@ -122,9 +122,8 @@ static void effective_range_us(const rw_throttle_map *m, uint16_t *lo_us, uint16
 
 uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, int32_t throttle_q16)
 {
-    uint16_t lo_us;
-    uint16_t hi_us;
-    effective_range_us(m, &lo_us, &hi_us);
+    const uint16_t lo_us = m->state.pulse_lo_us;
+    const uint16_t hi_us = m->state.pulse_hi_us;
     if (throttle_q16 <= 0) {
         return lo_us;
     }
@@ -160,9 +159,8 @@ uint16_t rw_throttle_map_pulse_third_us(const rw_throttle_map *m, int32_t thrott
 
 float rw_throttle_map_throttle_from_pulse(const rw_throttle_map *m, uint16_t pulse_us)
 {
-    uint16_t lo_us;
-    uint16_t hi_us;
-    effective_range_us(m, &lo_us, &hi_us);
+    const uint16_t lo_us = m->state.pulse_lo_us;
+    const uint16_t hi_us = m->state.pulse_hi_us;
     if (pulse_us <= lo_us || hi_us == lo_us) {
         return 0.0f;
     }

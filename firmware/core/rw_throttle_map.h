@@ -3,7 +3,8 @@
  * radius), and throttle fraction <-> ESC pulse width with the ESC minimum as a hard floor.
  *
  * Throttle fraction: 0 = ESC minimum pulse (motor stopped), 1 = full throttle (pulse_max_us); on the tick
- * path (feed-forward, pulse) in Q16.16 fixed point, the config float (converted when it changes).
+ * path (feed-forward, pulse) in Q16.16 fixed point, the config float (converted by rw_throttle_map_prepare
+ * when it changes, never on the tick path).
  * Portable core module: no Arduino header, no heap, reads no clock; stateless.
  */
 #ifndef RW_THROTTLE_MAP_H
@@ -25,33 +26,37 @@ typedef struct rw_throttle_map_config {
 } rw_throttle_map_config;
 
 typedef struct rw_throttle_map {
-    rw_throttle_map_config cfg; /**< public, may be changed between calls */
+    rw_throttle_map_config cfg; /**< public; after a change call rw_throttle_map_prepare */
     struct {
-        float two_pi_r_kv;  /**< 2 pi wheel_radius_m kv_rpm_per_v for the two below (computed once) */
-        float memo_kv_rpm_per_v; /**< the kv two_pi_r_kv belongs to (0: none yet) */
-        float memo_wheel_radius_m; /**< the radius it belongs to */
-        float memo_battery_v;   /**< the battery voltage throttle_per_mps belongs to (0: none yet) */
+        float two_pi_r_kv;      /**< 2 pi wheel_radius_m kv_rpm_per_v, 0 when not computable (prepared) */
+        uint16_t pulse_lo_us;   /**< the pulse range in force: cfg's narrowed into 1000..2000 us (prepared) */
+        uint16_t pulse_hi_us;
+        float battery_v;        /**< the battery voltage throttle_per_mps is for (0: none yet) */
         float throttle_per_mps; /**< 60 / (2 pi r kv V): feed-forward throttle per m/s of rope (0: none) */
         int32_t throttle_per_mps_q24; /**< the same, Q24 (saturated at 127) */
-    } state;                /**< private: precomputed values only, the map has no history */
+    } state;                /**< private: prepared values only, the map has no history */
 } rw_throttle_map;
 
-/** Copies cfg. */
+/** Copies cfg and prepares. */
 void rw_throttle_map_init(rw_throttle_map *m, const rw_throttle_map_config *cfg);
+/** Converts cfg (2 pi r kv, the pulse range in force) and the factor for the battery voltage prepared last:
+ *  call it after changing cfg (the core does, from rw_core_apply_params). */
+void rw_throttle_map_prepare(rw_throttle_map *m);
 /** Fills cfg with the defaults of rw_defaults.h. */
 void rw_throttle_map_config_defaults(rw_throttle_map_config *cfg);
 /**
  * Feed-forward throttle fraction in [0, 1] (Q16.16: 65536 = full throttle) that spins the unloaded motor so
  * the rope moves at rope_mps_q16 (m/s, Q16.16) on a battery of battery_v volts:
  *     throttle = 60 rope_mps / (2 pi wheel_radius_m kv_rpm_per_v battery_v), clamped to [0, 1],
- * evaluated as rope_mps * (60 / (2 pi r kv V)) in fixed point: the factor is kept in m->state per battery
- * voltage (and kv, radius) in Q24, so a step with the same battery_v costs one integer multiplication, no
- * division and no soft-float call (resolution: 1/65536 of full throttle).
+ * evaluated as rope_mps * (60 / (2 pi r kv V)) in fixed point: the factor is kept in m->state for the last
+ * battery voltage prepared (rw_throttle_map_prepare_battery), in Q24, so a call with that battery_v costs one
+ * integer multiplication, no division and no soft-float call (resolution: 1/65536 of full throttle); another
+ * battery_v prepares for itself first (one division).
  * Returns 0 for non-positive rope_mps_q16, non-finite or non-positive battery_v, or an invalid kv/radius.
  */
 int32_t rw_throttle_map_feed_forward(rw_throttle_map *m, int32_t rope_mps_q16, float battery_v);
 /** Computes the factor of rw_throttle_map_feed_forward for battery_v ahead of time (one division),
- *  so that the next feed-forward at this voltage needs none. */
+ *  so that the feed-forwards at this voltage need none. */
 void rw_throttle_map_prepare_battery(rw_throttle_map *m, float battery_v);
 /** Inverse of the feed-forward: unloaded rope speed (m/s, >= 0) at a throttle fraction (clamped
  *  to [0, 1]) and battery voltage; 0 for non-finite input or invalid config. */

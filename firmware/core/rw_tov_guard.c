@@ -7,30 +7,17 @@
 
 #include "rw_float_bits.h"
 
-/* Keep tov_mps * margin and the validity for the current config (computed once per config). */
-static void refresh_min_airborne(rw_tov_guard *g)
+void rw_tov_guard_prepare(rw_tov_guard *g)
 {
-    if (!rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) || !rw_f32_same(g->cfg.margin, g->state.memo_margin) ||
-        !rw_f32_same(g->cfg.collapse_time_s, g->state.memo_collapse_time_s)) {
-        g->state.min_airborne_mps = g->cfg.tov_mps * g->cfg.margin;
-        g->state.min_airborne_mps_q16 = rw_f32_to_q16(g->state.min_airborne_mps);
-        g->state.memo_tov_mps = g->cfg.tov_mps;
-        g->state.memo_margin = g->cfg.margin;
-        g->state.memo_collapse_time_s = g->cfg.collapse_time_s;
-        g->state.config_valid = rw_tov_guard_config_is_valid(&g->cfg);
-    }
+    g->state.min_airborne_mps = g->cfg.tov_mps * g->cfg.margin;
+    g->state.min_airborne_mps_q16 = rw_f32_to_q16(g->state.min_airborne_mps);
+    g->state.config_valid = rw_tov_guard_config_is_valid(&g->cfg);
 }
 
 void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg)
 {
     g->cfg = *cfg;
-    g->state.memo_tov_mps = 0.0f;
-    g->state.memo_margin = 0.0f;
-    g->state.memo_collapse_time_s = 0.0f;
-    g->state.config_valid = false;
-    g->state.min_airborne_mps = 0.0f;
-    g->state.min_airborne_mps_q16 = 0;
-    refresh_min_airborne(g);
+    rw_tov_guard_prepare(g);
     rw_tov_guard_reset(g);
 }
 
@@ -55,23 +42,17 @@ bool rw_tov_guard_config_is_valid(const rw_tov_guard_config *cfg)
 
 float rw_tov_guard_min_airborne_mps(const rw_tov_guard *g)
 {
-    if (rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) && rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
-        return g->state.min_airborne_mps;
-    }
-    return g->cfg.tov_mps * g->cfg.margin;
+    return g->state.min_airborne_mps;
 }
 
 int32_t rw_tov_guard_min_airborne_mps_q16(const rw_tov_guard *g)
 {
-    if (rw_f32_same(g->cfg.tov_mps, g->state.memo_tov_mps) && rw_f32_same(g->cfg.margin, g->state.memo_margin)) {
-        return g->state.min_airborne_mps_q16;
-    }
-    return rw_f32_to_q16(g->cfg.tov_mps * g->cfg.margin);
+    return g->state.min_airborne_mps_q16;
 }
 
 bool rw_tov_guard_setpoint_allowed(const rw_tov_guard *g, float setpoint_mps)
 {
-    if (!rw_tov_guard_config_is_valid(&g->cfg) || !rw_f32_finite(setpoint_mps)) {
+    if (!g->state.config_valid || !rw_f32_finite(setpoint_mps)) {
         return false;
     }
     return rw_f32_ge(setpoint_mps, rw_tov_guard_min_airborne_mps(g));
@@ -93,7 +74,6 @@ bool rw_tov_guard_is_collapsed(const rw_tov_guard *g)
  */
 bool rw_tov_guard_step(rw_tov_guard *g, float measured_mps, float dt_s)
 {
-    refresh_min_airborne(g);
     if (!rw_f32_finite(measured_mps) || !g->state.config_valid) {
         return false;
     }

@@ -27,21 +27,21 @@ typedef struct rw_tov_guard_config {
 } rw_tov_guard_config;
 
 typedef struct rw_tov_guard {
-    rw_tov_guard_config cfg; /**< public, may be changed between steps */
+    rw_tov_guard_config cfg; /**< public; after a change call rw_tov_guard_prepare */
     struct {
         float below_s;  /**< time the measured speed has been continuously under tov_mps, seconds */
         bool collapsed; /**< the collapse has been reported; cleared when the speed recovers */
-        float min_airborne_mps; /**< tov_mps * margin for the two below (kept by init and step) */
-        int32_t min_airborne_mps_q16; /**< the same, m/s Q16.16 */
-        float memo_tov_mps;     /**< the tov_mps min_airborne_mps belongs to (0: none yet) */
-        float memo_margin;      /**< the margin it belongs to */
-        float memo_collapse_time_s; /**< the collapse time config_valid belongs to (with the two above) */
-        bool config_valid;      /**< rw_tov_guard_config_is_valid of that config */
-    } state;            /**< private history */
+        float min_airborne_mps;       /**< tov_mps * margin (prepared) */
+        int32_t min_airborne_mps_q16; /**< the same, m/s Q16.16 (prepared) */
+        bool config_valid;            /**< rw_tov_guard_config_is_valid(cfg) (prepared) */
+    } state;            /**< private: history and the prepared values */
 } rw_tov_guard;
 
-/** Copies cfg and resets. */
+/** Copies cfg, prepares and resets. */
 void rw_tov_guard_init(rw_tov_guard *g, const rw_tov_guard_config *cfg);
+/** tov_mps * margin (float and Q16.16) and the validity, computed from cfg: call it after changing cfg (the
+ *  core does, from rw_core_apply_params); the step and the accessors use what it computed. */
+void rw_tov_guard_prepare(rw_tov_guard *g);
 /** Fills cfg with the defaults of rw_defaults.h. */
 void rw_tov_guard_config_defaults(rw_tov_guard_config *cfg);
 /** Timer cleared, detector re-armed. */

@@ -32,10 +32,12 @@ CORE_FLASH_BUDGET_BYTES = 64 * 1024
 # by design: about 16.5 KB static on the board of its 32 KB, the rest for stacks and the libraries' heap
 CORE_RAM_BUDGET_BYTES = 12 * 1024
 
-pytestmark = pytest.mark.skipif(
-    not ah.toolchain_available(),
-    reason="arm-none-eabi-gcc not installed (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi); CI has it",
-)
+
+
+@pytest.fixture(autouse=True)
+def _arm_toolchain(skip_unless_ci) -> None:
+    if not ah.toolchain_available():
+        skip_unless_ci("arm-none-eabi-gcc not installed (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi)")
 
 
 @pytest.fixture(scope="module")

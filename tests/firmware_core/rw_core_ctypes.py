@@ -27,7 +27,7 @@ class LowpassConfig(ctypes.Structure):
 
 
 class _LowpassState(ctypes.Structure):
-    _fields_ = [("y_q32", c_int64), ("alpha_q20", c_int32), ("alpha_tau_s", c_float), ("alpha_dt_s", c_float)]
+    _fields_ = [("y_q32", c_int64), ("alpha_q20", c_int32), ("prepared_dt_s", c_float)]
 
 
 class Lowpass(ctypes.Structure):
@@ -39,9 +39,7 @@ class RampConfig(ctypes.Structure):
 
 
 class _RampState(ctypes.Structure):
-    _fields_ = [("y_q32", c_int64), ("step_up_q32", c_int64), ("step_up_rate_per_s", c_float),
-                ("step_up_dt_s", c_float), ("step_down_q32", c_int64), ("step_down_rate_per_s", c_float),
-                ("step_down_dt_s", c_float)]
+    _fields_ = [("y_q32", c_int64), ("step_up_q32", c_int64), ("step_down_q32", c_int64), ("prepared_dt_s", c_float)]
 
 
 class Ramp(ctypes.Structure):
@@ -53,9 +51,9 @@ class PiConfig(ctypes.Structure):
 
 
 class _PiState(ctypes.Structure):
-    _fields_ = [("integral_q32", c_int64), ("output_q16", c_int32), ("saturation", c_int8), ("kp_q24", c_int32),
-                ("ki_dt_q32", c_int64), ("memo_kp", c_float), ("memo_ki_per_s", c_float), ("memo_dt_s", c_float),
-                ("out_min_q16", c_int32), ("out_max_q16", c_int32), ("memo_out_min", c_float), ("memo_out_max", c_float)]
+    _fields_ = [("integral_q32", c_int64), ("output_q16", c_int32), ("saturation", c_int8), ("valid", c_bool),
+                ("kp_q24", c_int32), ("ki_dt_q32", c_int64), ("prepared_dt_s", c_float), ("out_min_q16", c_int32),
+                ("out_max_q16", c_int32)]
 
 
 class Pi(ctypes.Structure):
@@ -69,8 +67,8 @@ class MtConfig(ctypes.Structure):
 
 class _MtState(ctypes.Structure):
     _fields_ = [("last_count", c_uint32), ("last_edge_us", c_uint32), ("raw_rev_per_s_q16", c_int32),
-                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("two_pi_r_q32", c_uint32),
-                ("two_pi_r_radius_m", c_float), ("rope_mps_q16", c_int32)]
+                ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("valid", c_bool),
+                ("two_pi_r_q32", c_uint32), ("rope_mps_q16", c_int32)]
 
 
 class Mt(ctypes.Structure):
@@ -83,8 +81,8 @@ class ThrottleConfig(ctypes.Structure):
 
 
 class _ThrottleState(ctypes.Structure):
-    _fields_ = [("two_pi_r_kv", c_float), ("memo_kv_rpm_per_v", c_float), ("memo_wheel_radius_m", c_float),
-                ("memo_battery_v", c_float), ("throttle_per_mps", c_float), ("throttle_per_mps_q24", c_int32)]
+    _fields_ = [("two_pi_r_kv", c_float), ("pulse_lo_us", c_uint16), ("pulse_hi_us", c_uint16),
+                ("battery_v", c_float), ("throttle_per_mps", c_float), ("throttle_per_mps_q24", c_int32)]
 
 
 class Throttle(ctypes.Structure):
@@ -97,9 +95,7 @@ class TovConfig(ctypes.Structure):
 
 class _TovState(ctypes.Structure):
     _fields_ = [("below_s", c_float), ("collapsed", c_bool), ("min_airborne_mps", c_float),
-                ("min_airborne_mps_q16", c_int32),
-                ("memo_tov_mps", c_float), ("memo_margin", c_float), ("memo_collapse_time_s", c_float),
-                ("config_valid", c_bool)]
+                ("min_airborne_mps_q16", c_int32), ("config_valid", c_bool)]
 
 
 class Tov(ctypes.Structure):
@@ -114,6 +110,7 @@ _SIGNATURES = {
     "rw_lowpass_step": (c_int32, ["Lowpass*", c_int32, c_float]),
     "rw_lowpass_output_q16": (c_int32, ["Lowpass*"]),
     "rw_lowpass_config_is_valid": (c_bool, ["LowpassConfig*"]),
+    "rw_lowpass_prepare": (None, ["Lowpass*", c_float]),
     "rw_ramp_init": (None, ["Ramp*", "RampConfig*"]),
     "rw_ramp_config_defaults": (None, ["RampConfig*"]),
     "rw_ramp_reset": (None, ["Ramp*"]),
@@ -123,12 +120,15 @@ _SIGNATURES = {
     "rw_ramp_output": (c_float, ["Ramp*"]),
     "rw_ramp_at_target": (c_bool, ["Ramp*", c_float]),
     "rw_ramp_config_is_valid": (c_bool, ["RampConfig*"]),
+    "rw_ramp_prepare": (None, ["Ramp*", c_float]),
     "rw_pi_controller_init": (None, ["Pi*", "PiConfig*"]),
     "rw_pi_controller_config_defaults": (None, ["PiConfig*"]),
     "rw_pi_controller_reset": (None, ["Pi*"]),
     "rw_pi_controller_step": (c_int32, ["Pi*", c_int32, c_int32, c_int32, c_float]),
     "rw_pi_controller_output_q16": (c_int32, ["Pi*"]),
     "rw_pi_controller_config_is_valid": (c_bool, ["PiConfig*"]),
+    "rw_pi_controller_prepare": (None, ["Pi*", c_float]),
+    "rw_pi_controller_set_out_min_q16": (None, ["Pi*", c_int32]),
     "rw_mt_speed_estimator_init": (None, ["Mt*", "MtConfig*"]),
     "rw_mt_speed_estimator_config_defaults": (None, ["MtConfig*"]),
     "rw_mt_speed_estimator_reset": (None, ["Mt*"]),
@@ -140,6 +140,7 @@ _SIGNATURES = {
     "rw_mt_speed_estimator_raw_rev_per_s": (c_float, ["Mt*"]),
     "rw_mt_speed_estimator_is_stale": (c_bool, ["Mt*"]),
     "rw_mt_speed_estimator_config_is_valid": (c_bool, ["MtConfig*"]),
+    "rw_mt_speed_estimator_prepare": (None, ["Mt*", c_float]),
     "rw_throttle_map_init": (None, ["Throttle*", "ThrottleConfig*"]),
     "rw_throttle_map_config_defaults": (None, ["ThrottleConfig*"]),
     "rw_throttle_map_feed_forward": (c_int32, ["Throttle*", c_int32, c_float]),
@@ -148,6 +149,7 @@ _SIGNATURES = {
     "rw_throttle_map_pulse_third_us": (c_uint16, ["Throttle*", c_int32]),
     "rw_throttle_map_throttle_from_pulse": (c_float, ["Throttle*", c_uint16]),
     "rw_throttle_map_config_is_valid": (c_bool, ["ThrottleConfig*"]),
+    "rw_throttle_map_prepare": (None, ["Throttle*"]),
     "rw_tov_guard_init": (None, ["Tov*", "TovConfig*"]),
     "rw_tov_guard_config_defaults": (None, ["TovConfig*"]),
     "rw_tov_guard_reset": (None, ["Tov*"]),
@@ -156,6 +158,7 @@ _SIGNATURES = {
     "rw_tov_guard_step": (c_bool, ["Tov*", c_float, c_float]),
     "rw_tov_guard_is_collapsed": (c_bool, ["Tov*"]),
     "rw_tov_guard_config_is_valid": (c_bool, ["TovConfig*"]),
+    "rw_tov_guard_prepare": (None, ["Tov*"]),
 }
 
 
@@ -241,6 +244,10 @@ class LowpassFilter(_Guarded):
     def reset_to(self, y: float) -> None:
         self._call("rw_lowpass_reset_to", to_q16(y, name="y"))
 
+    def prepare(self, dt_s: float = 0.0) -> None:
+        """Converts the (changed) config for steps of dt_s (0: for none in particular)."""
+        self._call("rw_lowpass_prepare", dt_s)
+
     @property
     def output(self) -> float:
         return from_q16(self._call("rw_lowpass_output_q16"))
@@ -266,6 +273,10 @@ class RampLimiter(_Guarded):
     def at_target(self, target: float) -> bool:
         return self._call("rw_ramp_at_target", target)
 
+    def prepare(self, dt_s: float = 0.0) -> None:
+        """Converts the (changed) rates for steps of dt_s (0: for none in particular)."""
+        self._call("rw_ramp_prepare", dt_s)
+
     @property
     def output(self) -> float:
         return self._call("rw_ramp_output")
@@ -286,6 +297,10 @@ class PiController(_Guarded):
 
     def reset(self) -> None:
         self._call("rw_pi_controller_reset")
+
+    def prepare(self, dt_s: float = 0.0) -> None:
+        """Converts the (changed) config for steps of dt_s (0: for none in particular)."""
+        self._call("rw_pi_controller_prepare", dt_s)
 
     @property
     def output(self) -> float:
@@ -319,6 +334,10 @@ class MtSpeedEstimator(_Guarded):
 
     def reset(self) -> None:
         self._call("rw_mt_speed_estimator_reset")
+
+    def prepare(self, dt_s: float = 0.0) -> None:
+        """Converts the (changed) config for steps of dt_s (0: for none in particular)."""
+        self._call("rw_mt_speed_estimator_prepare", dt_s)
 
     @property
     def rev_per_s(self) -> float:
@@ -371,6 +390,10 @@ class ThrottleMap(_Guarded):
     def throttle_from_pulse(self, pulse_us: int) -> float:
         return self._call("rw_throttle_map_throttle_from_pulse", pulse_us)
 
+    def prepare(self) -> None:
+        """Converts the (changed) config."""
+        self._call("rw_throttle_map_prepare")
+
 
 class TovGuard(_Guarded):
     struct_type = Tov
@@ -384,6 +407,10 @@ class TovGuard(_Guarded):
 
     def reset(self) -> None:
         self._call("rw_tov_guard_reset")
+
+    def prepare(self) -> None:
+        """Converts the (changed) config."""
+        self._call("rw_tov_guard_prepare")
 
     def setpoint_allowed(self, setpoint_mps: float) -> bool:
         return self._call("rw_tov_guard_setpoint_allowed", setpoint_mps)

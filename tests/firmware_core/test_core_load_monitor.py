@@ -31,7 +31,7 @@ class Config(ctypes.Structure):
 class _State(ctypes.Structure):
     _fields_ = [("load", Lowpass), ("reference", Lowpass), ("rise", Lowpass), ("battery", Lowpass),
                 ("steady", c_bool), ("reported", c_bool),
-                ("steady_s", c_float), ("drop_s", c_float), ("drive_memo", c_float * 4)]
+                ("steady_s", c_float), ("drop_s", c_float), ("active", c_bool)]
 
 
 class Monitor(ctypes.Structure):
@@ -48,7 +48,7 @@ def lib(rw_core: ctypes.CDLL) -> ctypes.CDLL:
             ("rw_load_monitor_step", c_bool, [m, c_bool, c_float, c_float, c_float]),
             ("rw_load_monitor_load_n", c_float, [m]), ("rw_load_monitor_drop_n", c_float, [m]),
             ("rw_load_monitor_config_is_valid", c_bool, [c]),
-            ("rw_load_monitor_set_drive", None, [m, c_float, c_float, c_float, c_float])):
+            ("rw_load_monitor_prepare", None, [m, c_float])):
         fn = getattr(rw_core, name)
         fn.restype, fn.argtypes = restype, argtypes
     return rw_core
@@ -67,6 +67,7 @@ class Rig:
         for i in range(4):
             self.m.canary[i] = 0xA5A5A5A5A5A5A5A5
         lib.rw_load_monitor_init(ctypes.byref(self.m), ctypes.byref(cfg))
+        lib.rw_load_monitor_prepare(ctypes.byref(self.m), DT_S)  # as the core does: converted once for its dt
         self.t_s = 0.0
 
     def step(self, force_n: float, *, steady: bool = True, battery_v: float = BATTERY_V) -> bool:
@@ -106,14 +107,10 @@ def test_force_scale_of_the_reference_rig_and_bad_arguments(lib: ctypes.CDLL) ->
         assert not lib.rw_load_monitor_config_is_valid(ctypes.byref(bad)), field
 
 
-def test_set_drive_computes_the_scale_and_follows_its_arguments(lib: ctypes.CDLL) -> None:
-    rig = Rig(lib)
-    lib.rw_load_monitor_set_drive(ctypes.byref(rig.m), 2.0, 1250.0, 0.17, 0.015)
-    assert rig.m.cfg.n_per_v == pytest.approx(11.98 / 2, abs=0.01)  # twice the resistance: half the force per volt
-    lib.rw_load_monitor_set_drive(ctypes.byref(rig.m), 2.0, 1250.0, 0.17, 0.015)  # the same: kept
-    assert rig.m.cfg.n_per_v == pytest.approx(11.98 / 2, abs=0.01)
-    lib.rw_load_monitor_set_drive(ctypes.byref(rig.m), 2.0, 2500.0, 0.17, 0.015)  # kv doubled: Kt halved
-    assert rig.m.cfg.n_per_v == pytest.approx(11.98 / 4, abs=0.01)
+def test_the_force_scale_follows_resistance_and_kv(lib: ctypes.CDLL) -> None:
+    # twice the resistance: half the force per volt; kv doubled as well: Kt halved again
+    assert lib.rw_load_monitor_n_per_v(2.0, 1250.0, 0.17, 0.015) == pytest.approx(11.98 / 2, abs=0.01)
+    assert lib.rw_load_monitor_n_per_v(2.0, 2500.0, 0.17, 0.015) == pytest.approx(11.98 / 4, abs=0.01)
 
 
 def test_a_load_that_vanishes_is_reported_once_after_the_set_time(lib: ctypes.CDLL) -> None:

@@ -48,11 +48,23 @@ def test_zero_tau_passes_through(rw_core):
     assert lp.step(-7.25, 0.001) == -7.25
 
 
-def test_tau_change_takes_effect_on_the_next_step(rw_core):
+def test_tau_change_takes_effect_on_the_next_step_once_prepared(rw_core):
     lp = LowpassFilter(rw_core, tau_s=1.0)
+    lp.prepare(0.001)
     assert lp.step(1.0, 0.001) < 0.01
     lp.obj.cfg.tau_s = 0.0
+    lp.prepare(0.001)
     assert lp.step(1.0, 0.001) == 1.0
+
+
+def test_a_prepared_step_and_an_unprepared_one_agree(rw_core):
+    prepared = LowpassFilter(rw_core, tau_s=0.02)
+    prepared.prepare(0.002)
+    other = LowpassFilter(rw_core, tau_s=0.02)  # prepared for no step: each step computes its coefficient
+    for k in range(50):
+        x = 1.0 + 0.1 * k
+        assert prepared.step(x, 0.002) == other.step(x, 0.002)
+    assert prepared.step(3.0, 0.005) == other.step(3.0, 0.005)  # another dt: converted for itself
 
 
 @pytest.mark.parametrize("x", [float("nan"), float("inf"), float("-inf")])

@@ -182,6 +182,7 @@ def test_invalid_limits_hold_the_output(rw_core):
     pi = PiController(rw_core, kp=0.1, ki_per_s=1.0, out_min=0.0, out_max=1.0)
     held = pi.step(1.0, 0.0, 0.0, DT_S)
     pi.obj.cfg.out_min = 2.0  # out_min > out_max
+    pi.prepare(DT_S)
     assert pi.step(5.0, 0.0, 0.0, DT_S) == held
     assert not rw_core.rw_pi_controller_config_is_valid(ctypes.byref(pi.obj.cfg))
 

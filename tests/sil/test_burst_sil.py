@@ -17,7 +17,7 @@ SAMPLES = 600
 
 
 def _run(path: Path, *, burst: bool) -> tuple[list[float], list[gen.Telemetry], int]:
-    """Spin up to 5 m/s, then BURST_START (or a HEARTBEAT in the same tick), run 2.5 s: the pulse the plant got
+    """Spin up to 5 m/s, then BURST_START (or a PARAM_GET in the same tick), run 3.5 s: the pulse the plant got
     each tick, the telemetry, and the tick at which the command went out."""
     pulses: list[float] = []
     with SilSession(speedup=None, seed=3) as sil, RecordingSession(
@@ -33,7 +33,7 @@ def _run(path: Path, *, burst: bool) -> tuple[list[float], list[gen.Telemetry], 
             assert isinstance(verdict, gen.Ack), verdict
         else:
             host.command(gen.ParamGet(0))  # a command in the same tick, answered the same way
-        host.run_for(2.5)
+        host.run_for(3.5)  # 0.6 s of capture, then about 50 frames a second at 50 Hz telemetry
         rec.close(host_s=sil.time_s)
         host.close()
         return pulses, list(host.received.telemetry), tick

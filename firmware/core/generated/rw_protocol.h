@@ -21,6 +21,17 @@ extern "C" {
 #define RW_MAX_FRAME_LEN 93u
 #define RW_MSG_ID_UNREADABLE 255u
 
+/* Bottom of the ESC pulse protocol (zero throttle); esc_min_us may raise the floor, never lower it. (us) */
+#define RW_ESC_PULSE_MIN_US 1000u
+/* Full throttle: the top of the ESC pulse protocol; no pulse over it is ever sent. (us) */
+#define RW_ESC_PULSE_MAX_US 2000u
+/* At a speed setpoint of at least this, an encoder silence longer than the stale bound holds the throttle and the integrator (a stale reading, not a stopped rope). (mm/s) */
+#define RW_ENCODER_HOLD_MIN_MMPS 1000u
+/* The stale bound: this many encoder edge periods at the speed setpoint, and at least ENCODER_STALE_MIN_US. (1) */
+#define RW_ENCODER_STALE_EDGE_PERIODS 4u
+/* The stale bound is never shorter than this (a turning wheel's silence between two ticks never trips it). (us) */
+#define RW_ENCODER_STALE_MIN_US 3000u
+
 /* Device state machine. */
 typedef enum {
     RW_STATE_DISARMED = 0, /* ESC held at its minimum pulse; commands other than ARM/params refused. */
@@ -74,12 +85,19 @@ typedef enum {
     RW_EVENT_KIND_FAULT_RAISED = 4, /* arg = the fault bit that was raised. */
     RW_EVENT_KIND_PARAM_CHANGED = 5, /* arg = parameter id. */
     RW_EVENT_KIND_ARMING_HOLD_DONE = 6, /* The ESC has seen its minimum pulse for arm_hold_s: ARM is now accepted. */
-    RW_EVENT_KIND_SPINDLE_HOMED = 7, /* Homing found the end of the stroke; guide position 0 set. arg = 1 by stall, 2 by limit switch. */
+    RW_EVENT_KIND_SPINDLE_HOMED = 7, /* Homing found the end of the stroke; guide position 0 set. arg = how (enum homed_by). */
     RW_EVENT_KIND_SPINDLE_TARGET_REACHED = 8, /* The guide reached its target within spindle_tolerance_mm; arg = position, um. */
     RW_EVENT_KIND_FAULT_CLEARED = 9, /* arg = the fault bits cleared (by DISARM). */
     RW_EVENT_KIND_LOAD_LOST = 10, /* The drive's load estimate (speed PI integral x battery voltage, as rope force) fell by more than load_loss_drop_n for load_loss_time_s while airborne at a steady setpoint: the rope broke or the object came off the loop. The rope is spun down (SPINDOWN, cause LOAD_LOST) and fault LOAD_LOST latched. arg = the drop, mN. Loads under about load_loss_drop_n (a free loop: 0.16 N) cannot be seen: see docs/load_loss.md. */
 } rw_event_kind;
 #define RW_EVENT_KIND_COUNT 11u
+
+/* How homing found the end of the stroke (EVENT.arg of SPINDLE_HOMED). */
+typedef enum {
+    RW_HOMED_BY_STALL = 1, /* The servo's present load stayed over homing_load_pct: the guide is against the hard stop. */
+    RW_HOMED_BY_SWITCH = 2, /* The home limit switch closed. */
+} rw_homed_by;
+#define RW_HOMED_BY_COUNT 3u
 
 /* Why a state changed (EVENT.arg of STATE_CHANGED). */
 typedef enum {

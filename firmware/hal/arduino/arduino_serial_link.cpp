@@ -55,58 +55,17 @@ void pump(rw_arduino_serial_link *link)
     memmove(link->tx, link->tx + n, link->tx_len);
 }
 
-/* Move what USB has received into rx (at most its free space); false if nothing came. */
-bool fill(rw_arduino_serial_link *link)
-{
-    const int available = Serial.available();
-    if (available <= 0) {
-        return false;
-    }
-    if (link->rx_len == RW_SERIAL_RX_BYTES) { /* no delimiter in a full buffer: drop the frame's bytes */
-        link->rx_overflow = true;
-        link->rx_len = 0u;
-    }
-    size_t want = static_cast<size_t>(available);
-    const size_t space = RW_SERIAL_RX_BYTES - link->rx_len;
-    if (want > space) {
-        want = space;
-    }
-    const size_t got = Serial.readBytes(reinterpret_cast<char *>(link->rx + link->rx_len), want);
-    link->rx_len += got;
-    return got != 0u;
-}
-
 size_t serial_recv(void *ctx, uint8_t *buf, size_t cap)
 {
     rw_arduino_serial_link *link = static_cast<rw_arduino_serial_link *>(ctx);
-    for (;;) {
-        const uint8_t *end = static_cast<const uint8_t *>(memchr(link->rx, 0, link->rx_len));
-        if (end == nullptr) {
-            if (!fill(link)) {
-                return 0u;
-            }
-            continue;
+    /* Serial.read() takes one byte from the CDC receive buffer and never waits (-1: empty) */
+    for (int byte = Serial.read(); byte >= 0; byte = Serial.read()) {
+        const size_t len = rw_cobs_deframer_put(&link->rx, static_cast<uint8_t>(byte), buf, cap);
+        if (len != 0u) {
+            return len;
         }
-        const size_t n = static_cast<size_t>(end - link->rx);
-        const bool overflow = link->rx_overflow;
-        size_t len = 0u;
-        if (n != 0u && !overflow) {
-            len = rw_cobs_decode(link->rx, n, buf, cap);
-        }
-        link->rx_overflow = false;
-        link->rx_len -= n + 1u;
-        memmove(link->rx, link->rx + n + 1u, link->rx_len);
-        if (n == 0u && !overflow) {
-            continue; /* back-to-back delimiters */
-        }
-        if (len == 0u) {
-            ++link->bad_frames;
-            buf[0] = 0u; /* not a frame: the core refuses it (BAD_MAGIC) and counts it */
-            return 1u;
-        }
-        ++link->frames_in;
-        return len;
     }
+    return 0u;
 }
 
 void serial_send(void *ctx, const uint8_t *frame, size_t len)

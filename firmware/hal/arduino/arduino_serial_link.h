@@ -4,8 +4,9 @@
  * (`wrangler provision --port /dev/ttyACM0 ...`).
  *
  * Never blocks the tick:
- *  - receive: each recv moves what Serial.available() reports into rx (at most its free space) and hands
- *    over one decoded frame (the first complete one), leaving the rest for the next ticks;
+ *  - receive: each recv reads the bytes Serial has buffered, one at a time, into the core's COBS deframer
+ *    (core/rw_cobs_deframer.h, the SIL's serial HAL uses the same) and stops at the first complete frame,
+ *    leaving the rest in Serial's buffer for the next ticks;
  *  - send: the encoded frame and its delimiter are queued whole in tx, or dropped (counted) if they do
  *    not fit; the queue leaves in USB packets of at most 63 bytes, one whenever the CDC IN endpoint's bank
  *    is free (checked on the USB registers before each Serial.write). On this core Serial.availableForWrite()
@@ -20,27 +21,21 @@
 
 extern "C" {
 #include "rw_cobs.h"
+#include "rw_cobs_deframer.h"
 #include "rw_hal_link.h"
 #include "rw_protocol.h"
 }
 
-/* Encoded bytes awaiting their delimiter: more than the longest encoded frame, so a valid frame always
- * fits; a longer run without a delimiter is dropped up to the next delimiter and reported as not a frame. */
-static const size_t RW_SERIAL_RX_BYTES = 256u;
 /* Encoded frames awaiting the host: three of the longest. */
 static const size_t RW_SERIAL_TX_BYTES = 3u * (RW_COBS_MAX_ENCODED(RW_MAX_FRAME_LEN) + 1u);
 /* One USB full-speed bulk packet carries 64 bytes; 63 keeps every write a single short packet. */
 static const size_t RW_SERIAL_PACKET_BYTES = 63u;
 
 struct rw_arduino_serial_link {
-    uint8_t rx[RW_SERIAL_RX_BYTES];
-    size_t rx_len;
-    bool rx_overflow;      /* the frame being received outgrew rx: skipped to its delimiter */
+    rw_cobs_deframer rx;   /* received bytes -> frames; counts good and bad frames */
     uint8_t tx[RW_SERIAL_TX_BYTES];
     size_t tx_len;
     uint8_t in_endpoint;   /* USB endpoint of the CDC bulk IN (found once USB is configured; 0 = not yet) */
-    uint32_t frames_in;    /* frames decoded and handed to the core */
-    uint32_t bad_frames;   /* malformed COBS or over-long frames (handed over as "not a frame") */
     uint32_t frames_out;   /* frames queued for the host */
     uint32_t tx_dropped;   /* frames dropped: queue full or nobody listening */
 };

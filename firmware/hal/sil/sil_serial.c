@@ -10,6 +10,7 @@
 bool sil_serial_open(sil_serial *s)
 {
     memset(s, 0, sizeof *s);
+    rw_cobs_deframer_reset(&s->rx);
     s->fd = posix_openpt(O_RDWR | O_NOCTTY);
     if (s->fd < 0 || grantpt(s->fd) != 0 || unlockpt(s->fd) != 0) {
         return false;
@@ -48,29 +49,10 @@ static size_t hal_recv(void *ctx, uint8_t *buf, size_t cap)
     sil_serial *s = ctx;
     uint8_t byte;
     while (read(s->fd, &byte, 1) == 1) {
-        if (byte != 0u) {
-            if (s->rx_len < sizeof s->rx) {
-                s->rx[s->rx_len++] = byte;
-            } else {
-                s->rx_overflow = true;
-            }
-            continue;
+        const size_t len = rw_cobs_deframer_put(&s->rx, byte, buf, cap);
+        if (len != 0u) {
+            return len;
         }
-        size_t n = s->rx_len;
-        bool overflow = s->rx_overflow;
-        s->rx_len = 0u;
-        s->rx_overflow = false;
-        if (n == 0u) {
-            continue; /* back-to-back delimiters */
-        }
-        size_t len = overflow ? 0u : rw_cobs_decode(s->rx, n, buf, cap);
-        if (len == 0u) {
-            ++s->bad_frames;
-            buf[0] = 0u; /* not a frame: the core refuses it (BAD_MAGIC) and counts it */
-            return 1u;
-        }
-        ++s->frames_in;
-        return len;
     }
     return 0u;
 }

@@ -9,19 +9,14 @@
 #include <stdint.h>
 
 #include "rw_cobs.h"
+#include "rw_cobs_deframer.h"
 #include "rw_hal_link.h"
 #include "rw_protocol.h"
-
-#define SIL_SERIAL_RX_MAX 512u
 
 typedef struct sil_serial {
     int fd;                 /* pty master */
     char path[128];         /* slave side */
-    uint8_t rx[SIL_SERIAL_RX_MAX];
-    size_t rx_len;
-    bool rx_overflow;       /* current frame too long: dropped up to the next delimiter */
-    uint32_t frames_in;
-    uint32_t bad_frames;
+    rw_cobs_deframer rx;    /* received bytes -> frames (the board's serial HAL uses the same) */
 } sil_serial;
 
 bool sil_serial_open(sil_serial *s);

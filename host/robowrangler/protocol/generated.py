@@ -26,6 +26,11 @@ SIGNATURE_LEN = 20
 KEY_LEN = 16
 MAX_FRAME_LEN = 93
 MSG_ID_UNREADABLE = 255
+ESC_PULSE_MIN_US = 1000  # Bottom of the ESC pulse protocol (zero throttle); esc_min_us may raise the floor, never lower it. (us)
+ESC_PULSE_MAX_US = 2000  # Full throttle: the top of the ESC pulse protocol; no pulse over it is ever sent. (us)
+ENCODER_HOLD_MIN_MMPS = 1000  # At a speed setpoint of at least this, an encoder silence longer than the stale bound holds the throttle and the integrator (a stale reading, not a stopped rope). (mm/s)
+ENCODER_STALE_EDGE_PERIODS = 4  # The stale bound: this many encoder edge periods at the speed setpoint, and at least ENCODER_STALE_MIN_US. (1)
+ENCODER_STALE_MIN_US = 3000  # The stale bound is never shorter than this (a turning wheel's silence between two ticks never trips it). (us)
 
 
 class State(IntEnum):
@@ -124,13 +129,22 @@ class EventKind(IntEnum):
     ARMING_HOLD_DONE = 6
     """The ESC has seen its minimum pulse for arm_hold_s: ARM is now accepted."""
     SPINDLE_HOMED = 7
-    """Homing found the end of the stroke; guide position 0 set. arg = 1 by stall, 2 by limit switch."""
+    """Homing found the end of the stroke; guide position 0 set. arg = how (enum homed_by)."""
     SPINDLE_TARGET_REACHED = 8
     """The guide reached its target within spindle_tolerance_mm; arg = position, um."""
     FAULT_CLEARED = 9
     """arg = the fault bits cleared (by DISARM)."""
     LOAD_LOST = 10
     """The drive's load estimate (speed PI integral x battery voltage, as rope force) fell by more than load_loss_drop_n for load_loss_time_s while airborne at a steady setpoint: the rope broke or the object came off the loop. The rope is spun down (SPINDOWN, cause LOAD_LOST) and fault LOAD_LOST latched. arg = the drop, mN. Loads under about load_loss_drop_n (a free loop: 0.16 N) cannot be seen: see docs/load_loss.md."""
+
+
+class HomedBy(IntEnum):
+    """How homing found the end of the stroke (EVENT.arg of SPINDLE_HOMED)."""
+
+    STALL = 1
+    """The servo's present load stayed over homing_load_pct: the guide is against the hard stop."""
+    SWITCH = 2
+    """The home limit switch closed."""
 
 
 class Cause(IntEnum):

@@ -432,7 +432,7 @@ static void boot_and_arm(void)
 static void follow_setpoint_until(uint8_t state, uint32_t max_ms)
 {
     for (uint32_t i = 0u; i < max_ms && rw_core_state(&core) != state; ++i) {
-        set_rope_speed_mps((double)core.state.setpoint_mps);
+        set_rope_speed_mps((double)rw_speed_loop_setpoint_mps(&core.state.loop));
         if (now_ms() % 100u == 0u) {
             heartbeat();
         }
@@ -688,7 +688,7 @@ static void test_heartbeat_loss_spins_down_after_the_timeout(void)
     tick();
     uint32_t t_last = now_ms();
     for (uint32_t i = 0u; i < 600u && rw_core_state(&core) == RW_STATE_AIRBORNE; ++i) {
-        set_rope_speed_mps((double)core.state.setpoint_mps);
+        set_rope_speed_mps((double)rw_speed_loop_setpoint_mps(&core.state.loop));
         tick();
     }
     TEST_ASSERT_EQUAL_UINT8(RW_STATE_SPINDOWN, rw_core_state(&core));
@@ -750,7 +750,7 @@ static void record_scenario(uint32_t offset_us, uint16_t *pulses, unsigned n)
         } else if (k % 100u == 0u) {
             heartbeat();
         }
-        set_rope_speed_mps((double)core.state.setpoint_mps);
+        set_rope_speed_mps((double)rw_speed_loop_setpoint_mps(&core.state.loop));
         tick();
         pulses[k++] = fake.pulse_us;
     }
@@ -778,8 +778,8 @@ static void test_long_tick_gap_does_not_jump_the_esc_pulse(void)
     /* the first tick loads the stored parameters over the core's: store these (as provisioning would) */
     rw_config_set_params(&flash, core.params.value);
     to_airborne(4000);
-    for (uint32_t i = 0u; i < 2000u && core.state.setpoint_mps < 4.0f; ++i) {
-        set_rope_speed_mps((double)core.state.setpoint_mps);
+    for (uint32_t i = 0u; i < 2000u && rw_speed_loop_setpoint_mps(&core.state.loop) < 4.0f; ++i) {
+        set_rope_speed_mps((double)rw_speed_loop_setpoint_mps(&core.state.loop));
         tick();
     }
     TEST_ASSERT_TRUE(command(buf, frame_speed(buf, ++host_seq, 8000)).ack);

@@ -88,6 +88,7 @@ static void test_nothing_is_judged_while_not_steady_or_settling(void)
 static void test_off_at_zero_threshold(void)
 {
     mon.cfg.drop_n = 0.0f;
+    rw_load_monitor_prepare(&mon, DT_S); /* a changed config is prepared */
     TEST_ASSERT_EQUAL_INT(0, hold(20.0f, 2.0f, true, BATTERY_V));
     TEST_ASSERT_EQUAL_INT(0, hold(0.0f, 2.0f, true, BATTERY_V));
 }
@@ -113,6 +114,7 @@ static void test_a_fast_battery_sag_is_no_load_change(void)
     TEST_ASSERT_EQUAL_INT(0, sag_run());
     rw_load_monitor_reset(&mon);
     mon.cfg.battery_tau_s = 0.0f; /* the instantaneous voltage reads the sag as a load loss */
+    rw_load_monitor_prepare(&mon, DT_S);
     TEST_ASSERT_EQUAL_INT(1, sag_run());
 }
 

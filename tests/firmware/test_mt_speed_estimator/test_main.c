@@ -104,6 +104,7 @@ static void test_wrap_between_two_steps_exact(void)
 static void test_rpm_and_rope_speed_units(void)
 {
     est.cfg.filter_tau_s = 0.0f;
+    rw_mt_speed_estimator_prepare(&est, 0.0f); /* a changed config is prepared */
     rw_mt_speed_estimator_step(&est, 1000u, 5000u, 5100u, 0.001f);
     const float rope_mps = rw_mt_speed_estimator_step(&est, 1016u, 7000u, 7050u, 0.001f);
     TEST_ASSERT_FLOAT_WITHIN(1e-3f, 125.0f, rw_mt_speed_estimator_rev_per_s(&est));
@@ -114,6 +115,7 @@ static void test_rpm_and_rope_speed_units(void)
 static void test_stop_decays_then_zero_and_stale_after_timeout(void)
 {
     est.cfg.filter_tau_s = 0.0f;
+    rw_mt_speed_estimator_prepare(&est, 0.0f);
     /* 3000 rpm until the edge at 10,000 us, then silence */
     rw_mt_speed_estimator_step(&est, 0u, 0u, 500u, 0.001f);
     rw_mt_speed_estimator_step(&est, 32u, 10000u, 10010u, 0.001f); /* 32 edges / 10 ms: 50 rev/s */
@@ -136,6 +138,7 @@ static void test_stop_decays_then_zero_and_stale_after_timeout(void)
 static void test_restart_after_stop_longer_than_half_the_clock_range(void)
 {
     est.cfg.filter_tau_s = 0.0f;
+    rw_mt_speed_estimator_prepare(&est, 0.0f);
     rw_mt_speed_estimator_step(&est, 0u, 1000u, 1000u, 0.001f);
     rw_mt_speed_estimator_step(&est, 8u, 2000u, 2010u, 0.001f);
     /* still for 40 minutes (> 2^31 us), stepped every 50 ms */
@@ -163,6 +166,7 @@ static void test_first_step_only_latches(void)
 static void test_backward_count_keeps_estimate(void)
 {
     est.cfg.filter_tau_s = 0.0f;
+    rw_mt_speed_estimator_prepare(&est, 0.0f);
     rw_mt_speed_estimator_step(&est, 1000u, 5000u, 5100u, 0.001f);
     rw_mt_speed_estimator_step(&est, 1016u, 7000u, 7050u, 0.001f);
     rw_mt_speed_estimator_step(&est, 900u, 7400u, 7500u, 0.001f);
@@ -203,6 +207,7 @@ static void test_quotient_is_the_exact_division_to_its_resolution(void)
 static void test_invalid_config_reads_zero(void)
 {
     est.cfg.counts_per_rev = 0u;
+    rw_mt_speed_estimator_prepare(&est, 0.0f);
     TEST_ASSERT_FALSE(rw_mt_speed_estimator_config_is_valid(&est.cfg));
     rw_mt_speed_estimator_step(&est, 0u, 0u, 10u, 0.001f);
     TEST_ASSERT_EQUAL_FLOAT(0.0f, rw_mt_speed_estimator_step(&est, 100u, 1000u, 1010u, 0.001f));

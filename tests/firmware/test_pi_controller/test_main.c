@@ -45,6 +45,7 @@ static void test_proportional_plus_feed_forward(void)
 {
     pi.cfg.kp = 0.5f;
     pi.cfg.ki_per_s = 0.0f;
+    rw_pi_controller_prepare(&pi, DT_S); /* a changed config is prepared */
     TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f, 0.25f + 0.5f * 1.0f, step(3.0f, 2.0f, 0.25f, DT_S));
 }
 
@@ -52,6 +53,7 @@ static void test_integral_ramps_at_ki_times_error(void)
 {
     pi.cfg.kp = 0.0f;
     pi.cfg.ki_per_s = 2.0f;
+    rw_pi_controller_prepare(&pi, DT_S);
     float u = 0.0f;
     for (int k = 0; k < 100; ++k) {
         u = step(1.5f, 1.0f, 0.0f, DT_S);
@@ -101,6 +103,7 @@ static void test_lower_limit_symmetric(void)
     pi.cfg.kp = 0.01f;
     pi.cfg.ki_per_s = 1.0f;
     pi.cfg.out_min = -1.0f;
+    rw_pi_controller_prepare(&pi, DT_S);
     float u = 0.0f;
     for (int k = 0; k < 3000; ++k) {
         u = step(0.0f, 5.0f, 0.0f, DT_S);
@@ -118,9 +121,11 @@ static void test_bad_input_holds_output(void)
     TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, -DT_S));
     TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, NAN));
     pi.cfg.out_min = 2.0f; /* invalid: out_min > out_max */
+    rw_pi_controller_prepare(&pi, DT_S);
     TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, DT_S));
     pi.cfg.out_min = 0.0f;
     pi.cfg.kp = NAN; /* invalid gain */
+    rw_pi_controller_prepare(&pi, DT_S);
     TEST_ASSERT_EQUAL_FLOAT(held, step(10.0f, 5.0f, 0.1f, DT_S));
 }
 

@@ -72,6 +72,7 @@ static void test_out_of_range_config_narrowed(void)
 {
     map.cfg.pulse_min_us = 900u;
     map.cfg.pulse_max_us = 2500u;
+    rw_throttle_map_prepare(&map); /* a changed config is prepared */
     TEST_ASSERT_FALSE(rw_throttle_map_config_is_valid(&map.cfg));
     TEST_ASSERT_EQUAL_UINT16(1000u, pulse_of(0.0f));
     TEST_ASSERT_EQUAL_UINT16(2000u, pulse_of(1.0f));
@@ -103,8 +104,10 @@ static void test_prepared_battery_factor_follows_voltage_and_kv(void)
     TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f, (60.0f * 5.0f) / (6.28318530718f * 0.015f * 1400.0f * 14.8f), at_14v8);
     TEST_ASSERT_FLOAT_WITHIN(2.0f / 65536.0f, at_14v8 * 14.8f / 12.0f, ff(5.0f, 12.0f));
     map.cfg.kv_rpm_per_v = 700.0f;
+    rw_throttle_map_prepare(&map);
     TEST_ASSERT_FLOAT_WITHIN(2.0f / 65536.0f, 2.0f * at_14v8, ff(5.0f, 14.8f));
     map.cfg.kv_rpm_per_v = 0.0f; /* invalid: no feed-forward */
+    rw_throttle_map_prepare(&map);
     TEST_ASSERT_EQUAL_FLOAT(0.0f, ff(5.0f, 14.8f));
 }
 

@@ -79,6 +79,7 @@ static void test_rearms_after_recovery(void)
 static void test_nan_speed_and_bad_dt_ignored(void)
 {
     guard.cfg.collapse_time_s = 0.01f;
+    rw_tov_guard_prepare(&guard); /* a changed config is prepared */
     int first = 0;
     TEST_ASSERT_EQUAL_INT(0, run_steps(5, 1.0f, &first));
     TEST_ASSERT_FALSE(rw_tov_guard_step(&guard, NAN, DT_S));
@@ -92,6 +93,7 @@ static void test_nan_speed_and_bad_dt_ignored(void)
 static void test_invalid_config_never_reports(void)
 {
     guard.cfg.margin = 0.5f;
+    rw_tov_guard_prepare(&guard);
     int first = 0;
     TEST_ASSERT_FALSE(rw_tov_guard_setpoint_allowed(&guard, 100.0f));
     TEST_ASSERT_EQUAL_INT(0, run_steps(1000, 0.0f, &first));
