@@ -86,6 +86,13 @@ static void fake_esc_write(void *ctx, uint16_t pulse_us)
     harness_pulse_us = pulse_us;
 }
 
+/* the board's HAL writes thirds of a microsecond (TCC1): the harness takes that path as the board does */
+static void fake_esc_write_third(void *ctx, uint16_t pulse_third_us)
+{
+    (void)ctx;
+    harness_pulse_us = (uint16_t)(((pulse_third_us + 1u) * 21846u) >> 16); /* as the board's HAL: no division */
+}
+
 static size_t fake_link_recv(void *ctx, uint8_t *buf, size_t cap)
 {
     (void)ctx;
@@ -184,7 +191,7 @@ static bool fake_config_save(void *ctx, const void *buf, size_t len)
     return true;
 }
 
-static const rw_hal_esc_output harness_esc = { NULL, fake_esc_write };
+static const rw_hal_esc_output harness_esc = { NULL, fake_esc_write, fake_esc_write_third };
 static const rw_hal_encoder harness_encoder = { NULL, fake_encoder_read };
 static const rw_hal_battery harness_battery = { NULL, fake_battery_read_mv };
 static const rw_hal_link harness_link = { NULL, fake_link_recv, fake_link_reply, fake_link_accept_peer, fake_link_send };

@@ -296,6 +296,13 @@ static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
         return cmd_retract(core, hal);
     case RW_MSG_ID_RELEASE:
         return cmd_release(core, hal);
+    case RW_MSG_ID_BURST_START: {
+        rw_msg_burst_start msg;
+        rw_msg_burst_start_unpack(&msg, frame->payload);
+        int32_t detail = 0;
+        const uint8_t reason = rw_burst_start(&core->state.burst, msg.samples, &detail);
+        return reason == 0u ? ACCEPT : refuse(reason, detail);
+    }
     default:
         return refuse(RW_NACK_REASON_NOT_A_COMMAND, 0);
     }

@@ -88,6 +88,7 @@ class ClientStats:
     telemetry_dropped: int = 0
     events_received: int = 0
     events_lost: int = 0
+    burst_frames: int = 0  # BURST_DATA frames received (a recorder on the transport keeps their content)
     unexpected_messages: int = 0
     auth_failures: int = 0
     replayed: int = 0  # signed device frames dropped as stale (an older session or a counter already seen)
@@ -385,6 +386,14 @@ class Client:
         """DISARMED or ARMED with the rope stopped: drive the guide to the home end (stall or limit
         switch), position 0 there. Returns when accepted; telemetry spindle_flags gets HOMED when done."""
         return State(self._command(gen.Home()).state)
+
+    def start_burst(self, samples: int) -> State:
+        """BURST_START: the device samples every control tick (1 kHz) for `samples` ticks (1..1000), then streams
+        them as BURST_DATA (a recorder writes them to /device/burst). Refused (NackError) while a burst is
+        captured or streamed (BURST_BUSY) or for a size out of range (OUT_OF_RANGE, detail = the maximum)."""
+        if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= 0xFFFF:
+            raise InvalidArgument("samples", "an integer 1..1000 (the device's burst buffer)", samples)
+        return State(self._command(gen.BurstStart(samples)).state)
 
     # ----------------------------------------------------------------- provisioning (USB serial only)
 
@@ -769,6 +778,9 @@ class Client:
             self._on_telemetry(TelemetrySample.from_wire(msg, received_s=received_s))
         elif msg_id == MsgId.EVENT:
             self._on_event(DeviceEvent.from_wire(msg, received_s=received_s))
+        elif msg_id == MsgId.BURST_DATA:
+            with self._lock:
+                self._stats.burst_frames += 1
         else:
             with self._lock:
                 self._stats.unexpected_messages += 1

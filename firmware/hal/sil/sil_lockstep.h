@@ -19,7 +19,8 @@ typedef struct sil_lockstep {
     bool has_plant;
     rw_msg_sil_sensors sensors; /* latest */
     uint16_t esc_pulse_us;      /* the pulse the ESCs have (applied at the start of the tick, as on the board) */
-    uint16_t esc_staged_us;     /* the core's latest pulse, applied at the start of the next tick */
+    uint16_t esc_pulse_third_us; /* the same, thirds of a microsecond (the timer's resolution) */
+    uint16_t esc_staged_third_us; /* the core's latest pulse (thirds of a us), applied at the start of the next tick */
     uint16_t spindle_moving_speed_raw; /* latest output (the spindle bus's last write, sil_spindle_bus.h) */
     uint32_t bad_datagrams;
     uint16_t tx_seq;

@@ -18,7 +18,7 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param, plugins, provision, record, spindle
+from robowrangler.cli import excite, monitor, motion, param, plugins, provision, record, spindle
 from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_ENV_VAR, CliContext, OutputClosed,
                                       read_key_file)
 from robowrangler.cli.environment import Environment
@@ -33,6 +33,7 @@ COMMANDS: list[click.Command] = [
     monitor.status, monitor.watch,
     param.param, provision.provision, provision.keygen,
     record.record, record.inspect, record.replay,
+    excite.excite,
 ]
 
 _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStatus) + "."

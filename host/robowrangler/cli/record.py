@@ -5,7 +5,6 @@ The file format is protocol/recording/schema.md; the work is done by robowrangle
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
@@ -15,11 +14,10 @@ from robowrangler.cli.context import CliContext, pass_context
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.client import Client
 from robowrangler.errors import LinkTimeout, RoboWranglerError
-from robowrangler.recorder.link import LinkRecorder, RecordingTransport
 from robowrangler.recorder.plot import plot_recording
 from robowrangler.recorder.reader import read_recording
 from robowrangler.recorder.summary import format_summary, summarize
-from robowrangler.recorder.writer import RecordingWriter
+from robowrangler.recorder.session import RecordingSession, read_device_params
 from robowrangler.transport import UdpUrl, open_transport, parse_url
 
 PROGRESS_PERIOD_S = 2.0  # a progress line on stderr this often (a live line on a terminal)
@@ -94,9 +92,9 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
     """
     start_s = time.monotonic()
     deadline_s = None if duration_s is None else start_s + duration_s
-    writer = RecordingWriter(out, source=source or _default_source(ctx.url), seed=seed, device_url=ctx.url,
-                             description=description)
-    recorder = LinkRecorder(writer)
+    recording = RecordingSession(out, source=source or _default_source(ctx.url), seed=seed, device_url=ctx.url,
+                                 description=description)
+    recorder = recording.recorder
     progress = _Progress(ctx)
     client: Client | None = None
     waiting_noted = lost = interrupted = False
@@ -110,7 +108,7 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
                 connect_s = ctx.timeout_s if remaining_s is None else min(ctx.timeout_s, remaining_s)
                 try:
                     client = Client(ctx.url, connect_timeout_s=connect_s, key=ctx.key,
-                                    transport=RecordingTransport(open_transport(ctx.url), recorder)).connect()
+                                    transport=recording.transport(open_transport(ctx.url))).connect()
                 except LinkTimeout:
                     if not waiting_noted:
                         progress.note(f"no telemetry from {ctx.url} yet; recording goes on, waiting for the device")
@@ -119,7 +117,7 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
                 progress.note(f"recording {ctx.url} to {out}" + ("" if duration_s is None else f" for {duration_s:g} s")
                               + " (Ctrl-C ends it)")
                 if not no_params:
-                    _record_params(ctx, client, writer, progress)
+                    _record_params(client, recording, progress)
                 continue
             time.sleep(TICK_S if remaining_s is None else max(0.0, min(TICK_S, remaining_s)))
             now_s = time.monotonic()
@@ -140,8 +138,7 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
         progress.end_line()
         if client is not None:
             client.close()
-        recorder.finish()
-        writer.close()
+        recording.close()
     elapsed_s = time.monotonic() - start_s
     if recorder.telemetry_count == 0:
         raise LinkTimeout(f"no TELEMETRY from {ctx.url} during the whole recording ({elapsed_s:.1f} s); {out} was "
@@ -155,14 +152,14 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
     return ExitStatus.OK
 
 
-def _record_params(ctx: CliContext, client: Client, writer: RecordingWriter, progress: _Progress) -> None:
+def _record_params(client: Client, recording: RecordingSession, progress: _Progress) -> None:
     """Read every device parameter into the "/device/params" metadata record (best effort)."""
     try:
-        params = client.params()
+        params = read_device_params(client.get_param)
     except RoboWranglerError as err:
         progress.note(f"device parameters not recorded: {err}")
         return
-    writer.add_metadata("/device/params", {name: json.dumps(value) for name, value in params.items()})
+    recording.write_params(params)
 
 
 @click.command("inspect")

@@ -82,7 +82,7 @@ class EscNotResponding(_WindowedFault):
         super().__init__(start_s=start_s, duration_s=duration_s)
         self._sil: SilSession | None = None
 
-    def __call__(self, pulse_us: int) -> int:
+    def __call__(self, pulse_us: float) -> float:
         sil = self._sil
         if sil is None or not self.active_at(sil.drive_out.time_us):
             return pulse_us

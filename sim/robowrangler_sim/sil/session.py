@@ -199,6 +199,7 @@ class SilSession:
         self.trace: list[PlantSample] = []
         self.ticks = 0
         self.last_esc_pulse_us = 0
+        self.last_esc_pulse_fine_us = 0.0
         self.sensor_filters: list[SensorFilter] = []
         self.actuator_filters: list[ActuatorFilter] = []
         self.tick_hooks: list[TickHook] = []
@@ -360,8 +361,10 @@ class SilSession:
                     raise SilFirmwareError(f"SIL firmware exited with code {code}: {self._firmware.stderr_text()}") from None
                 raise
             self.last_esc_pulse_us = out.esc_pulse_us
+            # the pulse at the PWM timer's resolution (1/3 us), as the board's TCC1 outputs it
+            self.last_esc_pulse_fine_us = out.esc_pulse_third_us / 3.0
             self.last_spindle_speed_raw = out.spindle_moving_speed_raw
-        plant_pulse_us = self.last_esc_pulse_us
+        plant_pulse_us = self.last_esc_pulse_fine_us
         for actuator_filter in self.actuator_filters:
             plant_pulse_us = actuator_filter(plant_pulse_us)
         loads, dt_s = self.loads, self.tick_us * 1e-6
