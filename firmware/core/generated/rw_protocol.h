@@ -61,8 +61,9 @@ typedef enum {
     RW_NACK_REASON_REPLAYED = 21, /* Never sent: a frame from another session, or whose counter is not above the last accepted, is dropped and counted (rx_replayed). */
     RW_NACK_REASON_NO_KEY = 22, /* Never sent: the device has no key provisioned and drops every frame over WiFi but HELLO (SESSION_INFO says key_set 0) until one is set over USB serial. */
     RW_NACK_REASON_STORE_FAILED = 23, /* PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed. */
+    RW_NACK_REASON_PARAM_CONFLICT = 24, /* PARAM_SET: the value is in range but breaks a rule between parameters (guide_min_mm < guide_max_mm; tov_mps x tov_margin <= max_rope_speed_mps); nothing changed. NACK.detail = the id of the other parameter of the rule. */
 } rw_nack_reason;
-#define RW_NACK_REASON_COUNT 24u
+#define RW_NACK_REASON_COUNT 25u
 
 /* Event kinds (EVENT.event). */
 typedef enum {
@@ -344,7 +345,7 @@ void rw_msg_param_get_pack(const rw_msg_param_get *msg, uint8_t *payload);
 void rw_msg_param_get_unpack(rw_msg_param_get *msg, const uint8_t *payload);
 size_t rw_msg_param_get_encode(const rw_msg_param_get *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED); answered by ACK then PARAM_VALUE. */
+/* PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED; checked with the parameters it must hold together with: PARAM_CONFLICT); answered by ACK then PARAM_VALUE. */
 #define RW_MSG_PARAM_SET_LEN 5u
 #define RW_MSG_PARAM_SET_CRC_EXTRA 0x5862u
 typedef struct {

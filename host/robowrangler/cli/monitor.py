@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.stream import stream_telemetry, telemetry_table
 
 
@@ -18,7 +18,7 @@ def status(ctx: CliContext) -> None:
 
 
 @click.command()
-@click.option("--duration", "duration_s", type=click.FloatRange(min=0.0), default=None, metavar="SECONDS",
+@click.option("--duration", "duration_s", type=Seconds(), default=None, metavar="SECONDS",
               help="Stop after this long (default: until Ctrl-C).")
 @pass_context
 def watch(ctx: CliContext, duration_s: float | None) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from robowrangler import units
-from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.stream import stream_telemetry
 from robowrangler.protocol.generated import State
 
@@ -34,7 +34,7 @@ def disarm(ctx: CliContext) -> None:
 
 @click.command()
 @click.argument("mps", type=float, metavar="MPS")
-@click.option("--hold", "hold_s", type=click.FloatRange(min=0.0), default=None, metavar="SECONDS",
+@click.option("--hold", "hold_s", type=Seconds(), default=None, metavar="SECONDS",
               help="Keep the link alive and stream telemetry this long, then spin down and wait for ARMED.")
 @pass_context
 def spin(ctx: CliContext, mps: float, hold_s: float | None) -> None:

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
+
 import click
 
 from robowrangler import units
 from robowrangler.cli.context import CliContext, pass_context
 from robowrangler.client import param_spec
+from robowrangler.errors import InvalidArgument
 from robowrangler.protocol.generated import PARAMS, ParamSpec
 
 
@@ -52,6 +55,8 @@ def set_(ctx: CliContext, name: str, value: float) -> None:
     """Set parameter NAME to VALUE (SI unit); prints the value the device now holds."""
     spec = param_spec(name)
     units.param_to_float32(name, value)  # NaN fails before connecting
+    if spec.integer and math.isfinite(value) and value != int(value):
+        raise InvalidArgument(name, f"an integer ({spec.units})", value)
     with ctx.client() as rw:
         held = rw.set_param(name, value)
     ctx.result({"command": "param set", **_describe(spec, held)}, f"{name} = {held:g} {spec.units}")

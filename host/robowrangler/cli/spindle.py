@@ -9,16 +9,29 @@ from __future__ import annotations
 import click
 
 from robowrangler import units
-from robowrangler.cli.context import CliContext, pass_context
-from robowrangler.errors import RoboWranglerError
+from robowrangler.cli.context import CliContext, Seconds, pass_context
+from robowrangler.errors import InvalidArgument, RoboWranglerError
 from robowrangler.protocol.generated import SpindleFlag, State
 
-_WITHIN = dict(type=click.FloatRange(min=0.0, min_open=True), metavar="SECONDS", show_default=True)
+_WITHIN = dict(type=Seconds(positive=True), metavar="SECONDS", show_default=True)
 _HEARTBEAT_NOTE = "the device stops the spindle heartbeat_timeout_s after this command exits"
 
 
 class NothingGrasped(RoboWranglerError):
     """A grasp or retract reached the end of the stroke without the load that secures an object."""
+
+
+GUIDE_WIRE_LIMIT_MM = units.INT32_MAX / 1000.0  # SET_LOOP carries um in an int32
+
+
+def guide_target_m(guide_mm: float) -> float:
+    """GUIDE_MM (mm, as typed) -> m for the client; what the wire cannot carry is refused in mm, the
+    argument's unit (the device range-checks the rest against guide_min_mm..guide_max_mm)."""
+    x = units.check_real("GUIDE_MM", guide_mm, allow_inf=False)
+    if abs(x) > GUIDE_WIRE_LIMIT_MM:
+        raise InvalidArgument("GUIDE_MM", f"a guide position encodable on the wire (|x| <= {GUIDE_WIRE_LIMIT_MM:.3f} mm)",
+                              x)
+    return units.mm_to_m(x)
 
 
 def _guide_mm(sample) -> float:
@@ -45,8 +58,7 @@ def home(ctx: CliContext, within_s: float) -> None:
 @pass_context
 def loop(ctx: CliContext, guide_mm: float, within_s: float, no_wait: bool) -> None:
     """Move the rope guide to GUIDE_MM from home (larger = smaller loop); needs a homed spindle."""
-    target_m = units.mm_to_m(guide_mm)
-    units.m_to_um(target_m, argument="GUIDE_MM")  # NaN/inf fail before connecting
+    target_m = guide_target_m(guide_mm)  # NaN/inf/beyond the wire fail before connecting
     with ctx.client() as rw:
         state = rw.set_loop(target_m)
         if no_wait:

@@ -102,6 +102,8 @@ class NackReason(IntEnum):
     """Never sent: the device has no key provisioned and drops every frame over WiFi but HELLO (SESSION_INFO says key_set 0) until one is set over USB serial."""
     STORE_FAILED = 23
     """PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed."""
+    PARAM_CONFLICT = 24
+    """PARAM_SET: the value is in range but breaks a rule between parameters (guide_min_mm < guide_max_mm; tov_mps x tov_margin <= max_rope_speed_mps); nothing changed. NACK.detail = the id of the other parameter of the rule."""
 
 
 class EventKind(IntEnum):
@@ -704,7 +706,7 @@ class ParamGet(Message):
 
 @dataclass(frozen=True)
 class ParamSet(Message):
-    """PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED); answered by ACK then PARAM_VALUE.
+    """PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED; checked with the parameters it must hold together with: PARAM_CONFLICT); answered by ACK then PARAM_VALUE.
 
     Fields:
         param_id: uint8 Parameter id.
