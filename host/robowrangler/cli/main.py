@@ -17,7 +17,7 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param, provision, record, sil, spindle
+from robowrangler.cli import monitor, motion, param, provision, proxy, record, sil, spindle
 from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_ENV_VAR, CliContext, OutputClosed, Seconds,
                                       read_key_file)
 from robowrangler.cli.environment import Environment
@@ -33,7 +33,7 @@ COMMANDS: list[click.Command] = [
     monitor.status, monitor.watch,
     param.param, provision.provision, provision.keygen,
     sil.sil_command, sil.demo_command,
-    record.record, record.inspect, record.replay,
+    record.record, record.inspect, record.replay, proxy.proxy,
 ]
 
 _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStatus) + "."

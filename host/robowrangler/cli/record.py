@@ -28,7 +28,7 @@ TICK_S = 0.1
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 
-def _default_source(url: str) -> str:
+def default_source(url: str) -> str:
     parsed = parse_url(url)
     return "sil" if isinstance(parsed, UdpUrl) and parsed.host in LOOPBACK_HOSTS else "board"
 
@@ -102,7 +102,7 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
     check_recording_path(out, force=force)
     start_s = time.monotonic()
     deadline_s = None if duration_s is None else start_s + duration_s
-    writer = RecordingWriter(out, source=source or _default_source(ctx.url), seed=seed, device_url=ctx.url,
+    writer = RecordingWriter(out, source=source or default_source(ctx.url), seed=seed, device_url=ctx.url,
                              description=description)
     recorder = LinkRecorder(writer)
     progress = _Progress(ctx)
