@@ -74,3 +74,80 @@ def test_json_works_after_any_verb(device: ScriptedDevice, argv: list[str]) -> N
     run = wrangler("--url", device.url, *argv)
     assert run.status == ExitStatus.OK, run.stderr
     assert run.json_lines and all(isinstance(line, dict) for line in run.json_lines)
+
+
+def test_loop_progress_timeout_and_no_wait_say_what_the_guide_does(device: ScriptedDevice) -> None:
+    """Item 4: a guide move needs a live host. The wait shows progress; a --within timeout says where the guide
+    is and that it stops there; --no-wait says the guide goes on only while a host is alive."""
+    url = ("--url", device.url)
+    assert wrangler(*url, "arm").status == ExitStatus.OK
+    assert wrangler(*url, "home").status == ExitStatus.OK
+    device.guide_speed_mps = 0.02  # 20 mm/s: 150 mm take 7.5 s
+    late = wrangler(*url, "loop", "150", "--within", "2.5")
+    assert late.status == ExitStatus.ERROR and late.stdout == ""
+    lines = late.stderr.splitlines()
+    assert lines[0].startswith("wrangler: loop: guide at ") and "of the target 150 mm" in lines[0]  # progress
+    assert lines[-1].startswith("wrangler: loop: not done within 2.5 s: the guide is at ")
+    assert "still moving; the device stops it there heartbeat_timeout_s after this command exits" in lines[-1]
+    quick = wrangler(*url, "--json", "loop", "20", "--no-wait")
+    assert quick.status == ExitStatus.OK and quick.json["guide_target_mm"] == 20
+    assert "the guide goes on only while a host is alive" in quick.stderr
+    helped = wrangler("loop", "--help").stdout
+    assert "alone it stops where it is" in " ".join(helped.split())
+
+
+def test_spin_hold_below_the_tov_guard_says_the_loop_never_flew(device: ScriptedDevice) -> None:
+    assert wrangler("--url", device.url, "arm").status == ExitStatus.OK
+    run = wrangler("--url", device.url, "spin", "2.5", "--hold", "0.4")
+    assert run.status == ExitStatus.OK, run.stderr
+    assert "the loop never flew: 2.5 m/s is under the ToV guard" in run.stdout and "held" not in run.stdout
+    flown = wrangler("--url", device.url, "--json", "spin", "5", "--hold", "0.4")
+    assert flown.json_lines[-1]["airborne"] is True
+
+
+def test_spin_zero_points_at_spindown(device: ScriptedDevice) -> None:
+    assert wrangler("--url", device.url, "arm").status == ExitStatus.OK
+    run = wrangler("--url", device.url, "spin", "0")
+    assert run.status == ExitStatus.NACK and "command spindown (`wrangler spindown`)" in run.stderr
+    assert "limit crossed" not in run.stderr
+
+
+def test_two_hosts_through_a_proxy_the_holder_reports_what_the_other_did(device: ScriptedDevice, tmp_path) -> None:
+    """Host A holds 4 m/s through `wrangler proxy`; host B changes the speed, then ESTOPs. A says the target was
+    changed by another host, and after the ESTOP that the device left the spin, not that it was interrupted."""
+    import socket
+    import threading
+    import time
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    proxy_run: list = []
+    proxy = threading.Thread(target=lambda: proxy_run.append(
+        wrangler("--url", device.url, "proxy", "--listen", str(port), "--duration", "6")), daemon=True)
+    proxy.start()
+    tool = ("--url", f"udp://127.0.0.1:{port}")
+    deadline = time.monotonic() + 5
+    while wrangler(*tool, "--timeout", "0.3", "arm").status != ExitStatus.OK:
+        assert time.monotonic() < deadline
+    held: list = []
+    a = threading.Thread(target=lambda: held.append(wrangler(*tool, "spin", "4", "--hold", "1.2")), daemon=True)
+    a.start()
+    time.sleep(0.6)
+    assert wrangler(*tool, "spin", "6").status == ExitStatus.OK
+    a.join(10)
+    assert held[0].status == ExitStatus.OK, held[0].stderr
+    assert "the target was changed to 6 m/s by another host" in held[0].stdout
+    stopped: list = []
+    a = threading.Thread(target=lambda: stopped.append(wrangler(*tool, "spin", "4", "--hold", "3")), daemon=True)
+    a.start()
+    time.sleep(0.6)
+    assert wrangler(*tool, "estop").status == ExitStatus.OK
+    a.join(10)
+    assert stopped[0].status == ExitStatus.ERROR, stopped[0].stderr
+    assert stopped[0].stderr.splitlines()[-1] == ("wrangler: spin --hold: the device went to ESTOP during the hold "
+                                                  "(another host or a fault: see `wrangler status`); the rope is not "
+                                                  "driven")
+    assert "interrupt" not in stopped[0].stderr
+    proxy.join(10)
+    assert proxy_run[0].status == ExitStatus.OK, proxy_run[0].stderr

@@ -578,7 +578,7 @@ typedef enum {
     RW_PARAM_RAMP_DOWN_MPS2 = 6, /* [m/s^2] Setpoint ramp when slowing down and for SPINDOWN. */
     RW_PARAM_WHEEL_RADIUS_M = 7, /* [m] Drive wheel radius (rope speed = 2 pi r x wheel rev/s). */
     RW_PARAM_ENCODER_COUNTS_PER_REV = 8, /* [counts/rev] Encoder edges per wheel revolution. */
-    RW_PARAM_HEARTBEAT_TIMEOUT_S = 9, /* [s] Host silence after which the device spins the rope down. */
+    RW_PARAM_HEARTBEAT_TIMEOUT_S = 9, /* [s] Host silence after which the device spins the rope down and stops the guide where it is: the rope and the guide move only while a host is alive. */
     RW_PARAM_MAX_ROPE_SPEED_MPS = 10, /* [m/s] Largest accepted SET_ROPE_SPEED. */
     RW_PARAM_MOTOR_KV_RPM_PER_V = 11, /* [rpm/V] Motor velocity constant, for the feed-forward throttle map. */
     RW_PARAM_ESC_MIN_US = 12, /* [us] ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher). */

@@ -130,7 +130,11 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
     except LinkTimeout as err:
         return _fail(env, json_mode, ExitStatus.LINK_TIMEOUT, err, str(err), url=err.url, waited_s=err.waited_s)
     except AuthenticationError as err:
-        return _fail(env, json_mode, ExitStatus.AUTH, err, str(err), url=err.url)
+        message = str(err)
+        if "--key-file" not in argv and not env.environ.get(KEY_FILE_ENV_VAR):  # the only cause without a key
+            message = (f"{err.url} requires signed frames and no link key was given: pass --key-file PATH or set "
+                       f"{KEY_FILE_ENV_VAR} (`wrangler keygen PATH` makes a key; provision the device with it over USB)")
+        return _fail(env, json_mode, ExitStatus.AUTH, err, message, url=err.url)
     except RoboWranglerError as err:
         return _fail(env, json_mode, ExitStatus.ERROR, err, str(err))
     except OSError as err:

@@ -13,7 +13,8 @@ import click
 
 from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.exit_status import ExitStatus
-from robowrangler.cli.record import PROGRESS_PERIOD_S, check_recording_path, default_source
+from robowrangler.cli.progress import PROGRESS_PERIOD_S
+from robowrangler.cli.record import check_recording_path, default_source
 from robowrangler.cli.signals import sigterm_as_interrupt
 from robowrangler.client import Client
 from robowrangler.errors import RoboWranglerError

@@ -13,6 +13,7 @@ import click
 
 from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.cli.progress import PROGRESS_PERIOD_S, Progress
 from robowrangler.cli.signals import sigterm_as_interrupt
 from robowrangler.client import Client
 from robowrangler.errors import InvalidArgument, LinkTimeout, RoboWranglerError
@@ -23,7 +24,6 @@ from robowrangler.recorder.summary import format_summary, summarize
 from robowrangler.recorder.writer import RecordingWriter
 from robowrangler.transport import UdpUrl, open_transport, parse_url
 
-PROGRESS_PERIOD_S = 2.0  # a progress line on stderr this often (a live line on a terminal)
 TICK_S = 0.1
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 
@@ -43,38 +43,6 @@ def check_recording_path(out: Path, *, force: bool) -> None:
         raise InvalidArgument("OUT", "a file that does not exist yet (add --force to replace it)", str(out))
     if not out.parent.is_dir():
         raise InvalidArgument("OUT", "a path in an existing folder", str(out))
-
-
-class _Progress:
-    """Progress on stderr: a live line on a terminal, else a line every PROGRESS_PERIOD_S."""
-
-    def __init__(self, ctx: CliContext) -> None:
-        self.ctx = ctx
-        self.tty = bool(getattr(ctx.env.stderr, "isatty", lambda: False)())
-        self.last_s = -1e9
-        self.live = False
-
-    def show(self, text: str, now_s: float) -> None:
-        period_s = 0.25 if self.tty else PROGRESS_PERIOD_S
-        if now_s - self.last_s < period_s:
-            return
-        self.last_s = now_s
-        if self.tty:
-            self.ctx.env.stderr.write(f"\rwrangler: {text}\033[K")
-            self.ctx.env.stderr.flush()
-            self.live = True
-        else:
-            self.ctx.note(text)
-
-    def note(self, text: str) -> None:
-        self.end_line()
-        self.ctx.note(text)
-
-    def end_line(self) -> None:
-        if self.live:
-            self.ctx.env.stderr.write("\n")
-            self.ctx.env.stderr.flush()
-            self.live = False
 
 
 @click.command("record")
@@ -105,7 +73,7 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
     writer = RecordingWriter(out, source=source or default_source(ctx.url), seed=seed, device_url=ctx.url,
                              description=description)
     recorder = LinkRecorder(writer)
-    progress = _Progress(ctx)
+    progress = Progress(ctx)
     client: Client | None = None
     waiting_noted = lost = interrupted = False
     try:
@@ -164,7 +132,7 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
     return ExitStatus.OK
 
 
-def _record_params(ctx: CliContext, client: Client, writer: RecordingWriter, progress: _Progress) -> None:
+def _record_params(ctx: CliContext, client: Client, writer: RecordingWriter, progress: Progress) -> None:
     """Read every device parameter into the "/device/params" metadata record (best effort)."""
     try:
         params = client.params()

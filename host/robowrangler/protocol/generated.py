@@ -1193,7 +1193,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(6, 'ramp_down_mps2', 'm/s^2', 0.5, 200.0, 10.0, False, False, 'Setpoint ramp when slowing down and for SPINDOWN.'),
     ParamSpec(7, 'wheel_radius_m', 'm', 0.005, 0.05, 0.015, True, False, 'Drive wheel radius (rope speed = 2 pi r x wheel rev/s).'),
     ParamSpec(8, 'encoder_counts_per_rev', 'counts/rev', 1.0, 4096.0, 64.0, True, True, 'Encoder edges per wheel revolution.'),
-    ParamSpec(9, 'heartbeat_timeout_s', 's', 0.1, 10.0, 0.5, False, False, 'Host silence after which the device spins the rope down.'),
+    ParamSpec(9, 'heartbeat_timeout_s', 's', 0.1, 10.0, 0.5, False, False, 'Host silence after which the device spins the rope down and stops the guide where it is: the rope and the guide move only while a host is alive.'),
     ParamSpec(10, 'max_rope_speed_mps', 'm/s', 1.0, 25.0, 20.0, False, False, 'Largest accepted SET_ROPE_SPEED.'),
     ParamSpec(11, 'motor_kv_rpm_per_v', 'rpm/V', 100.0, 5000.0, 1250.0, False, False, 'Motor velocity constant, for the feed-forward throttle map.'),
     ParamSpec(12, 'esc_min_us', 'us', 1000.0, 1200.0, 1000.0, True, False, 'ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher).'),
