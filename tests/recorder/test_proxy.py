@@ -65,7 +65,7 @@ def test_recording_through_the_proxy_loses_nothing_while_another_tool_commands(n
         commander = Runner(key_file, "--url", tool_url, "arm").join()
         assert commander.status == ExitStatus.OK, commander.err.getvalue()
         spin = Runner(key_file, "--url", tool_url, "--json", "spin", "4", "--hold", "1.5").join()
-        assert spin.status == ExitStatus.OK, spin.err.getvalue()
+        assert spin.status == ExitStatus.OK, spin.err.getvalue() + spin.out.getvalue()[-3000:]
         refused = Runner(key_file, "--url", tool_url, "--json", "param", "set", "guide_max_mm", "0.5").join()
         assert refused.status == ExitStatus.NACK and json.loads(refused.out.getvalue())["reason"] == "OUT_OF_RANGE"
         value = Runner(key_file, "--url", tool_url, "--json", "param", "set", "tov_margin", "1.2").join()

@@ -60,17 +60,20 @@ def spin(ctx: CliContext, mps: float, hold_s: float | None) -> None:
             return
         landed = False
         seen: list = []  # the latest sample (a list: set inside the callback)
-        flew = False
+        flew = spinning = False
 
         def ended(sample) -> bool:  # another host's ESTOP or DISARM, or a fault: holding is over
-            nonlocal flew
+            nonlocal flew, spinning
             seen[:] = [sample]
             flew = flew or sample.state == State.AIRBORNE
-            return sample.state in _HOLD_ENDERS
+            # the device answers at once but queues telemetry: the first samples after the ACK may predate
+            # the command (still ARMED, even DISARMED); only a stop after the spin was seen ends the hold
+            spinning = spinning or sample.state in (State.SPINUP, State.AIRBORNE)
+            return spinning and sample.state in _HOLD_ENDERS
         try:
             samples = stream_telemetry(ctx, rw, duration_s=hold_s, events_from=first_event, until=ended)
             last = seen[0] if seen else rw.latest_telemetry
-            if last is not None and last.state in _HOLD_ENDERS:
+            if spinning and last is not None and last.state in _HOLD_ENDERS:
                 landed = True  # nothing to spin down: the rope is stopped or stopping by the device's own rule
                 raise HoldEnded(f"spin --hold: the device went to {last.state.name} during the hold (another host or "
                                 f"a fault: see `wrangler status`); the rope is not driven")
