@@ -123,6 +123,7 @@ class LinkProxy:
             raise InvalidArgument("--listen", "a free local UDP port", f"{listen_port} ({err.strerror})") from None
         self.port = self._sock.getsockname()[1]
         self.stats = ProxyStats()
+        self.on_param: Callable[[str, float], None] | None = None  # a parameter a tool read or set, as the device holds it
         self._upstream: Client | None = None
         self._tools: dict[tuple, _Tool] = {}
         self._answers: collections.OrderedDict[tuple, list[bytes] | None] = collections.OrderedDict()
@@ -297,6 +298,8 @@ class LinkProxy:
                 if isinstance(answer, gen.Ack) and msg_id in (MsgId.PARAM_GET, MsgId.PARAM_SET):
                     value = upstream.get_param(PARAMS[msg.param_id].name)
                     replies.append(gen.ParamValue(msg.param_id, value, len(PARAMS)))
+                    if self.on_param is not None:
+                        self.on_param(PARAMS[msg.param_id].name, value)
             except Exception:  # noqa: BLE001 - LinkTimeout, a closing link: the tool times out and retries
                 with self._lock:  # no answer: the tool times out; a retransmission tries again
                     self._answers.pop(key, None)
