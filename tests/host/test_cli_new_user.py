@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.protocol.generated import PARAMS
 from scripted_device import ScriptedDevice
 from test_cli import wrangler
 
@@ -151,3 +152,20 @@ def test_two_hosts_through_a_proxy_the_holder_reports_what_the_other_did(device:
     assert "interrupt" not in stopped[0].stderr
     proxy.join(10)
     assert proxy_run[0].status == ExitStatus.OK, proxy_run[0].stderr
+
+
+def test_param_list_is_a_table_with_units_defaults_and_changes_marked(device: ScriptedDevice) -> None:
+    assert wrangler("--url", device.url, "param", "set", "TOV_Margin", "1.3").stdout == "tov_margin = 1.3 1\n"
+    table = wrangler("--url", device.url, "param", "list").stdout.splitlines()
+    assert table[0].split() == ["name", "value", "unit", "default", "range"]
+    rows = {line.split()[0]: line.split() for line in table[1:]}
+    assert rows["tov_margin"][:5] == ["tov_margin", "1.3*", "1", "1.15", "[1,"]  # changed: marked
+    assert rows["tov_mps"][:4] == ["tov_mps", "2.6", "m/s", "2.6"]
+    assert "integer" in table[[r.split()[0] for r in table].index("encoder_counts_per_rev")]
+    assert len(rows) == len(PARAMS)
+
+
+def test_param_names_are_case_insensitive_with_did_you_mean(device: ScriptedDevice) -> None:
+    assert wrangler("--url", device.url, "param", "get", "TOV_MPS").stdout == "tov_mps = 2.6 m/s\n"
+    typo = wrangler("--url", device.url, "param", "get", "Tov_Mrgin")
+    assert typo.status == ExitStatus.USAGE and "did you mean tov_margin" in typo.stderr
