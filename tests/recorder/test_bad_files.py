@@ -154,3 +154,16 @@ def test_a_file_cut_inside_its_header_record_is_called_truncated(tmp_path: Path)
         text = str(raised.value)
         assert "truncated before its /meta record" in text, text
         assert "claims" not in text and "at byte 8" in text, text
+
+
+def test_replay_plots_a_window_and_refuses_an_empty_or_backwards_one(tmp_path: Path, wrangler) -> None:
+    """--from/--to pick device time; the six panels (speed, ESC, guide, load, battery, state) come out."""
+    path = _good_recording(tmp_path / "r.mcap", n=50)  # device time 0 (all-zero telemetry): one instant
+    whole = tmp_path / "whole.png"
+    status, _, err = wrangler("replay", str(path), "--plot", str(whole))
+    assert status == ExitStatus.OK, err
+    status, _, err = wrangler("replay", str(path), "--plot", str(tmp_path / "none.png"), "--from", "5")
+    assert status == ExitStatus.ERROR and "nothing to plot between 5 and - s of device time" in err
+    assert not (tmp_path / "none.png").exists()
+    status, _, err = wrangler("replay", str(path), "--plot", str(tmp_path / "x.png"), "--from", "2", "--to", "1")
+    assert status == ExitStatus.USAGE and "--to: expected a time after --from (2 s)" in err

@@ -6,6 +6,7 @@ The file format is protocol/recording/schema.md; the work is done by robowrangle
 from __future__ import annotations
 
 import json
+import math
 import time
 from pathlib import Path
 
@@ -161,15 +162,23 @@ def inspect(ctx: CliContext, file: Path) -> ExitStatus:
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               metavar="OUT.png", help="Write the plot here (PNG).")
+@click.option("--from", "from_s", type=float, default=None, metavar="SECONDS", help="Start of the window (device time).")
+@click.option("--to", "to_s", type=float, default=None, metavar="SECONDS", help="End of the window (device time).")
 @pass_context
-def replay(ctx: CliContext, file: Path, plot_path: Path) -> ExitStatus:
-    """Plot a recording: rope speed with setpoint and ToV, ESC pulse, battery, state timeline, gaps."""
+def replay(ctx: CliContext, file: Path, plot_path: Path, from_s: float | None, to_s: float | None) -> ExitStatus:
+    """Plot a recording: rope speed with setpoint and ToV guard, ESC pulse, guide and its target, spindle load,
+    battery, state timeline; events and gaps in every panel and in the legend."""
+    for name, value in (("--from", from_s), ("--to", to_s)):
+        if value is not None and not math.isfinite(value):
+            raise InvalidArgument(name, "a finite device time in seconds", value)
+    if from_s is not None and to_s is not None and to_s <= from_s:
+        raise InvalidArgument("--to", f"a time after --from ({from_s:g} s)", to_s)
     rec = read_recording(file)
     if rec.truncated:
         ctx.note(f"{file} is truncated ({rec.truncation_reason}); plotting what it holds")
     for damage in rec.damaged:
         ctx.note(f"{file}: {damage}")
-    out = plot_recording(rec, plot_path)
+    out = plot_recording(rec, plot_path, from_s=from_s, to_s=to_s)
     ctx.result({"command": "replay", "path": str(file), "plot": str(out),
                 "telemetry": len(rec.telemetry["log_time_ns"])}, f"wrote {out}")
     return ExitStatus.OK
