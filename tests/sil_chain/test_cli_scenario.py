@@ -48,6 +48,9 @@ def test_scenario_runs_with_progress_and_a_json_verdict(native_build_dir: Path) 
     assert result["grasp_end"] == "STROKE_END" and result["diverged"] is None
     assert "RETRACT->ARMED (STROKE_END)" in result["firmware_path"]
     assert "GRASP" in err and "pull" in err  # progress on stderr
+    explained = err.strip().splitlines()[-1]  # what the verdict means, and what the figures say happened
+    assert explained.startswith("wrangler: secured = over the judged part of the pull the object followed")
+    assert "at least 0.5" in explained and "at least 80 %" in explained and ". Here: " in explained
 
 
 @pytest.mark.slow

@@ -201,8 +201,30 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
                      + ("" if data["door_opening_deg"] is None else f", door opened {outcome.door_opening_deg:.1f} deg")
                      + f"; {outcome.simulated_s:.1f} simulated s in "
                      f"{outcome.wall_s:.1f} s){files}")
+    if outcome.secured is not None:
+        ctx.note(_explain_verdict(name, outcome))
     if outcome.secured is None:
         raise ScenarioFailed(f"scenario {name}: {outcome.verdict}")
+
+
+def explain_criteria(spec) -> str:
+    """What the verdict of a scenario means, with its thresholds (the judged half of the pull)."""
+    script = spec.script
+    if spec.kind == "door":
+        return (f"held = the rope kept touching the lever in at least {100 * script.contact_fraction:.0f} % of the "
+                "judged samples while the robot pulled (a fixture does not follow)")
+    return (f"secured = over the judged part of the pull the object followed the module (follow = its displacement "
+            f"/ the module's, at least {script.follow_fraction:g}) and the rope touched it in at least "
+            f"{100 * script.contact_fraction:.0f} % of the samples; follow above 1 means it went further than the "
+            "module (pushed or rolled ahead)")
+
+
+def _explain_verdict(name: str, outcome) -> str:
+    from robowrangler_sim.scenarios.catalogue import get_scenario
+    from robowrangler_sim.scenarios.table_i_sil import why_outcome
+
+    spec = get_scenario(name)
+    return f"{explain_criteria(spec)}. Here: {why_outcome(outcome, spec)}"
 
 
 @click.command("demo")
