@@ -1202,7 +1202,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(15, 'arm_hold_s', 's', 0.2, 5.0, 0.5, True, False, 'After boot the ESC gets its minimum pulse this long before ARM is accepted (BLHeli arms after ~0.2 s).'),
     ParamSpec(16, 'encoder_timeout_s', 's', 0.02, 2.0, 0.25, False, False, 'No encoder edge for this long with the throttle above idle -> ENCODER_SILENT fault.'),
     ParamSpec(17, 'lead_mm_per_rev', 'mm/rev', 0.5, 20.0, 8.0, True, False, 'Lead screw lead: guide travel per spindle revolution.'),
-    ParamSpec(18, 'guide_min_mm', 'mm', 0.0, 180.0, 0.0, False, False, 'Soft limit at the home end (largest loop).'),
+    ParamSpec(18, 'guide_min_mm', 'mm', 0.0, 179.0, 0.0, False, False, 'Soft limit at the home end (largest loop).'),
     ParamSpec(19, 'guide_max_mm', 'mm', 1.0, 180.0, 180.0, False, False, 'Soft limit at the retracted end (smallest loop).'),
     ParamSpec(20, 'spindle_kp_per_s', '1/s', 0.1, 50.0, 4.0, False, False, 'Guide position loop: commanded guide speed (mm/s) per mm of position error.'),
     ParamSpec(21, 'spindle_max_speed_mmps', 'mm/s', 0.5, 15.0, 6.0, False, False, 'Fastest commanded guide speed.'),
