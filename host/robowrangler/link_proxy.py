@@ -123,7 +123,7 @@ class LinkProxy:
             raise InvalidArgument("--listen", "a free local UDP port", f"{listen_port} ({err.strerror})") from None
         self.port = self._sock.getsockname()[1]
         self.stats = ProxyStats()
-        self.on_param: Callable[[str, float], None] | None = None  # a parameter a tool read or set, as the device holds it
+        self.on_param: Callable[[str, float], None] | None = None  # a parameter a tool read or set (device's value)
         self._upstream: Client | None = None
         self._tools: dict[tuple, _Tool] = {}
         self._answers: collections.OrderedDict[tuple, list[bytes] | None] = collections.OrderedDict()

@@ -12,7 +12,7 @@ from mcap.writer import CompressionType, Writer
 
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.protocol import generated as gen
-from robowrangler.recorder import (CorruptRecording, LinkRecorder, NotARecording, RecordingSchemaError,
+from robowrangler.recorder import (LinkRecorder, NotARecording, RecordingSchemaError,
                                    RecordingWriter, read_recording)
 from robowrangler.recorder import schemas_generated as sg
 from robowrangler.recorder.errors import RecordingError

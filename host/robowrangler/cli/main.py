@@ -153,7 +153,8 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
         message = str(err)
         if "--key-file" not in argv and not env.environ.get(KEY_FILE_ENV_VAR):  # the only cause without a key
             message = (f"{err.url} requires signed frames and no link key was given: pass --key-file PATH or set "
-                       f"{KEY_FILE_ENV_VAR} (`wrangler keygen PATH` makes a key; provision the device with it over USB)")
+                       f"{KEY_FILE_ENV_VAR} (`wrangler keygen PATH` makes a key; provision the device with it "
+                       "over USB)")
         return _fail(env, json_mode, ExitStatus.AUTH, err, message, url=err.url)
     except RoboWranglerError as err:
         return _fail(env, json_mode, ExitStatus.ERROR, err, str(err))

@@ -88,8 +88,8 @@ def spin(ctx: CliContext, mps: float, hold_s: float | None) -> None:
         if abs(target - mps) > 0.0005:
             held = f"the target was changed to {target:g} m/s by another host during the {hold_s:g} s hold"
         elif not flew:
-            held = (f"spun at {mps:g} m/s for {hold_s:g} s, but the loop never flew: {mps:g} m/s is under the ToV guard "
-                    "(tov_mps x tov_margin)")
+            held = (f"spun at {mps:g} m/s for {hold_s:g} s, but the loop never flew: {mps:g} m/s is under the ToV "
+                    "guard (tov_mps x tov_margin)")
         ctx.result({"command": "spin", "rope_speed_mps": mps, "hold_s": hold_s, "samples": samples,
                     "airborne": flew, "rope_speed_target_mps": target, "state": final.state.name},
                    f"{held}, spun down (state {final.state.name})")

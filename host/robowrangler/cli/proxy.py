@@ -91,8 +91,9 @@ def proxy(ctx: CliContext, listen_port: int, record_path: Path | None, force: bo
                         live.publish_params(params)
                     link_proxy.on_param = on_param
                 link_proxy.start(client)
-                ctx.note(f"serving udp://127.0.0.1:{link_proxy.port} for local tools (wrangler --url "
-                         f"udp://127.0.0.1:{link_proxy.port} ...)" + (f", recording to {record_path}" if record_path else "")
+                local = f"udp://127.0.0.1:{link_proxy.port}"
+                ctx.note(f"serving {local} for local tools (wrangler --url {local} ...)"
+                         + (f", recording to {record_path}" if record_path else "")
                          + (f", live in Foxglove at {live.url}" if live else "") + "; Ctrl-C or SIGTERM ends it")
                 _serve(ctx, client, link_proxy, recorder, duration_s, start_s,
                        republish=(lambda: live.publish_params(params)) if live is not None and params else None)

@@ -14,7 +14,7 @@ import click
 
 from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.exit_status import ExitStatus
-from robowrangler.cli.progress import PROGRESS_PERIOD_S, Progress
+from robowrangler.cli.progress import Progress
 from robowrangler.cli.signals import sigterm_as_interrupt
 from robowrangler.client import Client
 from robowrangler.errors import InvalidArgument, LinkTimeout, RoboWranglerError
@@ -94,7 +94,8 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
                             progress.note(f"no telemetry from {ctx.url} yet; recording goes on, waiting for the device")
                             waiting_noted = True
                         continue
-                    progress.note(f"recording {ctx.url} to {out}" + ("" if duration_s is None else f" for {duration_s:g} s")
+                    progress.note(f"recording {ctx.url} to {out}"
+                                  + ("" if duration_s is None else f" for {duration_s:g} s")
                                   + " (Ctrl-C or SIGTERM ends it)")
                     if not no_params:
                         _record_params(ctx, client, writer, progress)
@@ -162,7 +163,8 @@ def inspect(ctx: CliContext, file: Path) -> ExitStatus:
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               metavar="OUT.png", help="Write the plot here (PNG).")
-@click.option("--from", "from_s", type=float, default=None, metavar="SECONDS", help="Start of the window (device time).")
+@click.option("--from", "from_s", type=float, default=None, metavar="SECONDS",
+              help="Start of the window (device time).")
 @click.option("--to", "to_s", type=float, default=None, metavar="SECONDS", help="End of the window (device time).")
 @pass_context
 def replay(ctx: CliContext, file: Path, plot_path: Path, from_s: float | None, to_s: float | None) -> ExitStatus:

@@ -67,8 +67,8 @@ def guide_target_m(guide_mm: float) -> float:
     argument's unit (the device range-checks the rest against guide_min_mm..guide_max_mm)."""
     x = units.check_real("GUIDE_MM", guide_mm, allow_inf=False)
     if abs(x) > GUIDE_WIRE_LIMIT_MM:
-        raise InvalidArgument("GUIDE_MM", f"a guide position encodable on the wire (|x| <= {GUIDE_WIRE_LIMIT_MM:.3f} mm)",
-                              x)
+        raise InvalidArgument("GUIDE_MM",
+                              f"a guide position encodable on the wire (|x| <= {GUIDE_WIRE_LIMIT_MM:.3f} mm)", x)
     return units.mm_to_m(x)
 
 

@@ -25,7 +25,7 @@ from robowrangler.recorder import schemas_generated as sg
 PARAMS_TOPIC = "/device/params"
 PARAMS_SCHEMA = {
     "title": "robowrangler.DeviceParams",
-    "description": "The device parameters (SI units as in the parameter table) and tov_guard_mps = tov_mps x tov_margin.",
+    "description": "The device parameters (units as in the parameter table) and tov_guard_mps = tov_mps x tov_margin.",
     "type": "object",
     "additionalProperties": {"type": "number"},
 }
