@@ -11,8 +11,9 @@ cd "$(dirname "$0")/.."
 # gcc-arm-none-eabi + newlib: the core cross-compiled for the board's Cortex-M0+ (size, instruction counts, tests)
 # clang + libclang-rt-14-dev: the libFuzzer targets with AddressSanitizer/UBSan (tests/fuzz)
 # python3 + python3-venv: a minimal Debian has no Python at all; venv (with its bundled pip) installs uv
+# xvfb + libgl1-mesa-dri: a virtual display for the MuJoCo viewer's test (GLFW window, software OpenGL)
 APT_PACKAGES=(python3 python3-venv build-essential cmake libosmesa6 gcc-arm-none-eabi libnewlib-arm-none-eabi clang
-              libclang-rt-14-dev)
+              libclang-rt-14-dev xvfb libgl1-mesa-dri)
 UV_VERSION=0.13.8
 
 say() { printf '[setup] %s\n' "$*" >&2; }

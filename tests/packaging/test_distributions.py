@@ -57,13 +57,11 @@ def test_sil_help_comes_from_the_plugin(capsys):
 
 
 @pytest.fixture(scope="module")
-def host_only_venv(tmp_path_factory) -> Path:
+def host_only_venv(tmp_path_factory, skip_unless_ci) -> Path:
     """A fresh virtual environment with only ./host installed (what `pip install robowrangler` gives)."""
     uv = shutil.which("uv")
     if uv is None:
-        if os.environ.get("CI") == "true":
-            pytest.fail("uv is missing: scripts/setup.sh installs it")
-        pytest.skip("uv not on PATH")
+        skip_unless_ci("uv not on PATH")
     venv = tmp_path_factory.mktemp("host_only") / "venv"
     env = {**os.environ, "UV_PYTHON_DOWNLOADS": "never"}
     env.pop("VIRTUAL_ENV", None)
