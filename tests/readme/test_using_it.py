@@ -46,7 +46,7 @@ def _free_udp_ports(n: int) -> list[int]:
             s.close()
 
 
-@pytest.mark.slow  # about 70 s (homing alone is 15 s of real time): `uv run pytest -m slow tests/readme`
+@pytest.mark.slow  # about 80 s of real time (homing alone is 15 s); `-m "not slow"` leaves it out
 def test_the_readme_using_it_block_runs_top_to_bottom_on_a_fresh_home(native_build_dir: Path, tmp_path: Path) -> None:
     lines = _using_it_block()
     commands = [line.split("  #")[0].rstrip() for line in lines]
