@@ -60,7 +60,6 @@ def test_recording_through_the_proxy_loses_nothing_while_another_tool_commands(n
         proxy = Runner(key_file, "--url", sil.cmd_url, "--json", "proxy", "--listen", str(port), "--record", str(out),
                        "--duration", "9")
         _wait_for_note(proxy, "serving udp://127.0.0.1")
-        t0 = time.monotonic()
         watcher = Runner(key_file, "--url", tool_url, "--json", "watch", "--duration", "4")
         commander = Runner(key_file, "--url", tool_url, "arm").join()
         assert commander.status == ExitStatus.OK, commander.err.getvalue()
@@ -71,7 +70,6 @@ def test_recording_through_the_proxy_loses_nothing_while_another_tool_commands(n
         value = Runner(key_file, "--url", tool_url, "--json", "param", "set", "tov_margin", "1.2").join()
         assert value.status == ExitStatus.OK and json.loads(value.out.getvalue())["value"] == 1.2
         watcher.join()
-        watched_s = time.monotonic() - t0
         # a tool that leaves the rope spinning: the proxy stops heartbeating when no tool is left, so the
         # device lands it by itself (the live-host rule holds through the proxy)
         assert Runner(key_file, "--url", tool_url, "spin", "4").join().status == ExitStatus.OK
@@ -82,21 +80,21 @@ def test_recording_through_the_proxy_loses_nothing_while_another_tool_commands(n
 
     watched = [json.loads(line) for line in watcher.out.getvalue().splitlines()]
     telemetry = [w for w in watched if w["type"] == "telemetry"]
-    assert watcher.status == ExitStatus.OK and len(telemetry) >= 0.8 * 50 * 4  # the whole 50 Hz stream
+    assert watcher.status == ExitStatus.OK and len(telemetry) >= 0.8 * 50 * 4, (len(telemetry), watcher.err.getvalue())
     assert "AIRBORNE" in {w["state"] for w in telemetry}
 
     rec = read_recording(out)
     seqs = rec.telemetry["seq"]
     span_s = rec.duration_s
     assert len(seqs) >= 0.9 * 50 * span_s, (len(seqs), span_s)  # 50 Hz, not 18
-    assert sum(g["missing"] for g in rec.gaps) <= 5 and watched_s > 0
+    assert sum(g["missing"] for g in rec.gaps) <= 5, rec.gaps  # loopback UDP: none expected, a few tolerated
     carried = [(c["message"], c["verdict"]) for c in rec.commands if c["message"] not in ("PARAM_GET",)]
     assert ("ARM", "ACK") in carried and ("SET_ROPE_SPEED", "ACK") in carried and ("SPINDOWN", "ACK") in carried
     assert ("PARAM_SET", "NACK") in carried and ("PARAM_SET", "ACK") in carried
     kinds = [(e["event"], e.get("state_to")) for e in rec.events]
     assert ("STATE_CHANGED", "AIRBORNE") in kinds
     landed = [e for e in rec.events if e["event"] == "STATE_CHANGED" and e["state_to"] == "SPINDOWN"]
-    assert len(landed) == 2, rec.events  # the --hold's own spindown, then the device's, without a live host
+    assert len(landed) == 2, (rec.events, proxy.err.getvalue())  # the --hold's spindown, then the device's
     assert [e["arg"] for e in landed] == [Cause.COMMAND, Cause.HEARTBEAT_LOST]
     assert rec.telemetry["state"][-1] in ("ARMED", "SPINDOWN")
 
