@@ -87,3 +87,38 @@ def test_a_websocket_client_sees_the_link_live_with_the_recording_schemas(device
     assert {("ARM", "ACK"), ("SET_ROPE_SPEED", "ACK"), ("SPINDOWN", "ACK")} <= commands
     params = got["/device/params"][-1]
     assert params["tov_guard_mps"] == params["tov_mps"] * params["tov_margin"]
+
+
+def test_watch_foxglove_serves_the_stream_it_prints(device: ScriptedDevice) -> None:
+    err = io.StringIO()
+    out = io.StringIO()
+    runs: list = []
+    watch = threading.Thread(target=lambda: runs.append(main(["--url", device.url, "--json", "watch", "--duration", "2",
+                                                              "--foxglove", "0"], Environment(out, err, {}))),
+                             daemon=True)
+    watch.start()
+    deadline = time.monotonic() + 10
+    while not (found := re.search(r"live in Foxglove at (ws://127\.0\.0\.1:\d+)", err.getvalue())):
+        assert time.monotonic() < deadline and watch.is_alive(), err.getvalue()
+        time.sleep(0.02)
+    got = []
+    with connect(found.group(1), subprotocols=[SUBPROTOCOL], open_timeout=5) as ws:
+        channel = None
+        while channel is None:
+            msg = json.loads(ws.recv(timeout=5))
+            if msg["op"] == "advertise":
+                channel = next((c["id"] for c in msg["channels"] if c["topic"] == "/device/telemetry"), None)
+        ws.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 7, "channelId": channel}]}))
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:
+            try:
+                frame = ws.recv(timeout=0.2)
+            except TimeoutError:
+                continue
+            if isinstance(frame, bytes) and frame[0] == MESSAGE_DATA:
+                got.append(json.loads(frame[13:]))
+    watch.join(10)
+    assert runs == [ExitStatus.OK], err.getvalue()
+    assert len(got) >= 0.8 * 50 * 0.8 and {g["state"] for g in got} == {"DISARMED"}
+    printed = {json.loads(line)["time_s"] for line in out.getvalue().splitlines() if '"telemetry"' in line}
+    assert {g["time_s"] for g in got} <= printed  # the very samples it printed
