@@ -185,6 +185,7 @@ class Client:
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self._connected = False
+        self._heartbeat_idle: Callable[[], bool] | None = None
 
     # ----------------------------------------------------------------- lifecycle
 
@@ -686,14 +687,32 @@ class Client:
         raise LinkTimeout(f"{spec.name}: ACKed by {self.url} but no PARAM_VALUE arrived after "
                           f"{self.retries + 1} requests", url=self.url, waited_s=waited_s)
 
+    def request(self, message: gen.Message) -> gen.Ack | gen.Nack:
+        """Send any command message and return the device's answer, its ACK or its NACK (not raised).
+
+        For a tool that carries other hosts' commands (wrangler proxy); retries and LinkTimeout as for
+        every command. PARAM_GET/PARAM_SET: use get_param/set_param, which also wait for the PARAM_VALUE.
+        """
+        try:
+            return self._command(message)
+        except CommandRefused as err:
+            return gen.Nack(message.MSG_ID, 0, int(err.reason), int(err.state), err.detail)
+
+    def pause_heartbeats_while(self, idle: Callable[[], bool] | None) -> None:
+        """Send no HEARTBEAT while idle() is true (None: always send). A proxy passes "no local tool is
+        alive", so that the device's live-host rule (heartbeat_timeout_s) still follows the tools."""
+        self._heartbeat_idle = idle
+
     def _heartbeat_loop(self) -> None:
         period_s = 1.0 / self.heartbeat_hz
         next_s = time.monotonic()
         while not self._stop.is_set():
             try:
-                self._send_new(gen.Heartbeat(units.s_to_ms_u32(time.monotonic())))
-                with self._lock:
-                    self._stats.heartbeats_sent += 1
+                idle = self._heartbeat_idle
+                if idle is None or not idle():
+                    self._send_new(gen.Heartbeat(units.s_to_ms_u32(time.monotonic())))
+                    with self._lock:
+                        self._stats.heartbeats_sent += 1
             except NotConnected:
                 return
             next_s += period_s

@@ -168,9 +168,14 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
     from robowrangler_sim.scenarios import run_scenario
     from robowrangler_sim.scenarios.viewer import ViewerUnavailable
 
+    from robowrangler_sim.scenarios.runner import ScenarioInterrupted
+
     try:
         outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
                                watch=watch)
+    except ScenarioInterrupted as stop:
+        ctx.note(_what_was_left(name, stop, render_dir))
+        raise KeyboardInterrupt from None
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
     except ViewerUnavailable as exc:
@@ -203,8 +208,43 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
                      + ("" if data["door_opening_deg"] is None else f", door opened {outcome.door_opening_deg:.1f} deg")
                      + f"; {outcome.simulated_s:.1f} simulated s in "
                      f"{outcome.wall_s:.1f} s){files}")
+    if outcome.secured is not None:
+        ctx.note(_explain_verdict(name, outcome))
     if outcome.secured is None:
         raise ScenarioFailed(f"scenario {name}: {outcome.verdict}")
+
+
+def _what_was_left(name: str, stop, render_dir: str | None) -> str:
+    """One line for an interrupted scenario: where it stopped, the firmware's states so far, the files left."""
+    o = stop.outcome
+    path = (" -> ".join([o.firmware_path[0][0]] + [to for _, to, _ in o.firmware_path]) if o.firmware_path
+            else "unchanged since boot")
+    pngs = [f for f in o.frames_written if f.endswith(".png")]
+    mp4s = [f for f in o.frames_written if f.endswith(".mp4")]
+    files = (f"; left in {render_dir}: {len(pngs)} PNG frames" + (f" and {Path(mp4s[0]).name} (the run so far)"
+                                                                 if mp4s else "")) if render_dir else ""
+    return (f"scenario {name} interrupted in phase {stop.phase} at {o.simulated_s:.1f} simulated s, no verdict; "
+            f"firmware states {path}; the SIL firmware is stopped{files}")
+
+
+def explain_criteria(spec) -> str:
+    """What the verdict of a scenario means, with its thresholds (the judged half of the pull)."""
+    script = spec.script
+    if spec.kind == "door":
+        return (f"held = the rope kept touching the lever in at least {100 * script.contact_fraction:.0f} % of the "
+                "judged samples while the robot pulled (a fixture does not follow)")
+    return (f"secured = over the judged part of the pull the object followed the module (follow = its displacement "
+            f"/ the module's, at least {script.follow_fraction:g}) and the rope touched it in at least "
+            f"{100 * script.contact_fraction:.0f} % of the samples; follow above 1 means it went further than the "
+            "module (pushed or rolled ahead)")
+
+
+def _explain_verdict(name: str, outcome) -> str:
+    from robowrangler_sim.scenarios.catalogue import get_scenario
+    from robowrangler_sim.scenarios.table_i_sil import why_outcome
+
+    spec = get_scenario(name)
+    return f"{explain_criteria(spec)}. Here: {why_outcome(outcome, spec)}"
 
 
 @click.command("demo")

@@ -122,6 +122,17 @@ class ScenarioOutcome:
     frames_written: list = field(default_factory=list)
 
 
+class ScenarioInterrupted(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM turned into it) during a scenario: the firmware was stopped, what was drawn so far
+    written. `outcome` holds the partial run (verdict "interrupted", firmware_path, simulated_s,
+    frames_written); `phase` is the script phase that was running."""
+
+    def __init__(self, outcome: ScenarioOutcome, phase: str) -> None:
+        super().__init__(f"interrupted in phase {phase} at {outcome.simulated_s:.1f} simulated s")
+        self.outcome = outcome
+        self.phase = phase
+
+
 class _FirmwareStopped(Exception):
     """The firmware did not get through the script (message says where)."""
 
@@ -433,10 +444,14 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
     run.watch = watch
     wall0 = time.perf_counter()
     run.build()
+    interrupted = False
     try:
         run.sil.start()
         try:
             run.script_run()
+        except KeyboardInterrupt:
+            interrupted = True  # finish below as for any end: firmware path, frames so far, SIL stopped
+            run.outcome.verdict = "interrupted"
         except ChainDivergenceError as exc:
             run.outcome.diverged = str(exc)
             run.outcome.verdict = "diverged"
@@ -456,5 +471,7 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
     finally:
         run.sil.stop()
     run.outcome.wall_s = time.perf_counter() - wall0
+    if interrupted:
+        raise ScenarioInterrupted(run.outcome, run.phase)
     run.note(f"outcome: {run.outcome.verdict}")
     return run.outcome

@@ -65,8 +65,7 @@ class FirmwareProcess:
         line = self._proc.stdout.readline() if ready else ""
         match = _READY.search(line)
         if not match:
-            self.stop()
-            err = self._proc.stderr.read() if self._proc.stderr else ""
+            err = self._stop_and_read_stderr()  # read before the pipes close: it names the real cause
             raise SilFirmwareError(f"{self.binary} did not start: {(line + err).strip() or 'no output'}")
         self.cmd_port, self.plant_port = int(match.group(1)), int(match.group(2))
         self.serial_path = match.group(3)
@@ -85,6 +84,18 @@ class FirmwareProcess:
         if self._proc is None or self._proc.poll() is None or self._proc.stderr is None:
             return ""
         return self._proc.stderr.read()
+
+    def _stop_and_read_stderr(self) -> str:
+        """End the process (if still running) and return what it wrote on stderr, then close its pipes."""
+        assert self._proc is not None
+        if self._proc.poll() is None:
+            self._proc.terminate()
+        try:
+            _, err = self._proc.communicate(timeout=3)
+        except subprocess.TimeoutExpired:
+            self._proc.kill()
+            _, err = self._proc.communicate()
+        return err or ""
 
     def stop(self) -> None:
         if self._proc is None:
