@@ -1,0 +1,1 @@
+"""The simulator's `wrangler` verbs (plugins of the host CLI)."""
