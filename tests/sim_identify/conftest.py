@@ -65,3 +65,9 @@ def rewrite_manifest(src: PhotoSetFixture, dst: Path, *, keep=None, **changes) -
     path = dst / "manifest.json"
     path.write_text(json.dumps(data))
     return path
+
+
+@pytest.fixture()
+def manifest_copy():
+    """rewrite_manifest, for the tests (conftest modules are not importable under --import-mode=importlib)."""
+    return rewrite_manifest

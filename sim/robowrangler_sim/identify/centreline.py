@@ -63,8 +63,11 @@ class BandEnds:
 
 
 def band_ends(mask: np.ndarray, exit_rc: tuple[float, float], *, rope_width_px: float,
-              max_cut_px: float) -> BandEnds | None:
-    """Cut discs of growing radius around the exit until one band with two rim ends remains; None if never.
+              max_cut_px: float) -> BandEnds | int:
+    """Cut discs of growing radius around the exit until one band with two rim ends remains.
+
+    Returns the BandEnds, or (when no cut leaves exactly two ends) the largest number of ends seen: 1 or 0
+    is an open rope, 4 or more is several loops sharing the exit.
 
     Args:
         mask: shape (h, w) bool, one connected component.
@@ -75,11 +78,12 @@ def band_ends(mask: np.ndarray, exit_rc: tuple[float, float], *, rope_width_px: 
     dist = np.hypot(rows_all - exit_rc[0], cols_all - exit_rc[1])
     step = max(1.5 * rope_width_px, 2.0)
     cut = float(dist.min()) + step
+    most = 0
     while cut <= max_cut_px:
         keep = dist > cut
         rows, cols, d = rows_all[keep], cols_all[keep], dist[keep]
         if rows.size < 10:
-            return None
+            return most
         graph = _graph(rows, cols, mask.shape)
         n_comp, labels = connected_components(graph, directed=False)
         main = np.argmax(np.bincount(labels))
@@ -90,6 +94,7 @@ def band_ends(mask: np.ndarray, exit_rc: tuple[float, float], *, rope_width_px: 
             n_rim, rim_labels = connected_components(sub, directed=False)
             sizes = np.bincount(rim_labels)
             big = [k for k in range(n_rim) if sizes[k] >= max(2, 0.3 * rope_width_px)]
+            most = max(most, len(big))
             if len(big) == 2:
                 sel = np.nonzero(in_main)[0]
                 remap = np.full(rows.size, -1, np.int64)
@@ -98,11 +103,14 @@ def band_ends(mask: np.ndarray, exit_rc: tuple[float, float], *, rope_width_px: 
                 return BandEnds(rows=rows[sel], cols=cols[sel], graph=graph[sel][:, sel], ends=ends,
                                 cut_radius_px=cut)
         cut += step
-    return None
+    return most
 
 
-def ordered_centre_line(band: BandEnds, weights: np.ndarray, *, bin_px: float = 1.0) -> np.ndarray:
-    """Centre-line points (K, 2) as (col, row) in crop coordinates, from ``band.ends[0]`` to ``band.ends[1]``.
+def ordered_centre_line(band: BandEnds, weights: np.ndarray, *, bin_px: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Centre-line points (K, 2) as (col, row) in crop coordinates, from ``band.ends[0]`` to ``band.ends[1]``,
+    and the spread (K,) of each level set: its largest distance from its centroid, pixels.
+
+    A level set wider than a few rope widths means the band forks (two ropes side by side or crossing).
 
     Args:
         weights: shape of the crop, the response (how much each pixel is rope).
@@ -110,12 +118,15 @@ def ordered_centre_line(band: BandEnds, weights: np.ndarray, *, bin_px: float = 
     geo = dijkstra(band.graph, directed=False, indices=band.ends[0], min_only=True)
     finite = np.isfinite(geo)
     bins = np.floor(geo[finite] / bin_px).astype(np.int64)
+    rows, cols = band.rows[finite].astype(np.float64), band.cols[finite].astype(np.float64)
     w = np.maximum(weights[band.rows[finite], band.cols[finite]].astype(np.float64), 1e-6)
     total = np.bincount(bins, weights=w)
-    cx = np.bincount(bins, weights=w * band.cols[finite])
-    cy = np.bincount(bins, weights=w * band.rows[finite])
     ok = total > 0
-    return np.column_stack([cx[ok] / total[ok], cy[ok] / total[ok]])
+    cx = np.bincount(bins, weights=w * cols) / np.where(ok, total, 1.0)
+    cy = np.bincount(bins, weights=w * rows) / np.where(ok, total, 1.0)
+    spread = np.zeros(total.size)
+    np.maximum.at(spread, bins, np.hypot(cols - cx[bins], rows - cy[bins]))
+    return np.column_stack([cx[ok], cy[ok]]), spread[ok]
 
 
 def resample_polyline(points: np.ndarray, spacing: float) -> np.ndarray:

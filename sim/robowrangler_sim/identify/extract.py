@@ -17,9 +17,13 @@ from robowrangler_sim.identify.binarise import binarise, rope_response
 from robowrangler_sim.identify.calibration import PlaneCalibration, calibration_for_photo
 from robowrangler_sim.identify.centreline import (ordered_centre_line, refine_centre_line, resample_polyline,
                                                   trim_ends)
-from robowrangler_sim.identify.errors import CalibrationError, ManifestError
+from robowrangler_sim.identify.errors import CalibrationError, ManifestError, SeveralLoops
 from robowrangler_sim.identify.loop_finder import find_loop
 from robowrangler_sim.identify.photos import PhotoEntry, read_gray
+
+
+FORK_SPREAD_ROPE_WIDTHS = 4.0  # a cross-section of the band wider than this is two ropes
+FORK_FRACTION = 0.05           # ... along more than this share of the loop: several loops
 
 
 @dataclass(frozen=True)
@@ -106,7 +110,12 @@ def extract_photo(entry: PhotoEntry, calibration_spec: dict, *, options: Extract
                      rope_width_px=rope_px, path=path)
     u0, v0 = loop.origin_px
     hh, ww = loop.mask.shape
-    coarse = ordered_centre_line(loop.band, response[v0:v0 + hh, u0:u0 + ww]) + np.array([u0, v0], float)
+    coarse, spread = ordered_centre_line(loop.band, response[v0:v0 + hh, u0:u0 + ww])
+    coarse += np.array([u0, v0], float)
+    forked = float(np.mean(spread > FORK_SPREAD_ROPE_WIDTHS * max(rope_px, loop.width_px)))
+    if forked > FORK_FRACTION:
+        raise SeveralLoops(path, f"the rope forks along {100 * forked:.0f} % of the loop (ropes side by side or "
+                                 "crossing): several loops, or another rope, touch the exit; expected one loop")
     coarse = trim_ends(coarse, opt.end_trim_m / mpp)
     line_px = refine_centre_line(coarse, response, half_width_px=max(3.0, 1.5 * rope_px))
     plane = cal.to_plane(line_px)

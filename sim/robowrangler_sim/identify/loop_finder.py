@@ -69,10 +69,13 @@ def find_loop(mask: np.ndarray, exit_px, *, touch_radius_px: float, min_length_p
         if length >= min_length_px and width <= max_width_px:
             band = band_ends(comp.astype(bool), (v - y, u - x), rope_width_px=rope_width_px,
                              max_cut_px=max(3.0 * touch_radius_px, 0.1 * length))
-            if band is not None:
+            if not isinstance(band, int):
                 loops.append(LoopComponent(mask=comp.astype(bool), origin_px=(x, y), length_px=length,
                                            width_px=width, band=band))
                 continue
+            if band >= 4:
+                raise SeveralLoops(path, f"{band // 2} loops share the exit point ({u:.0f}, {v:.0f}) px: the rope "
+                                         f"component there has {band} ends; expected one loop (two ends)")
             open_ends.append(length)
         rejected.append((length, width))
     if not loops:
