@@ -4,6 +4,8 @@
 #   ./run.sh test   set up, then run every test (the same command CI runs)
 set -euo pipefail
 cd "$(dirname "$0")"
+# scripts/setup.sh installs uv here when the machine has none of the pinned version
+export PATH="$PWD/.tools/uv/bin:$PATH" UV_PYTHON_DOWNLOADS=never
 case "${1:-}" in
   demo)
     bash scripts/setup.sh

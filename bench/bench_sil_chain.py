@@ -31,7 +31,6 @@ from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxy
 from robowrangler_sim.scenarios import run_scenario  # noqa: E402
 from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory  # noqa: E402
 from robowrangler_sim.scenarios.chain_bridge import ChainBridge  # noqa: E402
-from robowrangler_sim.scenarios.loaded_spindle import ChainLoadedSpindlePlant  # noqa: E402
 from robowrangler_sim.sil import SilSession  # noqa: E402
 from robowrangler_sim.sil.scripted_host import ScriptedHost  # noqa: E402
 
@@ -76,7 +75,7 @@ def measure(*, n_links: int, seconds: float, chain: bool,
     script = GraspScript()
     table = default_or_synthetic_table()
     params = ChainParams(n_links=n_links)
-    sil = SilSession(speedup=None, trace_every=0, spindle=ChainLoadedSpindlePlant if chain else None)
+    sil = SilSession(speedup=None, trace_every=0)
     bridge = None
     if chain:
         placed, base = grasp_scene("mug", table=table, params=params, script=script)

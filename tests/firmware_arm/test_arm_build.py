@@ -30,10 +30,12 @@ from robowrangler.protocol import generated as proto  # noqa: E402
 CORE_FLASH_BUDGET_BYTES = 64 * 1024
 CORE_RAM_BUDGET_BYTES = 8 * 1024
 
-pytestmark = pytest.mark.skipif(
-    not ah.toolchain_available(),
-    reason="arm-none-eabi-gcc not installed (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi); CI has it",
-)
+
+
+@pytest.fixture(autouse=True)
+def _arm_toolchain(skip_unless_ci) -> None:
+    if not ah.toolchain_available():
+        skip_unless_ci("arm-none-eabi-gcc not installed (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi)")
 
 
 @pytest.fixture(scope="module")

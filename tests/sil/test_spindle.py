@@ -176,7 +176,7 @@ def test_battery_under_cutoff_lands_the_rope(native_build_dir: Path) -> None:
     sil, host = _host()
     try:
         host.arm_and_spin(6000)
-        sil.plant.battery_aux_current_a = 90.0  # a short elsewhere drags the pack under 9.9 V
+        sil.loads.battery_aux_current_a = 90.0  # a short elsewhere drags the pack under 9.9 V
         host.run_for(2.5)
         kinds = [(e.event, e.arg) for e in host.received.events]
         assert (gen.EventKind.FAULT_RAISED, gen.Fault.BATTERY_LOW) in kinds

@@ -67,9 +67,12 @@ def test_an_unreachable_display_is_a_clear_error_not_a_dead_process(native_build
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="needs xvfb-run (Debian package xvfb) for a display")
-def test_viewer_on_a_virtual_display_follows_the_run_without_changing_it(native_build_dir: Path) -> None:
+def test_viewer_on_a_virtual_display_follows_the_run_without_changing_it(native_build_dir: Path,
+                                                                         skip_unless_ci) -> None:
     from robowrangler_sim.scenarios import run_scenario
+
+    if shutil.which("xvfb-run") is None:
+        skip_unless_ci("needs xvfb-run (Debian package xvfb) for a display")
 
     env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY")}
     proc = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x720x24", sys.executable, "-c",

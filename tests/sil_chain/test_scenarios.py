@@ -111,9 +111,19 @@ def test_catalogue_has_every_table_i_object_and_the_door() -> None:
     assert len(names) == 14
 
 
+# The paper's Table I: every object with an outcome in the paper. The SIL agrees on 9 of 10; the credit card is
+# the known disagreement (README, docs/chain_model.md "The credit card"): strict, so a change that catches it
+# fails here until the README and docs/table_i.md say so.
+TABLE_I_PAPER = [("chips_can", "secured"), ("tuna_can", "secured"), ("sponge", "secured"), ("mug", "secured"),
+                 ("cup", "secured"), ("tennis_ball", "slipped"), ("golf_ball", "slipped"), ("apple", "slipped"),
+                 ("orange", "slipped"),
+                 pytest.param("credit_card", "secured", marks=pytest.mark.xfail(
+                     strict=True, reason="known disagreement: the 0.76 mm card slips under the 1 mm-radius rope "
+                                         "in the SIL (docs/chain_model.md, 'The credit card')"))]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize(("name", "expected"), [("chips_can", "secured"), ("tennis_ball", "slipped"), ("mug", "secured"), ("cup", "secured"),
-                                                ("golf_ball", "slipped")])
+@pytest.mark.parametrize(("name", "expected"), TABLE_I_PAPER)
 def test_firmware_grasp_reproduces_table_i(name: str, expected: str, native_build_dir: Path) -> None:
     # the chips can is marginal (docs/table_i.md): it flipped to "slipped" (rope touching 76 % < 80 %) with the
     # firmware build before 37c9cb7/0906311 changed when frames leave, i.e. the tick GRASP is taken at
@@ -124,7 +134,7 @@ def test_firmware_grasp_reproduces_table_i(name: str, expected: str, native_buil
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["tuna_can", "sponge"])
-def test_firmware_grasp_secures_the_low_objects(name: str, native_build_dir: Path) -> None:
+def test_firmware_grasp_drags_the_low_objects_along_the_floor(name: str, native_build_dir: Path) -> None:
     # 33 mm and 14 mm tall: the rope lying on the floor (not 10 mm above it) and the module moving with a real
     # velocity (docs/chain_model.md) catch them; before, the pulled rope rode over them (rope touching 0-5 %)
     out = run_scenario(name, seed=0, n_links=20)

@@ -1,6 +1,6 @@
 """Plant faults at the HAL boundary of the SIL and what the firmware does about them, judged from telemetry.
 
-Behaviour the firmware specifies today is asserted; behaviour DESIGN.md asks for that the core does not
+Behaviour the firmware specifies today is asserted; behaviour docs/architecture.md and docs/board.md ask for that the core does not
 have yet is an xfail(strict=True) test naming what is missing.
 """
 

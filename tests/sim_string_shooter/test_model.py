@@ -118,8 +118,6 @@ def test_tap_gives_the_rope_the_impulse_asked_for():
 
 
 @pytest.mark.parametrize("make, name", [
-    (lambda: RopeParams(diameter_m=-1.0), "diameter_m"),
-    (lambda: RopeParams(skin_friction_coeff=float("nan")), "skin_friction_coeff"),
     (lambda: StringShooter(loop_length_m=0.0), "loop_length_m"),
     (lambda: StringShooter(initial_shape="square"), "initial_shape"),
     (lambda: StringShooter(motion=ModuleMotion(guide_travel_m=0.5)), "guide_travel_m"),

@@ -4,7 +4,8 @@ main(argv, env) is the one place where exceptions become exit statuses (ExitStat
 messages on stderr; with --json the same failure is also one JSON object on stdout.
 
 Adding a command group: write robowrangler/cli/<group>.py with click commands and append them to
-COMMANDS below.
+COMMANDS below. Verbs of other distributions (the simulator's sil, demo, diagnose, identify) arrive as plugins
+(robowrangler/cli/plugins.py); the host never imports them.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param, provision, record, sil, spindle
+from robowrangler.cli import monitor, motion, param, plugins, provision, record, spindle
 from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_ENV_VAR, CliContext, OutputClosed,
                                       read_key_file)
 from robowrangler.cli.environment import Environment
@@ -31,7 +32,6 @@ COMMANDS: list[click.Command] = [
     spindle.home, spindle.loop, spindle.relax, spindle.retract, spindle.grasp, spindle.release,
     monitor.status, monitor.watch,
     param.param, provision.provision, provision.keygen,
-    sil.sil_command, sil.demo_command,
     record.record, record.inspect, record.replay,
 ]
 
@@ -63,6 +63,25 @@ def cli(click_ctx: click.Context, url: str | None, json_mode: bool, timeout_s: f
 for _command in COMMANDS:
     cli.add_command(_command)
 
+_plugins_installed = False
+
+
+def _install_plugins() -> None:
+    """Add the verbs other installed distributions register (once, at the first main()), and a stand-in that
+    names the missing distribution for each simulator verb none provided."""
+    global _plugins_installed
+    if _plugins_installed:
+        return
+    _plugins_installed = True
+    loaded = plugins.load_plugins()
+    for command in loaded.commands:
+        if command.name in cli.commands:
+            raise RuntimeError(f"plugin verb {command.name!r} clashes with a built-in wrangler command")
+        cli.add_command(command)
+    for verb in plugins.SIMULATOR_VERBS:
+        if verb not in cli.commands:
+            cli.add_command(plugins.missing_verb(verb, loaded.problems))
+
 
 def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> ExitStatus:
     """Run `wrangler` with argv (without the program name); returns the exit status.
@@ -73,6 +92,7 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
     argv = list(sys.argv[1:] if argv is None else argv)
     json_mode = "--json" in argv
     try:
+        _install_plugins()
         with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
             rv = cli.main(args=argv, prog_name="wrangler", standalone_mode=False, obj=env)
         # click returns the Exit code for --help and friends, the command's value otherwise

@@ -28,8 +28,11 @@ def _tov(rec: Recording) -> tuple[float, float, str]:
 
 def plot_recording(rec: Recording, out_png: str | Path, *, title: str | None = None) -> Path:
     """Write the PNG; returns its path. RecordingError if there is no telemetry to plot."""
-    import matplotlib
-
+    try:
+        import matplotlib
+    except ImportError as exc:
+        raise RecordingError(rec.path, "plotting needs matplotlib, which this install lacks: add the extra "
+                                       "`robowrangler[plot]` (or install robowrangler-sim, which has it)") from exc
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -12,9 +12,10 @@ large drive damping is implicit, as PhysX's drives are.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 from robowrangler_sim.chain.errors import ChainModelError
+from robowrangler_sim.rope import RopeParams
 
 N_LINKS_MIN = 10
 N_LINKS_MAX = 80
@@ -31,8 +32,9 @@ class ChainParams:
         guide_take_up_ratio: metres of rope drawn inside per metre of guide travel (2.0: the loop's two
             ends pass over the moving guide like a pulley; an assumption to re-measure on hardware).
         guide_stroke_mm: guide travel of the lead screw (hardware: 180 mm).
-        rope_linear_density_kg_per_m: 0.221 g/m wool rope; a 2 m / 20-link chain has 2.2e-5 kg links.
-        rope_radius_m: collision radius of the chain links (2 mm rope).
+        rope: the rope's material, the one RopeParams of every model (robowrangler_sim/rope.py): its density
+            gives the link masses (0.221 g/m: a 2 m / 20-link chain has 2.2e-5 kg links), its diameter the links'
+            collision radius (rope_radius_m, 1 mm), its C_f the takeoff speed (takeoff_speed_mps, 2.6 m/s).
         visual_rope_radius_m: radius of the drawn rope (visual only, no contact, no mass).
     Drives (IsaacGym drive gains, see module doc):
         kp_upper_nm_per_rad, kd_upper_nms_per_rad: in-plane drives of the upper branch (1e4, 5e3).
@@ -51,7 +53,7 @@ class ChainParams:
         passive_damping_nms_per_rad: passive damping on the in-plane hinges (implicit; stabilises free links).
         out_of_plane_damping_nms_per_rad: passive damping on the out-of-plane hinges (stiffness stays 0, as
             in the paper). Air drag on a rope that runs axially at U has a normal force linear in the swing
-            velocity, about 0.5 rho U (C_f pi d) per metre (DESIGN.md: C_f pi d = 5.4e-4 m): at 4 m/s,
+            velocity, about 0.5 rho U (C_f pi d) per metre (rope.py: C_f pi d = 5.3e-4 m): at 4 m/s,
             1.3e-3 N s/m2, i.e. about 4e-4 N m s/rad for a 1 m arm swinging about a joint. 5e-4 stops the
             loop plane from swinging on after every leg move (the door handle's perturbed rollouts: 9/9 held
             instead of 4/9 with 1e-4); it does not restore the plane. docs/chain_model.md.
@@ -70,7 +72,6 @@ class ChainParams:
             The orientation is set directly (no angular velocity): no scenario turns the module while the
             rope touches something.
     Lift:
-        takeoff_speed_mps: ToV; at and above it the loop is airborne (paper rope: 2.6 m/s).
         lift_ramp_s: time for the lift factor to go 1 -> 0 (falling) or 0 -> 1 (rising).
     Contact:
         rope_friction: sliding friction of the rope links (MuJoCo takes the larger of a pair's values).
@@ -91,8 +92,7 @@ class ChainParams:
     rope_inside_at_home_m: float = 0.2
     guide_take_up_ratio: float = 2.0
     guide_stroke_mm: float = 180.0
-    rope_linear_density_kg_per_m: float = 2.21e-4
-    rope_radius_m: float = 1.0e-3
+    rope: RopeParams = field(default_factory=RopeParams)
     visual_rope_radius_m: float = 5.0e-3
     kp_upper_nm_per_rad: float = 1.0e4
     kd_upper_nms_per_rad: float = 5.0e3
@@ -111,7 +111,6 @@ class ChainParams:
     drive_armature_factor: float = 1.0
     module_mass_kg: float = 1.0
     module_max_step_m: float = 0.005
-    takeoff_speed_mps: float = 2.6
     lift_ramp_s: float = 0.2
     rope_friction: float = 0.3
     rope_floor_clearance_m: float = 0.0
@@ -126,16 +125,17 @@ class ChainParams:
         if not N_LINKS_MIN <= self.n_links <= N_LINKS_MAX:
             raise ChainModelError(
                 f"n_links: expected {N_LINKS_MIN}..{N_LINKS_MAX}, got {self.n_links}")
+        if not isinstance(self.rope, RopeParams):
+            raise ChainModelError(f"rope: expected RopeParams, got {self.rope!r}")
         for f in fields(self):
-            if f.name == "n_links":
+            if f.name in ("n_links", "rope"):
                 continue
             value = getattr(self, f.name)
             if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
                 raise ChainModelError(f"{f.name}: expected a finite number, got {value!r}")
             if value < 0:
                 raise ChainModelError(f"{f.name}: expected >= 0, got {value}")
-        for name in ("rope_length_m", "rope_linear_density_kg_per_m", "rope_radius_m", "timestep_s",
-                     "takeoff_speed_mps", "guide_take_up_ratio", "module_mass_kg"):
+        for name in ("rope_length_m", "timestep_s", "guide_take_up_ratio", "module_mass_kg"):
             if getattr(self, name) <= 0:
                 raise ChainModelError(f"{name}: expected > 0, got {getattr(self, name)}")
         if not 0.0 < self.upper_branch_fraction < 1.0:
@@ -153,6 +153,21 @@ class ChainParams:
                 f"{self.min_loop_length_m:.3f} m")
 
     # --- derived quantities ----------------------------------------------------------------
+    @property
+    def rope_linear_density_kg_per_m(self) -> float:
+        """The rope's mass per metre (self.rope)."""
+        return self.rope.linear_density_kg_per_m
+
+    @property
+    def rope_radius_m(self) -> float:
+        """Collision radius of the chain links: half the rope's diameter."""
+        return self.rope.radius_m
+
+    @property
+    def takeoff_speed_mps(self) -> float:
+        """ToV: at and above it the loop is airborne (the rope's, in standard air: 2.6 m/s for the paper's rope)."""
+        return self.rope.takeoff_speed_mps()
+
     @property
     def home_loop_length_m(self) -> float:
         """Loop length outside the device with the guide at 0 mm, metres."""

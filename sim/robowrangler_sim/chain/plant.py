@@ -175,8 +175,6 @@ class ChainPlant:
                                        module_pos_m=tuple(initial.base_pos_m))
         self.data = mujoco.MjData(self.model)
         self.targets = ShapeTargets(table, n_links=n)
-        self.lift_state = LiftState(takeoff_speed_mps=p.takeoff_speed_mps, lift_ramp_s=p.lift_ramp_s,
-                                    lift=1.0 if airborne else 0.0)
         m = self.model
         name = lambda kind, s: mujoco.mj_name2id(m, kind, s)  # noqa: E731
         J, B, G, S, A = (mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_GEOM,
@@ -219,24 +217,38 @@ class ChainPlant:
                 if m.geom_bodyid[g] == bid or m.body_rootid[m.geom_bodyid[g]] == bid:
                     self._geom_object[g] = o.spec.name
         self._chain_geoms = set(self._link_geom.tolist())
-        self._monitors = {
-            o.spec.name: SecuredMonitor(drag_force_n=max(self.params.floor_friction, o.spec.friction)
-                                        * o.spec.mass_kg * 9.81, window_s=secured_window_s)
-            for o in self.objects if o.spec.free}
-        self._link_len_m = -1.0
-        self._lift_applied = -1.0
-        self._steps = 0
-        self._warn_badqacc = 0
-        self._inputs = initial
-        self._inputs_applied = None
-        self._force6 = np.zeros(6)
-        self._warning_badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
-
+        self._secured_window_s = secured_window_s
+        self._start = (initial, airborne, seed, initial_noise_rad)
         self._module_max_step2_m2 = p.module_max_step_m ** 2
         self._module_qpos_view = self.data.qpos[self._module_qpos:self._module_qpos + 3]  # views into MjData
         self._module_qvel_view = self.data.qvel[self._module_dof:self._module_dof + 3]
         self._module_dp_buf = np.zeros(3)
         self._inv_timestep_hz = 1.0 / p.timestep_s
+        self._force6 = np.zeros(6)
+        self._warning_badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the start the plant was built with (pose, airborne or at rest, seeded initial noise): the plant
+        contract's reset (plants/contract.py)."""
+        initial, airborne, seed, initial_noise_rad = self._start
+        p, n = self.params, self.params.n_links
+        mujoco.mj_resetData(self.model, self.data)
+        self.lift_state = LiftState(takeoff_speed_mps=p.takeoff_speed_mps, lift_ramp_s=p.lift_ramp_s,
+                                    lift=1.0 if airborne else 0.0)
+        self._monitors = {
+            o.spec.name: SecuredMonitor(drag_force_n=max(self.params.floor_friction, o.spec.friction)
+                                        * o.spec.mass_kg * 9.81, window_s=self._secured_window_s)
+            for o in self.objects if o.spec.free}
+        self._link_len_m = -1.0
+        self._lift_applied = -1.0
+        self._steps = 0
+        self._warn_badqacc = int(self._warning_badqacc.number)
+        self._inputs = initial
+        self._inputs_applied = None
+        self._module_quat_applied = None
+        if hasattr(self, "_target_time_s"):
+            del self._target_time_s
         self._apply_inputs(initial)
         self._place_module()
         if airborne:
@@ -365,6 +377,14 @@ class ChainPlant:
         mujoco.mj_step(self.model, self.data)
         self._steps += 1
         self._check_divergence()
+
+    def update(self, inputs: PlantInputs, dt_s: float) -> PlantOutputs:
+        """The plant contract (plants/contract.py): advance dt_s with ``inputs`` held (whole MuJoCo steps; the
+        clock keeps the remainder, as advance() does); the outputs at the end."""
+        if not isinstance(inputs, PlantInputs):
+            raise ChainModelError(f"inputs: expected PlantInputs, got {type(inputs).__name__}")
+        self.advance(inputs, duration_s=dt_s)
+        return self.outputs()
 
     def advance(self, inputs: PlantInputs | None = None, *, duration_s: float) -> int:
         """Step until the clock is nearest to (start + duration_s); returns the number of steps."""

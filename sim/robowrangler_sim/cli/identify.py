@@ -1,18 +1,20 @@
 """`wrangler identify PHOTOS... --out SHAPE_TABLE`: the loop's shape table from photos (issue 16).
 
-PHOTOS is a manifest (.json, see robowrangler_sim/identify/photos.py) or image files whose names carry
-phi and the rope speed (``loop_phi-30_v5.0.png``), with the geometry on the command line. Prose goes to
-stderr; with ``wrangler --json`` one JSON result object goes to stdout. Errors (an unreadable photo, no
+A plugin of `wrangler` (robowrangler_sim.cli.commands). PHOTOS is a manifest (.json, see
+robowrangler_sim/identify/photos.py) or image files whose names carry phi and the rope speed
+(``loop_phi-30_v5.0.png``), with the geometry on the command line. The result line goes to stdout (one
+JSON object with ``wrangler --json``), a line per photo to stderr. Errors (an unreadable photo, no
 loop, several loops, phi missing or repeated, a calibration that does not fit) name the file, exit with
 status 1 (ERROR), and no table is written.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
+
+from robowrangler.cli.context import CliContext, pass_context
 
 
 def _pixel(ctx, param, value):
@@ -53,8 +55,8 @@ def _pixel(ctx, param, value):
 @click.option("--rope", "rope_polarity", type=click.Choice(["bright", "dark"]), default="bright", show_default=True,
               help="Rope lighter or darker than the background.")
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Threads (default: cores, at most 4).")
-@click.pass_context
-def identify_command(ctx: click.Context, photos, out_path, figures_dir, n_points, placement, marker_side_m, marker_id,
+@pass_context
+def identify_command(ctx: CliContext, photos, out_path, figures_dir, n_points, placement, marker_side_m, marker_id,
                      marker_dictionary, focal_px, distance_m, exit_px, return_px, rope_speed_mps, loop_length_m,
                      rope_polarity, workers) -> None:
     """Identify the loop's shape table from PHOTOS (a manifest .json, or images named ..._phi-30_v5.0.png)."""
@@ -88,18 +90,15 @@ def identify_command(ctx: click.Context, photos, out_path, figures_dir, n_points
                       workers=workers)
     path = write_identification(result, out_path, figures_dir=figures_dir)
     table = result.table
-    click.echo(f"wrote {path}: {table.rope_speed_mps.size} speed(s) x {table.phi_deg.size} phi x {table.n_points} "
-               f"points, loop {table.loop_length_m:.3f} m, {len(result.photos)} photos in {result.elapsed_s:.1f} s",
-               err=True)
     for r in result.photos:
-        click.echo(f"  {r.entry.path.name}: phi {r.entry.phi_deg:+g} deg, {r.entry.rope_speed_mps:g} m/s, "
-                   f"loop {r.loop_length_m:.3f} m", err=True)
-    if getattr(ctx.obj, "json_mode", False):
-        click.echo(json.dumps({"type": "result", "ok": True, "table": str(path),
-                               "figures": None if figures_dir is None else str(figures_dir),
-                               "phi_deg": table.phi_deg.tolist(), "rope_speed_mps": table.rope_speed_mps.tolist(),
-                               "n_points": table.n_points, "loop_length_m": table.loop_length_m,
-                               "elapsed_s": round(result.elapsed_s, 3),
-                               "photos": [{"file": str(r.entry.path), "phi_deg": r.entry.phi_deg,
-                                           "rope_speed_mps": r.entry.rope_speed_mps,
-                                           "loop_length_m": round(r.loop_length_m, 4)} for r in result.photos]}))
+        ctx.note(f"{r.entry.path.name}: phi {r.entry.phi_deg:+g} deg, {r.entry.rope_speed_mps:g} m/s, "
+                 f"loop {r.loop_length_m:.3f} m")
+    ctx.result({"command": "identify", "table": str(path), "figures": None if figures_dir is None else str(figures_dir),
+                "phi_deg": table.phi_deg.tolist(), "rope_speed_mps": table.rope_speed_mps.tolist(),
+                "n_points": table.n_points, "placement": placement, "loop_length_m": round(table.loop_length_m, 4),
+                "elapsed_s": round(result.elapsed_s, 3),
+                "photos": [{"file": str(r.entry.path), "phi_deg": r.entry.phi_deg,
+                            "rope_speed_mps": r.entry.rope_speed_mps, "loop_length_m": round(r.loop_length_m, 4)}
+                           for r in result.photos]},
+               f"wrote {path}: {table.rope_speed_mps.size} speed(s) x {table.phi_deg.size} phi x {table.n_points} "
+               f"points, loop {table.loop_length_m:.3f} m, {len(result.photos)} photos in {result.elapsed_s:.1f} s")

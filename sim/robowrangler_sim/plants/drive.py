@@ -21,6 +21,7 @@ speed); a slip model would add a rope degree of freedom coupled through a nip tr
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, fields
 from numbers import Real
 
 import numpy as np
@@ -34,6 +35,68 @@ from robowrangler_sim.plants.esc import Esc
 _RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
 
 
+@dataclass(frozen=True, kw_only=True)
+class DriveInputs:
+    """What drives the drive plant over one step (the plant contract, plants/contract.py).
+
+    Attributes:
+        esc_pulse_us: ESC input pulse width, us (0 = no signal, else 0 < pulse <= esc_frame_us).
+        external_rope_load_n: disturbance force on the rope, N (>= 0), opposing its motion.
+        rope_exposed_length_m: rope moving through air (carries the skin-friction drag), m, 0..rope_loop_length_m;
+            None: the params' rope_exposed_length_m.
+        battery_aux_current_a: other loads on the pack, A (>= 0); None: the params' battery_aux_current_a.
+    """
+
+    esc_pulse_us: float
+    external_rope_load_n: float = 0.0
+    rope_exposed_length_m: float | None = None
+    battery_aux_current_a: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class DriveOutputs:
+    """The drive plant's outputs at the end of a step (SI; the sensor fields are what the board's HAL reads).
+
+    Attributes:
+        time_us: plant clock, integer microseconds since reset.
+        rope_speed_mps, wheel_speed_rad_s, motor_rpm: rope / wheel / motor speed (signed).
+        shaft_angle_rad: cumulative wheel angle since reset.
+        motor_current_a: phase current per motor (negative while braking).
+        battery_v: terminal voltage; battery_adc_v: the same through the noisy, quantised ADC (sensor).
+        battery_current_a: battery-side current; battery_open_circuit_v: the pack's open-circuit voltage.
+        esc_armed, esc_throttle, esc_duty: ESC state (latched throttle 0..1, applied duty 0..1).
+        encoder_counts, encoder_last_edge_us: the encoder (sensor): cumulative edges, plant time of the last edge.
+        rope_drag_n: aerodynamic drag on the rope, N.
+        loop_airborne: rope speed above ToV (with hysteresis).
+        external_rope_load_n, rope_exposed_length_m, battery_aux_current_a: the inputs in force over the step.
+    """
+
+    time_us: int
+    rope_speed_mps: float
+    wheel_speed_rad_s: float
+    motor_rpm: float
+    shaft_angle_rad: float
+    motor_current_a: float
+    battery_v: float
+    battery_adc_v: float
+    battery_current_a: float
+    battery_open_circuit_v: float
+    esc_armed: bool
+    esc_throttle: float
+    esc_duty: float
+    encoder_counts: int
+    encoder_last_edge_us: int
+    rope_drag_n: float
+    loop_airborne: bool
+    external_rope_load_n: float
+    rope_exposed_length_m: float
+    battery_aux_current_a: float
+
+    @property
+    def time_s(self) -> float:
+        return self.time_us * 1e-6
+
+
 def _is_real(value: object) -> bool:
     """True for int/float/numpy real scalars, False for bool and everything else (fast path for float)."""
     if type(value) is float:
@@ -44,7 +107,7 @@ def _is_real(value: object) -> bool:
 def rope_drag_force_n(params: DriveParams, rope_speed_mps: float) -> float:
     """Axial skin-friction air drag on the exposed rope, N, signed against the motion.
 
-    f_t = 0.5 rho C_f pi d v^2 per metre (DESIGN.md), times ``rope_exposed_length_m``.
+    f_t = 0.5 rho C_f pi d v^2 per metre (robowrangler_sim/rope.py), times ``rope_exposed_length_m``.
     """
     return params.rope_drag_coeff_n_s2_per_m2 * rope_speed_mps * abs(rope_speed_mps)
 
@@ -137,6 +200,10 @@ def speed_time_constant_s(params: DriveParams, rope_speed_mps: float) -> float:
 
 class DrivePlant:
     """The rope drive, stepped in lockstep by the SIL; it owns the plant clock.
+
+    The contract (plants/contract.py): ``update(DriveInputs, dt_s) -> DriveOutputs``, ``outputs()``, ``reset()``.
+    ``step``/``step_us`` with the inputs set as attributes below are the same integration, for scripts and tests
+    that drive the plant by hand.
 
     Outputs (plain attributes, updated by ``step``; SI units, names carry units):
         time_us: plant clock, integer microseconds since reset.
@@ -243,6 +310,24 @@ class DrivePlant:
         if not _is_real(value) or not math.isfinite(value) or value < 0.0:
             raise ValueError(f"battery_aux_current_a: expected a finite current >= 0 A, got {value!r}")
         self._battery.aux_current_a = float(value)
+
+    def update(self, inputs: DriveInputs, dt_s: float) -> DriveOutputs:
+        """The plant contract: advance dt_s (whole microseconds, 0 < dt_s <= max_step_s) with ``inputs`` held;
+        the outputs at the end. ValueError/TypeError naming the field on a bad input."""
+        if not isinstance(inputs, DriveInputs):
+            raise TypeError(f"inputs: expected DriveInputs, got {type(inputs).__name__}")
+        p = self.params
+        self.external_rope_load_n = inputs.external_rope_load_n
+        self.rope_exposed_length_m = (p.rope_exposed_length_m if inputs.rope_exposed_length_m is None
+                                      else inputs.rope_exposed_length_m)
+        self.battery_aux_current_a = (p.battery_aux_current_a if inputs.battery_aux_current_a is None
+                                      else inputs.battery_aux_current_a)
+        self.step(esc_pulse_us=inputs.esc_pulse_us, dt_s=dt_s)
+        return self.outputs()
+
+    def outputs(self) -> DriveOutputs:
+        """The outputs now (the plant contract), without stepping."""
+        return DriveOutputs(**{name: getattr(self, name) for name in _OUTPUT_FIELDS})
 
     def step(self, *, esc_pulse_us: float, dt_s: float) -> None:
         """Advance the plant by dt_s seconds (a whole number of microseconds, 0 < dt_s <= max_step_s) with the
@@ -380,6 +465,8 @@ class DrivePlant:
         """All outputs as one dict (for telemetry, logging and determinism checks)."""
         return {name: getattr(self, name) for name in _SNAPSHOT_FIELDS}
 
+
+_OUTPUT_FIELDS = tuple(f.name for f in fields(DriveOutputs))
 
 _SNAPSHOT_FIELDS = (
     "time_us", "rope_speed_mps", "wheel_speed_rad_s", "motor_rpm", "shaft_angle_rad", "motor_current_a",

@@ -9,7 +9,9 @@ fit such numbers from recordings.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
+
+from robowrangler_sim.rope import STANDARD_AIR_DENSITY_KG_PER_M3, RopeParams
 
 # Motor constant of a 1250 rpm/V motor (T-MOTOR AS2317 is sold in 880/1250/1400 KV; 1250 KV gives the
 # 15000 rpm maximum at 12 V). Kt = Ke = 1 / (Kv in rad/s/V) = 60 / (2 pi 1250) = 7.64e-3 N m/A.
@@ -57,24 +59,21 @@ class DriveParams:
     """Rubber wheel radius (hardware description)."""
 
     # --- rope ---
-    rope_linear_density_kg_per_m: float = 0.221e-3
-    """Wool rope, 0.221 g/m (hardware description; the paper's rope)."""
+    rope: RopeParams = field(default_factory=RopeParams)
+    """The rope's material: density (its mass adds to the inertia), diameter and C_f (its air drag, hence ToV);
+    the one RopeParams of every model (robowrangler_sim/rope.py)."""
     rope_loop_length_m: float = 2.0
     """Closed loop length (hardware description); all of it moves, so its mass adds m r^2 to the inertia."""
     rope_exposed_length_m: float = 2.0
     """Rope length moving through air that carries skin-friction drag. Default: the whole loop."""
-    air_density_kg_per_m3: float = 1.204
+    air_density_kg_per_m3: float = STANDARD_AIR_DENSITY_KG_PER_M3
     """Dry air at 20 degC, 101.325 kPa."""
-    rope_cf_pi_d_m: float = 5.4e-4
-    """C_f pi d of the rope (DESIGN.md facts: from ToV 2.6 m/s where drag per metre = weight per metre)."""
     guide_friction_n: float = 0.04
     """Coulomb friction of the rope in the guide, rope side. Class estimate (tension is only mN)."""
     nip_friction_n: float = 0.08
     """Rolling resistance of the two rubber wheels pinching the rope, rope side. Class estimate."""
     nip_viscous_n_s_per_m: float = 0.004
     """Speed-proportional part of the nip loss (rubber hysteresis), rope side. Class estimate."""
-    takeoff_speed_mps: float = 2.6
-    """ToV: the loop lifts above this rope speed (DESIGN.md, 0.221 g/m wool rope)."""
     airborne_hysteresis_mps: float = 0.05
     """loop_airborne turns on above ToV + this and off below ToV - this (plots only)."""
 
@@ -91,7 +90,7 @@ class DriveParams:
     esc_deadband_us: float = 10.0
     """Pulses up to min + deadband are zero throttle. Assumption (BLHeli: small zero-throttle zone)."""
     esc_arm_hold_us: int = 200_000
-    """Valid zero-throttle signal needed before the ESC arms (BLHeli_32: about 200 ms; DESIGN.md)."""
+    """Valid zero-throttle signal needed before the ESC arms (BLHeli_32: about 200 ms; docs/drive_plant.md)."""
     esc_lag_s: float = 0.003
     """First-order lag from the latched throttle to the applied duty (ESC input filtering and commutation
     update), on top of the up-to-one-frame latching delay. Assumption."""
@@ -132,8 +131,12 @@ class DriveParams:
     """Longest dt_s accepted by DrivePlant.step."""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.rope, RopeParams):
+            raise DriveParamsError(f"rope: expected RopeParams, got {self.rope!r}")
         for f in fields(self):
             value = getattr(self, f.name)
+            if f.name == "rope":
+                continue
             if f.type in ("bool", bool):
                 if not isinstance(value, bool):
                     raise DriveParamsError(f"{f.name}: expected bool, got {value!r}")
@@ -181,6 +184,22 @@ class DriveParams:
     def circuit_resistance_ohm(self) -> float:
         """Winding plus ESC resistance in series, per motor."""
         return self.motor_resistance_ohm + self.esc_resistance_ohm
+
+    @property
+    def rope_linear_density_kg_per_m(self) -> float:
+        """The rope's mass per metre (self.rope)."""
+        return self.rope.linear_density_kg_per_m
+
+    @property
+    def rope_cf_pi_d_m(self) -> float:
+        """C_f pi d of the rope (self.rope): axial drag per metre is 0.5 rho (C_f pi d) v^2."""
+        return self.rope.cf_pi_d_m
+
+    @property
+    def takeoff_speed_mps(self) -> float:
+        """ToV: the loop lifts above this rope speed, where axial drag per metre equals weight per metre in this
+        air (2.6 m/s for the default rope in standard air: the calibration of C_f, robowrangler_sim/rope.py)."""
+        return self.rope.takeoff_speed_mps(air_density_kg_per_m3=self.air_density_kg_per_m3)
 
     @property
     def rope_mass_kg(self) -> float:

@@ -12,8 +12,9 @@ What the firmware sees is register values, so the plant produces them as the ser
 - The guide travels lead_mm_per_rev per output revolution (counter-clockwise = retract = +mm) between hard
   end stops at 0 and stroke_mm; the home limit switch closes within switch_travel_mm of 0 when fitted.
 - Loop length = rope outside at guide 0 minus rope_per_guide_mm x guide position (both strands pass the
-  guide). A grasped object of circumference object_circumference_m: once the loop is shorter than that, the
-  rope stretches around it (stiffness rope_wrap_stiffness_n_per_m) and pulls on the guide.
+  guide). The rope's pull on the guide comes from outside when the input guide_load_n is given (the rope chain
+  in a wrangling scenario); otherwise from a stand-in object of circumference object_circumference_m: once the
+  loop is shorter than that, the rope stretches around it (stiffness rope_wrap_stiffness_n_per_m).
 
 Numbers: AX-12A datasheet (ROBOTIS e-manual): stall torque 1.5 N m and no-load speed 59 rpm at 12 V,
 300 degree position range, 0.111 rpm speed unit. Lead screw: a T8 screw, 8 mm lead, efficiency about 0.35
@@ -28,6 +29,49 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 _TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True, kw_only=True)
+class SpindleInputs:
+    """What drives the spindle plant over one step (the plant contract, plants/contract.py).
+
+    Attributes:
+        moving_speed_raw: the AX-12A moving-speed register the firmware writes (wheel mode): 0-1023, bit 10 = cw.
+        guide_load_n: pull of the rope on the guide, N (>= 0), resisting retraction, from another plant (the rope
+            chain); None: the plant's own stand-in object (object_circumference_m) decides it.
+    """
+
+    moving_speed_raw: int
+    guide_load_n: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SpindleOutputs:
+    """The spindle plant's outputs at the end of a step.
+
+    Attributes:
+        guide_position_mm: guide travel from the home stop (+ = retracted, smaller loop).
+        loop_length_m: rope loop outside the device.
+        output_angle_deg, speed_rpm, torque_nm: the servo's output shaft (torque = what its load estimate reads).
+        rope_tension_n: tension of each strand of the rope on the guide, N.
+        position_raw, speed_raw, load_raw: the AX-12A's present-position / speed / load registers (sensors).
+        answering: the servo answers on its bus (False: silent, e.g. after a brown-out).
+        limit_switch: the home switch is closed (only when fitted).
+        moving_speed_raw: the input in force over the step.
+    """
+
+    guide_position_mm: float
+    loop_length_m: float
+    output_angle_deg: float
+    speed_rpm: float
+    torque_nm: float
+    rope_tension_n: float
+    position_raw: int
+    speed_raw: int
+    load_raw: int
+    answering: bool
+    limit_switch: bool
+    moving_speed_raw: int
 
 
 class SpindleParamsError(ValueError):
@@ -69,28 +113,37 @@ class SpindleParams:
 
 
 class SpindlePlant:
-    """The spindle, stepped by the SIL. Inputs: moving_speed_raw (each tick), object_circumference_m.
+    """The spindle, stepped by the SIL.
 
-    Outputs: guide_position_mm, output_angle_deg, speed_rpm, torque_nm, loop_length_m, rope_tension_n,
-    and the registers position_raw / speed_raw / load_raw / limit_switch.
-    Faults a scenario can inject: stalled (the output is blocked), answering (False: the servo is silent).
+    The contract (plants/contract.py): ``update(SpindleInputs, dt_s) -> SpindleOutputs``, ``outputs()``,
+    ``reset()``. ``step(dt_s)`` with moving_speed_raw / guide_load_n set as attributes is the same integration.
+    The scene, set between steps: object_circumference_m (the stand-in object). Faults a scenario can inject:
+    stalled (the output is blocked), answering (False: the servo is silent).
     """
 
     def __init__(self, params: SpindleParams | None = None, *, seed: int = 0) -> None:
         self.params = params or SpindleParams()
-        self._rng = np.random.default_rng(seed + 7919)
+        self.seed = int(seed)
         p = self.params
         self._w0_rad_s = p.no_load_speed_rpm * _TWO_PI / 60.0
         self._mm_per_rad = p.lead_mm_per_rev / _TWO_PI
+        self.object_circumference_m: float | None = None
+        self.stalled = False
+        self.answering = True
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to power-up: the guide mid-stroke (homing must find 0), at rest, same seed. The scene
+        (object_circumference_m) and injected faults (stalled, answering) are left as they are."""
+        p = self.params
+        self._rng = np.random.default_rng(self.seed + 7919)
         # the guide starts somewhere mid-stroke: homing must find 0
         self.output_angle_deg = p.start_angle_deg
         self._home_angle_deg = p.start_angle_deg - 40.0 / self._mm_per_rad * 180.0 / math.pi
         self.speed_rad_s = 0.0
         self.torque_nm = 0.0
         self.moving_speed_raw = 0
-        self.object_circumference_m: float | None = None
-        self.stalled = False
-        self.answering = True
+        self._guide_load_n: float | None = None
         self.rope_tension_n = 0.0
         self.position_raw = 0
         self.speed_raw = 0
@@ -114,9 +167,47 @@ class SpindlePlant:
     def speed_rpm(self) -> float:
         return self.speed_rad_s * 60.0 / _TWO_PI
 
+    @property
+    def guide_load_n(self) -> float | None:
+        """The rope's pull on the guide from outside, N (>= 0), or None: the stand-in object decides it."""
+        return self._guide_load_n
+
+    @guide_load_n.setter
+    def guide_load_n(self, value: float | None) -> None:
+        if value is not None and not (isinstance(value, (int, float)) and not isinstance(value, bool)
+                                      and math.isfinite(value) and value >= 0.0):
+            raise ValueError(f"guide_load_n: expected a finite force >= 0 N or None, got {value!r}")
+        self._guide_load_n = None if value is None else float(value)
+
+    # ------------------------------------------------------------------ the contract
+    def update(self, inputs: SpindleInputs, dt_s: float) -> SpindleOutputs:
+        """The plant contract: advance dt_s (0 < dt_s <= 0.05 s) with ``inputs`` held; the outputs at the end."""
+        if not isinstance(inputs, SpindleInputs):
+            raise TypeError(f"inputs: expected SpindleInputs, got {type(inputs).__name__}")
+        raw = inputs.moving_speed_raw
+        if isinstance(raw, bool) or not isinstance(raw, (int, np.integer)) or not 0 <= raw <= 0x7FF:
+            raise ValueError(f"moving_speed_raw: expected a register value 0..2047, got {raw!r}")
+        self.moving_speed_raw = int(raw)
+        self.guide_load_n = inputs.guide_load_n
+        self.step(dt_s)
+        return self.outputs()
+
+    def outputs(self) -> SpindleOutputs:
+        """The outputs now (the plant contract), without stepping."""
+        return SpindleOutputs(guide_position_mm=self.guide_position_mm, loop_length_m=self.loop_length_m,
+                              output_angle_deg=self.output_angle_deg, speed_rpm=self.speed_rpm,
+                              torque_nm=self.torque_nm, rope_tension_n=self.rope_tension_n,
+                              position_raw=self.position_raw, speed_raw=self.speed_raw, load_raw=self.load_raw,
+                              answering=self.answering, limit_switch=self.limit_switch,
+                              moving_speed_raw=self.moving_speed_raw)
+
     # ------------------------------------------------------------------ dynamics
     def _rope_force_n(self) -> float:
-        """Pull of the rope on the guide (resisting retraction), N."""
+        """Pull of the rope on the guide (resisting retraction), N: the outside load if given, else the
+        stand-in object's wrap."""
+        if self._guide_load_n is not None:
+            self.rope_tension_n = self._guide_load_n / self.params.rope_per_guide_mm
+            return self._guide_load_n
         c = self.object_circumference_m
         if c is None:
             self.rope_tension_n = 0.0

@@ -2,7 +2,6 @@
 
 - chain_bridge.ChainBridge: steps the ChainPlant in lockstep with a SilSession and couples the chain's
   loads back into the spindle and drive plants (the coupling law is in its docstring).
-- loaded_spindle.ChainLoadedSpindlePlant: the spindle plant whose guide load comes from the chain.
 - base_trajectory.BaseTrajectory: the robot's leg (module pose over time).
 - catalogue: the scenarios by name; runner.run_scenario(name, seed=...) -> ScenarioOutcome.
 - table_i_sil: Table I through the firmware-driven scenarios (docs/table_i.md).

@@ -18,17 +18,18 @@ Chain -> plants (the coupling law):
     objects push on the loop goes through the rope into the device. Both strands pass over the guide
     (rope_per_guide_mm = 2): a loop pulling an object with F carries about F / 2 in each strand and pulls
     the guide with about F (virtual work: F dx = T 2 dx). The spindle plant turns it into the torque
-    resisting retraction (ChainLoadedSpindlePlant: / lead, / screw efficiency, self-locking), which is
+    resisting retraction (SpindleInputs.guide_load_n: / lead, / screw efficiency, self-locking), which is
     what the AX-12A's present-load register shows the firmware; so RETRACT ends on LOAD_SECURED only
     when the chain really pulls that hard (grasp_secure_load_pct, 12 % by default: about 36 N on the
     guide). The chain's closure force (PlantOutputs.rope_tension_n) is not used: the soft closure
     constraint on the light links carries little of a grasp's load (docs/chain_model.md).
   * Drive rope load (N) = rope_axial_friction x (sum of the normal contact forces of the chain on the
     objects and on the floor): Coulomb friction along a rope that runs through its contacts, felt by
-    the wheels as DrivePlant.external_rope_load_n (it opposes the rope's motion, zero when the rope
+    the wheels as DriveInputs.external_rope_load_n (it opposes the rope's motion, zero when the rope
     stands). With a 0.44 g rope this is a few mN lying on the floor; it matters when the loop runs
     over an object it presses on.
-Both loads are held between chain steps; the firmware sees them one tick after the chain step that
+Both loads are held between chain steps in the session's ``loads`` (PlantLoads), which the session hands the
+plants as their inputs (the plant contract); the firmware sees them one tick after the chain step that
 produced them (the lockstep delay, 1 ms).
 
 Determinism: the chain has no random inputs after its seeded construction, the SIL is lockstep, so the
@@ -43,7 +44,6 @@ import numpy as np
 
 from robowrangler_sim.chain.plant import ChainPlant, PlantInputs
 from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory
-from robowrangler_sim.scenarios.loaded_spindle import ChainLoadedSpindlePlant
 
 DEFAULT_ROPE_AXIAL_FRICTION = 0.3
 """Coulomb friction coefficient of the rope sliding along its own axis over a contact (= rope_friction)."""
@@ -53,8 +53,8 @@ class ChainBridge:
     """Couples a ChainPlant to a SilSession (see module doc for the law and units).
 
     Args:
-        sil: the session; its spindle must be a ChainLoadedSpindlePlant
-            (``SilSession(spindle=ChainLoadedSpindlePlant, ...)``).
+        sil: the session (a SilSession); from construction on, the chain's loads replace the spindle plant's
+            stand-in object (``sil.loads.guide_load_n`` is set).
         chain: the chain plant, built with the trajectory's start pose.
         trajectory: the module's pose over simulated time.
         rope_axial_friction: friction coefficient for the drive's rope load (dimensionless, >= 0).
@@ -65,9 +65,6 @@ class ChainBridge:
 
     def __init__(self, sil, chain: ChainPlant, trajectory: BaseTrajectory, *,
                  rope_axial_friction: float = DEFAULT_ROPE_AXIAL_FRICTION) -> None:
-        if not isinstance(sil.spindle, ChainLoadedSpindlePlant):
-            raise TypeError(f"sil.spindle: expected a ChainLoadedSpindlePlant (SilSession(spindle=ChainLoadedSpindlePlant)), "
-                            f"got {type(sil.spindle).__name__}")
         if not (math.isfinite(rope_axial_friction) and rope_axial_friction >= 0):
             raise ValueError(f"rope_axial_friction: expected a finite value >= 0, got {rope_axial_friction!r}")
         self.sil = sil
@@ -80,6 +77,7 @@ class ChainBridge:
         self.chain_steps = 0
         self._h_s = chain.params.timestep_s
         self._stroke_mm = chain.params.guide_stroke_mm
+        sil.loads.guide_load_n = 0.0  # the chain pulls on the guide from now on, not the stand-in object
 
     def install(self) -> ChainBridge:
         self.sil.tick_hooks.append(self)
@@ -87,8 +85,8 @@ class ChainBridge:
 
     def inputs_at(self, t_s: float) -> PlantInputs:
         """The chain's inputs for a step starting at t_s, from the plants' present state."""
-        guide = min(max(self.sil.spindle.guide_position_mm, 0.0), self._stroke_mm)
-        return PlantInputs(rope_speed_mps=self.sil.plant.rope_speed_mps, guide_position_mm=guide,
+        guide = min(max(self.sil.spindle_out.guide_position_mm, 0.0), self._stroke_mm)
+        return PlantInputs(rope_speed_mps=self.sil.drive_out.rope_speed_mps, guide_position_mm=guide,
                            base_pos_m=tuple(self.trajectory.pos_at(t_s)), base_quat_wxyz=self.trajectory.quat_wxyz)
 
     def __call__(self, sil) -> None:
@@ -111,6 +109,6 @@ class ChainBridge:
         self.peak_guide_load_n = max(self.peak_guide_load_n, self.guide_load_n)
         self.drive_load_n = self.rope_axial_friction * (sum(contacts.chain_on_object_n.values())
                                                         + contacts.chain_on_floor_n)
-        self.sil.spindle.guide_load_n = self.guide_load_n
-        self.sil.plant.external_rope_load_n = self.drive_load_n
+        self.sil.loads.guide_load_n = self.guide_load_n
+        self.sil.loads.external_rope_load_n = self.drive_load_n
 

@@ -60,7 +60,6 @@ from robowrangler_sim.chain.secured import SecuredMonitor
 from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory
 from robowrangler_sim.scenarios.catalogue import ScenarioError, ScenarioSpec, get_scenario
 from robowrangler_sim.scenarios.chain_bridge import ChainBridge
-from robowrangler_sim.scenarios.loaded_spindle import ChainLoadedSpindlePlant
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 from robowrangler_sim.sil.session import SilSession
 
@@ -171,8 +170,8 @@ class _Run:
             placement, start = self._door_geometry(obj)
         self.trajectory = BaseTrajectory(start_pos_m=start, quat_wxyz=quat)
         self.placement = placement
-        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0, spindle=ChainLoadedSpindlePlant)
-        guide = min(max(self.sil.spindle.guide_position_mm, 0.0), self.params.guide_stroke_mm)
+        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0)
+        guide = min(max(self.sil.spindle_out.guide_position_mm, 0.0), self.params.guide_stroke_mm)
         self.chain = ChainPlant(table=self.table, params=self.params, objects=(placement,), floor_height_m=0.0,
                                 initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=guide,
                                                     base_pos_m=tuple(start), base_quat_wxyz=quat),
@@ -216,7 +215,7 @@ class _Run:
         self.host.tick()
         if self.watch is not None:
             self.watch(self.chain)
-        t_us = self.sil.plant.time_us
+        t_us = self.sil.drive_out.time_us
         if t_us >= self._next_sample_us:
             self._next_sample_us += self.sample_us
             self._sample()
@@ -224,19 +223,19 @@ class _Run:
             self._next_report_s += 2.0
             tel = self.host.last_telemetry
             state = gen.State(tel.state).name if tel is not None else "-"
-            self.note(f"{self.phase:9s} state {state:9s} rope {self.sil.plant.rope_speed_mps:5.2f} m/s, guide "
-                      f"{self.sil.spindle.guide_position_mm:6.1f} mm, load {self.bridge.guide_load_n:6.2f} N, "
+            self.note(f"{self.phase:9s} state {state:9s} rope {self.sil.drive_out.rope_speed_mps:5.2f} m/s, guide "
+                      f"{self.sil.spindle_out.guide_position_mm:6.1f} mm, load {self.bridge.guide_load_n:6.2f} N, "
                       f"lift {self.chain.lift:4.2f}")
 
     def run_for(self, duration_s: float) -> None:
-        end_us = self.sil.plant.time_us + round(duration_s * 1e6)
-        while self.sil.plant.time_us < end_us:
+        end_us = self.sil.drive_out.time_us + round(duration_s * 1e6)
+        while self.sil.drive_out.time_us < end_us:
             self.tick()
 
     def run_until(self, predicate, *, timeout_s: float, what: str) -> None:
-        end_us = self.sil.plant.time_us + round(timeout_s * 1e6)
+        end_us = self.sil.drive_out.time_us + round(timeout_s * 1e6)
         while not predicate():
-            if self.sil.plant.time_us >= end_us:
+            if self.sil.drive_out.time_us >= end_us:
                 raise _FirmwareStopped(f"{what} not reached within {timeout_s:g} s")
             self.tick()
 
@@ -267,7 +266,7 @@ class _Run:
             self.outcome.door_opening_deg = opening_deg
         self.outcome.trace.append(dict(
             time_s=self.sil.time_s, phase=self.phase, state=None if tel is None else int(tel.state),
-            rope_speed_mps=self.sil.plant.rope_speed_mps, guide_mm=self.sil.spindle.guide_position_mm,
+            rope_speed_mps=self.sil.drive_out.rope_speed_mps, guide_mm=self.sil.spindle_out.guide_position_mm,
             guide_load_n=self.bridge.guide_load_n,
             spindle_load_permille=None if tel is None else int(tel.spindle_load_permille),
             base_pos_m=base, object_com_m=com, chain_force_n=force,
@@ -346,9 +345,9 @@ class _Run:
         end = next(e for e in self._state_events()[n_before:]
                    if e.state_from == gen.State.RETRACT or e.state_to in (gen.State.FAULT, gen.State.ESTOP))
         self.outcome.grasp_end = gen.Cause(end.arg).name
-        self.outcome.guide_at_grasp_end_mm = self.sil.spindle.guide_position_mm
+        self.outcome.guide_at_grasp_end_mm = self.sil.spindle_out.guide_position_mm
         self.note(f"RETRACT ended: {gen.Cause(end.arg).name} -> {gen.State(end.state_to).name} at guide "
-                  f"{self.sil.spindle.guide_position_mm:.1f} mm, load {self.bridge.guide_load_n:.2f} N")
+                  f"{self.sil.spindle_out.guide_position_mm:.1f} mm, load {self.bridge.guide_load_n:.2f} N")
         if end.state_to in (gen.State.FAULT, gen.State.ESTOP):
             raise _FirmwareStopped(f"RETRACT ended in {gen.State(end.state_to).name}")
         self.phase = "hold"

@@ -81,9 +81,9 @@ class EscNotResponding(_WindowedFault):
 
     def __call__(self, pulse_us: int) -> int:
         sil = self._sil
-        if sil is None or not self.active_at(sil.plant.time_us):
+        if sil is None or not self.active_at(sil.drive_out.time_us):
             return pulse_us
-        return round(sil.plant.params.esc_min_pulse_us)
+        return round(sil.drive.params.esc_min_pulse_us)
 
     def install(self, sil: SilSession) -> EscNotResponding:
         self._sil = sil
@@ -109,15 +109,15 @@ class RopeBreak(_WindowedFault):
         self.drag_before_n: float | None = None
 
     def __call__(self, sensors: SensorValues | None) -> SensorValues | None:
-        plant = self._sil.plant
-        if self.active_at(plant.time_us):
+        sil = self._sil
+        out = sil.drive_out
+        if self.active_at(out.time_us):
             if self.drag_before_n is None:
-                self.drag_before_n = plant.rope_drag_n
-            plant.external_rope_load_n = 0.0
-            plant.rope_exposed_length_m = 0.0
-            spindle = getattr(self._sil, "spindle", None)
-            if spindle is not None:
-                spindle.object_circumference_m = None
+                self.drag_before_n = out.rope_drag_n
+            sil.loads.external_rope_load_n = 0.0
+            sil.loads.rope_exposed_length_m = 0.0
+            sil.loads.guide_load_n = None
+            sil.spindle.object_circumference_m = None
         return sensors
 
     def install(self, sil: SilSession) -> RopeBreak:
@@ -148,22 +148,24 @@ class BatterySag(_WindowedFault):
         self.ramp_s = float(ramp_s)
         self._sil: SilSession | None = None
         self._aux0_a: float | None = None
+        self._loads_aux0_a: float | None = None
         self._start_v: float | None = None
 
     def __call__(self, sensors: SensorValues | None) -> SensorValues | None:
-        plant = self._sil.plant
-        now_us = plant.time_us
+        sil = self._sil
+        out = sil.drive_out
+        now_us = out.time_us
         if self.active_at(now_us):
-            p = plant.params
+            r_int_ohm = sil.drive.params.battery_internal_resistance_ohm
             if self._aux0_a is None:
-                self._aux0_a = plant.battery_aux_current_a
-                self._start_v = plant.battery_open_circuit_v - p.battery_internal_resistance_ohm * self._aux0_a
+                self._aux0_a = out.battery_aux_current_a
+                self._loads_aux0_a = sil.loads.battery_aux_current_a
+                self._start_v = out.battery_open_circuit_v - r_int_ohm * self._aux0_a
             frac = min(1.0, (now_us - self.start_us) * 1e-6 / self.ramp_s)
             want_v = self._start_v + frac * (self.target_v - self._start_v)
-            plant.battery_aux_current_a = max(0.0, (plant.battery_open_circuit_v - want_v)
-                                              / p.battery_internal_resistance_ohm)
+            sil.loads.battery_aux_current_a = max(0.0, (out.battery_open_circuit_v - want_v) / r_int_ohm)
         elif self._aux0_a is not None:
-            plant.battery_aux_current_a = self._aux0_a
+            sil.loads.battery_aux_current_a = self._loads_aux0_a
             self._aux0_a = None
         return sensors
 
@@ -184,7 +186,7 @@ class SpindleStall(_WindowedFault):
         self._sil: SilSession | None = None
 
     def __call__(self, sensors: SensorValues | None) -> SensorValues | None:
-        self._sil.spindle.stalled = self.active_at(self._sil.plant.time_us)
+        self._sil.spindle.stalled = self.active_at(self._sil.drive_out.time_us)
         return sensors
 
     def install(self, sil: SilSession) -> SpindleStall:

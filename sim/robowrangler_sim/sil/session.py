@@ -1,7 +1,8 @@
-"""A SIL session: the firmware process, the drive plant and the lockstep between them.
+"""A SIL session: the firmware process, the drive and spindle plants and the lockstep between them.
 
-The plant owns the clock: each tick the session sends the plant's sensor values at time t, the firmware
-runs one control tick and answers with its ESC pulse, and the plant integrates [t, t + tick). Nothing
+The plant owns the clock: each tick the session sends the plants' sensor values at time t, the firmware
+runs one control tick and answers with its ESC pulse and spindle command, and the plants integrate
+[t, t + tick) through the plant contract (plants/contract.py: ``update(inputs, dt_s) -> outputs``). Nothing
 depends on the wall clock, so the same seed and the same host frames at the same ticks give the same
 telemetry at any pacing. Pacing (``speedup``): 1.0 is real time, 10.0 ten times faster, None as fast
 as the machine goes.
@@ -18,12 +19,15 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from robowrangler.protocol.generated import KEY_LEN
 from robowrangler.telemetry import ProvisionStatus
 from robowrangler.transport_serial import SerialTransport
 from robowrangler_sim.plants import DriveParams, DrivePlant
-from robowrangler_sim.plants.spindle import SpindleParams, SpindlePlant
+from robowrangler_sim.plants.contract import Plant
+from robowrangler_sim.plants.drive import DriveInputs, DriveOutputs
+from robowrangler_sim.plants.spindle import SpindleInputs, SpindleOutputs, SpindleParams, SpindlePlant
 from robowrangler_sim.sil.errors import SilError, SilFirmwareError
 from robowrangler_sim.sil.firmware import FirmwareProcess
 from robowrangler_sim.sil.lockstep import LockstepLink
@@ -68,30 +72,53 @@ TickHook = Callable[["SilSession"], None]
 """Per tick, after the drive and spindle plants stepped: couples another plant (e.g. the rope chain) in lockstep."""
 
 
-def _make_spindle(spindle, spindle_params: SpindleParams | None, seed: int) -> SpindlePlant:
-    """The session's spindle plant from SilSession's ``spindle`` argument (see there)."""
-    if spindle is None:
-        return SpindlePlant(spindle_params, seed=seed)
-    if isinstance(spindle, SpindlePlant):
-        if spindle_params is not None and spindle.params != spindle_params:
-            raise ValueError("spindle: expected a SpindlePlant built with spindle_params (or spindle_params=None), "
-                             f"got one with {spindle.params!r}")
-        return spindle
-    if callable(spindle):
-        made = spindle(spindle_params, seed=seed)
-        if not isinstance(made, SpindlePlant):
-            raise TypeError(f"spindle: expected the factory to return a SpindlePlant, got {type(made).__name__}")
+@dataclass
+class PlantLoads:
+    """What the scene applies to the plants, held until changed (set between ticks: at(), tick hooks, tests).
+
+    Attributes:
+        external_rope_load_n: disturbance force on the rope, N (>= 0), opposing its motion (DriveInputs).
+        battery_aux_current_a: other loads on the pack, A; None: the drive params' value (DriveInputs).
+        guide_load_n: the rope's pull on the guide from another plant (the rope chain), N; None: the spindle
+            plant's own stand-in object (SpindleInputs).
+        rope_exposed_length_m: rope in moving air, m (DriveInputs); None: the spindle's loop length (clamped to
+            0.05 m .. the drive's rope_loop_length_m). 0: no rope flies (a broken rope).
+    """
+
+    external_rope_load_n: float = 0.0
+    battery_aux_current_a: float | None = None
+    guide_load_n: float | None = None
+    rope_exposed_length_m: float | None = None
+
+
+def _make_plant(kind: str, given: Any, params: Any, seed: int, default_cls: type) -> Any:
+    """A session plant from SilSession's ``drive`` / ``spindle`` argument (see there)."""
+    if given is None:
+        return default_cls(params, seed=seed)
+    if isinstance(given, type) or (callable(given) and not isinstance(given, Plant)):
+        made = given(params, seed=seed)
+        if not isinstance(made, Plant):
+            raise TypeError(f"{kind}: expected the factory to return a plant meeting the plant contract "
+                            f"(update/outputs/reset), got {type(made).__name__}")
         return made
-    raise TypeError(f"spindle: expected None, a SpindlePlant or a factory(spindle_params, *, seed), "
-                    f"got {type(spindle).__name__}")
+    if isinstance(given, Plant):
+        if params is not None and getattr(given, "params", params) != params:
+            raise ValueError(f"{kind}: expected a plant built with {kind}_params (or {kind}_params=None), "
+                             f"got one with {given.params!r}")
+        return given
+    raise TypeError(f"{kind}: expected None, a plant meeting the plant contract (update/outputs/reset) or a "
+                    f"factory(params, *, seed), got {type(given).__name__}")
 
 
 class SilSession:
-    """Firmware + drive plant in lockstep. Use as a context manager, or start()/stop().
+    """Firmware + drive and spindle plants in lockstep. Use as a context manager, or start()/stop().
 
     Args:
         drive_params: drive plant parameters (defaults: AS2317-class motors, 3S LiPo, 15 mm wheels).
         spindle_params: spindle plant parameters (AX-12A, T8 lead screw, 180 mm stroke).
+        drive: the drive plant: None builds a DrivePlant(drive_params, seed=seed); a plant meeting the plant
+            contract with DriveInputs -> DriveOutputs (and a ``params`` DriveParams) is used as given; a callable
+            ``factory(drive_params, *, seed)`` (a plant class itself) is called with the session's params and seed.
         seed: plant noise seed.
         tick_us: control tick, microseconds (the firmware's period; 1000 = 1 kHz as on the board).
         speedup: pacing factor for run_for/background running; None = unpaced.
@@ -101,11 +128,14 @@ class SilSession:
             one; read it from ``key``). provision=False starts an unprovisioned device (it refuses WiFi).
         state_file: the SIL device's flash (configuration record, boot counter = session id); None: a file in
             a temporary folder removed at stop().
-        spindle: the spindle plant the firmware's servo bus drives: None builds a SpindlePlant(spindle_params,
-            seed=seed); a SpindlePlant (or subclass, e.g. the chain-loaded spindle of the wrangling scenarios)
-            is used as given; a callable ``factory(spindle_params, *, seed) -> SpindlePlant`` (a SpindlePlant
-            subclass itself, e.g. ``spindle=ChainLoadedSpindlePlant``) is called with the session's spindle_params
-            and seed (so the register noise follows the session's seed).
+        spindle: the spindle plant the firmware's servo bus drives, as ``drive`` (SpindleInputs -> SpindleOutputs;
+            None builds a SpindlePlant(spindle_params, seed=seed), so the register noise follows the seed).
+
+    Each tick the session composes the plants through the contract only: the drive gets DriveInputs (the
+    firmware's ESC pulse after the actuator filters, the scene's ``loads``, the rope exposed = the spindle's
+    loop length), the spindle SpindleInputs (the firmware's moving speed, ``loads.guide_load_n``); the sensors the
+    firmware sees and the trace come from their outputs (``drive_out``, ``spindle_out``). ``plant`` is the drive
+    plant (its older name).
 
     Fault hooks (fault injection at the HAL boundary, see plant_faults.py): ``sensor_filters`` and
     ``actuator_filters`` are lists of callables applied in order every tick. A sensor filter gets the
@@ -115,7 +145,7 @@ class SilSession:
     plant's ESC receives (applied on missed ticks too). Change the lists between steps or in at().
 
     Plant coupling (``tick_hooks``): callables hook(session) run every tick right after the drive and spindle
-    plants stepped, in order; a hook may read both plants and set their inputs for the next tick (see
+    plants stepped, in order; a hook may read their outputs and set ``loads`` for the next tick (see
     robowrangler_sim.scenarios.chain_bridge, which steps the rope chain this way).
     """
 
@@ -124,13 +154,18 @@ class SilSession:
                  speedup: float | None = 1.0, cmd_port: int = 0, trace_every: int = 10,
                  plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
                  state_file: str | Path | None = None,
-                 spindle: SpindlePlant | Callable[..., SpindlePlant] | None = None) -> None:
+                 drive: Plant | Callable[..., Plant] | None = None,
+                 spindle: Plant | Callable[..., Plant] | None = None) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
             raise ValueError(f"speedup: expected a positive factor or None (unpaced), got {speedup!r}")
-        self.plant = DrivePlant(drive_params, seed=seed)
-        self.spindle: SpindlePlant = _make_spindle(spindle, spindle_params, seed)
+        self.drive = _make_plant("drive", drive, drive_params, seed, DrivePlant)
+        self.spindle = _make_plant("spindle", spindle, spindle_params, seed, SpindlePlant)
+        self.loads = PlantLoads()
+        self.drive_out: DriveOutputs = self.drive.outputs()
+        self.spindle_out: SpindleOutputs = self.spindle.outputs()
+        self._rope_loop_length_m = self.drive.params.rope_loop_length_m
         self.last_spindle_speed_raw = 0
         self.tick_us = tick_us
         self.speedup = speedup
@@ -167,8 +202,13 @@ class SilSession:
         return f"udp://127.0.0.1:{self.cmd_port}"
 
     @property
+    def plant(self):
+        """The drive plant (its older name; ``drive``)."""
+        return self.drive
+
+    @property
     def time_s(self) -> float:
-        return self.plant.time_us * 1e-6
+        return self.drive_out.time_us * 1e-6
 
     @property
     def serial_path(self) -> str:
@@ -197,11 +237,10 @@ class SilSession:
         time.sleep(0.0005)  # the pseudo-terminal hands bytes over asynchronously
 
     def _read_sensors(self) -> SensorValues:
-        """What the plants show the firmware's HAL now."""
-        plant, spindle = self.plant, self.spindle
-        return SensorValues(plant.time_us, plant.encoder_counts, plant.encoder_last_edge_us,
-                            round(plant.battery_adc_v * 1000.0), spindle.position_raw, spindle.speed_raw,
-                            spindle.load_raw, spindle.answering, spindle.limit_switch)
+        """What the plants' outputs show the firmware's HAL now."""
+        d, sp = self.drive_out, self.spindle_out
+        return SensorValues(d.time_us, d.encoder_counts, d.encoder_last_edge_us, round(d.battery_adc_v * 1000.0),
+                            sp.position_raw, sp.speed_raw, sp.load_raw, sp.answering, sp.limit_switch)
 
     def _exchange(self, sensors: SensorValues, *, host_frames_sent: int):
         """One lockstep tick of the firmware with these sensor values; its SIL_ACTUATORS."""
@@ -241,8 +280,11 @@ class SilSession:
 
     def set_rope_load(self, load_n: float, *, at_s: float | None = None) -> None:
         """Apply an external rope load (N) now, or at simulated time at_s."""
+        if not (isinstance(load_n, (int, float)) and load_n >= 0.0 and load_n < float("inf")):
+            raise ValueError(f"load_n: expected a finite force >= 0 N, got {load_n!r}")
+
         def apply() -> None:
-            self.plant.external_rope_load_n = load_n
+            self.loads.external_rope_load_n = float(load_n)
         if at_s is None:
             self.at(self.time_s, apply)
         else:
@@ -252,12 +294,13 @@ class SilSession:
         """One control tick in lockstep."""
         if self._link is None:
             raise SilError("session not started: use `with SilSession(...) as sil:` or call start()")
-        plant = self.plant
+        now_us = self.drive_out.time_us
         with self._lock:
-            while self._actions and self._actions[0][0] <= plant.time_us:
+            while self._actions and self._actions[0][0] <= now_us:
                 _, _, action = heapq.heappop(self._actions)
                 action()
-        spindle = self.spindle
+        # the scene may have changed the servo between ticks (a fault: silent, stalled): its registers now
+        self.spindle_out = self.spindle.outputs()
         sensors: SensorValues | None = self._read_sensors()
         for sensor_filter in self.sensor_filters:
             sensors = sensor_filter(sensors)
@@ -276,37 +319,43 @@ class SilSession:
         plant_pulse_us = self.last_esc_pulse_us
         for actuator_filter in self.actuator_filters:
             plant_pulse_us = actuator_filter(plant_pulse_us)
-        plant.step_us(esc_pulse_us=float(plant_pulse_us), dt_us=self.tick_us)
-        spindle.moving_speed_raw = self.last_spindle_speed_raw
-        spindle.step(self.tick_us * 1e-6)
-        plant.rope_exposed_length_m = min(max(0.05, spindle.loop_length_m), plant.params.rope_loop_length_m)
+        loads, dt_s = self.loads, self.tick_us * 1e-6
+        exposed_m = (min(max(0.05, self.spindle_out.loop_length_m), self._rope_loop_length_m)
+                     if loads.rope_exposed_length_m is None else loads.rope_exposed_length_m)
+        self.drive_out = self.drive.update(DriveInputs(
+            esc_pulse_us=float(plant_pulse_us), external_rope_load_n=loads.external_rope_load_n,
+            rope_exposed_length_m=exposed_m, battery_aux_current_a=loads.battery_aux_current_a), dt_s)
+        self.spindle_out = self.spindle.update(SpindleInputs(moving_speed_raw=self.last_spindle_speed_raw,
+                                                             guide_load_n=loads.guide_load_n), dt_s)
         for hook in self.tick_hooks:
             hook(self)
         self.ticks += 1
         if self.trace_every and self.ticks % self.trace_every == 0:
-            self.trace.append(PlantSample(plant.time_us * 1e-6, plant.rope_speed_mps, self.last_esc_pulse_us,
-                                          plant.battery_v, plant.external_rope_load_n, plant.loop_airborne,
-                                          spindle.guide_position_mm, spindle.loop_length_m, spindle.rope_tension_n))
+            d, sp = self.drive_out, self.spindle_out
+            self.trace.append(PlantSample(d.time_us * 1e-6, d.rope_speed_mps, self.last_esc_pulse_us, d.battery_v,
+                                          d.external_rope_load_n, d.loop_airborne, sp.guide_position_mm,
+                                          sp.loop_length_m, sp.rope_tension_n))
         self._pace()
 
     def _pace(self) -> None:
         if self.speedup is None:
             return
         now = time.perf_counter()
+        now_us = self.drive_out.time_us
         if self._pace_origin is None:
-            self._pace_origin = (now, self.plant.time_us)
+            self._pace_origin = (now, now_us)
             return
         wall0, sim0_us = self._pace_origin
-        ahead_s = (self.plant.time_us - sim0_us) * 1e-6 / self.speedup - (now - wall0)
+        ahead_s = (now_us - sim0_us) * 1e-6 / self.speedup - (now - wall0)
         if ahead_s > 0.002:
             time.sleep(ahead_s)
         elif ahead_s < -0.5:
-            self._pace_origin = (now, self.plant.time_us)  # fell behind (machine busy): do not race to catch up
+            self._pace_origin = (now, now_us)  # fell behind (machine busy): do not race to catch up
 
     def run_for(self, duration_s: float, *, host_frames_sent: Callable[[], int] | None = None) -> None:
         """Step for duration_s simulated seconds at the session's pacing."""
-        end_us = self.plant.time_us + round(duration_s * 1e6)
-        while self.plant.time_us < end_us:
+        end_us = self.drive_out.time_us + round(duration_s * 1e6)
+        while self.drive_out.time_us < end_us:
             self.step(host_frames_sent=host_frames_sent() if host_frames_sent else 0)
 
     # ---------------------------------------------------------------------------------------------

@@ -1,8 +1,8 @@
 """Parameters of the first-principles string shooter: rope, air, nip, module geometry, numerics.
 
-Every number is SI and carries its unit in its name. The defaults are the RoboWrangler rope (wool,
-0.221 g/m) and are justified in docs/string_shooter.md; the drag coefficients are chosen so that the
-takeoff condition f_t(v*) = lambda g holds at v* = 2.6 m/s (DESIGN.md "Facts").
+Every number is SI and carries its unit in its name. The rope is the shared RopeParams (robowrangler_sim/rope.py:
+the RoboWrangler wool rope, 0.221 g/m, with C_f calibrated so that the takeoff condition f_t(v*) = lambda g holds
+at v* = 2.6 m/s in standard air); the other defaults are justified in docs/string_shooter.md.
 """
 
 from __future__ import annotations
@@ -12,7 +12,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-GRAVITY_MPS2 = 9.81
+# RopeParams is the one rope of every model (robowrangler_sim/rope.py); ShooterParams.rope holds it
+from robowrangler_sim.rope import GRAVITY_MPS2, STANDARD_AIR_DENSITY_KG_PER_M3, RopeParams
 
 
 class StringShooterParamError(ValueError):
@@ -28,49 +29,6 @@ def _check(name: str, value: float, *, low: float, high: float = math.inf, low_o
 
 
 @dataclass(frozen=True)
-class RopeParams:
-    """The rope.
-
-    Attributes:
-        linear_density_kg_per_m: lambda, mass per metre (0.221 g/m measured).
-        diameter_m: d, used for the drag areas (pi d per metre wetted, d per metre projected).
-        skin_friction_coeff: C_f of the axial (tangential) drag f_t = 0.5 rho C_f pi d |w_t| w_t.
-        normal_drag_coeff: C_n of the normal (pressure) drag f_n = 0.5 rho C_n d |w_n| w_n.
-        bending_stiffness_n_m2: B = EI.
-        bending_damping_s: internal (Kelvin-Voigt) bending damping as a time constant eta_B / B, seconds.
-        axial_stiffness_n: EA of the stiff axial spring (the rope is nearly inextensible).
-        compression_stiffness_ratio: fraction of EA that resists compression (a rope pushed out of
-            its guide tube resists a little before it buckles; 0 = pure string).
-        axial_damping_ratio: Kelvin-Voigt damping of the axial spring, as a ratio of critical damping of
-            the shortest (one-segment) axial mode.
-    """
-
-    linear_density_kg_per_m: float = 0.221e-3
-    diameter_m: float = 2.0e-3
-    skin_friction_coeff: float = 0.085
-    normal_drag_coeff: float = 1.2
-    bending_stiffness_n_m2: float = 5.0e-7
-    bending_damping_s: float = 0.002
-    axial_stiffness_n: float = 5.0
-    compression_stiffness_ratio: float = 0.01
-    axial_damping_ratio: float = 0.3
-
-    def __post_init__(self) -> None:
-        _check("compression_stiffness_ratio", self.compression_stiffness_ratio, low=0.0, high=1.0)
-        _check("linear_density_kg_per_m", self.linear_density_kg_per_m, low=0.0, low_open=True)
-        _check("diameter_m", self.diameter_m, low=0.0, low_open=True)
-        _check("skin_friction_coeff", self.skin_friction_coeff, low=0.0)
-        _check("normal_drag_coeff", self.normal_drag_coeff, low=0.0)
-        _check("bending_stiffness_n_m2", self.bending_stiffness_n_m2, low=0.0)
-        _check("bending_damping_s", self.bending_damping_s, low=0.0, high=1.0)
-        _check("axial_stiffness_n", self.axial_stiffness_n, low=0.0, low_open=True)
-        _check("axial_damping_ratio", self.axial_damping_ratio, low=0.0, high=1.0)
-
-    def with_(self, **changes) -> "RopeParams":
-        return replace(self, **changes)
-
-
-@dataclass(frozen=True)
 class AirParams:
     """Still air (plus an optional uniform wind).
 
@@ -79,7 +37,7 @@ class AirParams:
         wind_mps: shape (3,), uniform air velocity in the world frame.
     """
 
-    density_kg_per_m3: float = 1.2
+    density_kg_per_m3: float = STANDARD_AIR_DENSITY_KG_PER_M3
     wind_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
@@ -189,7 +147,4 @@ class ShooterParams:
 
 def takeoff_speed_estimate_mps(rope: RopeParams, air: AirParams, *, gravity_mps2: float = GRAVITY_MPS2) -> float:
     """v* from f_t(v*) = lambda g: sqrt(2 lambda g / (rho C_f pi d)); inf when there is no axial drag."""
-    k = air.density_kg_per_m3 * rope.skin_friction_coeff * math.pi * rope.diameter_m
-    if k <= 0:
-        return math.inf
-    return math.sqrt(2.0 * rope.linear_density_kg_per_m * gravity_mps2 / k)
+    return rope.takeoff_speed_mps(air_density_kg_per_m3=air.density_kg_per_m3, gravity_mps2=gravity_mps2)

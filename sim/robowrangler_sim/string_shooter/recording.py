@@ -193,7 +193,7 @@ class _Run:
     # ---------------------------------------------------------------------------------------------
     def _guide_travel_m(self) -> float:
         stroke_m = self.shooter_params.geometry.guide_stroke_m
-        return min(max(self.sil.spindle.guide_position_mm * 1e-3, 0.0), stroke_m)
+        return min(max(self.sil.spindle_out.guide_position_mm * 1e-3, 0.0), stroke_m)
 
     def run(self) -> RecordingSummary:
         wall0 = self._wall0 = self._last_progress = time.perf_counter()
@@ -202,13 +202,13 @@ class _Run:
                         speedup=None, trace_every=0, key=sil_key_for_seed(self.seed)) as sil:
             self.sil = sil
             travel0 = self._guide_travel_m()
-            self.window = _DriveWindow(0.0, sil.plant.rope_speed_mps, travel0)
+            self.window = _DriveWindow(0.0, sil.drive_out.rope_speed_mps, travel0)
             motion = ModuleMotion(wheel_speed_mps=self.window.wheel_speed_mps, phi_rad=script.phi_rad,
                                   guide_travel_m=self.window.guide_travel_m)
-            self.shooter = StringShooter(self.shooter_params, loop_length_m=sil.spindle.loop_length_m,
+            self.shooter = StringShooter(self.shooter_params, loop_length_m=sil.spindle_out.loop_length_m,
                                          motion=motion, initial_shape="hanging", initial_rope_speed_mps=0.0)
             writer = RecordingWriter(self.path, source="sil", seed=self.seed, time_base="simulation",
-                                     clock_ns=lambda: sil.plant.time_us * 1000,
+                                     clock_ns=lambda: sil.drive_out.time_us * 1000,
                                      description="string shooter (first-principles rope) driven by the SIL "
                                                  f"firmware; camera {CAMERA_ID} at {1 / self.camera_period_s:g} Hz")
             self.writer = writer
@@ -221,11 +221,11 @@ class _Run:
                     self._read_params(host)
                 for cmd in script.commands:
                     at_us = round(cmd.at_s * 1e6)
-                    while sil.plant.time_us < at_us:
+                    while sil.drive_out.time_us < at_us:
                         host.tick()
                     host.send(cmd.message)
                 end_us = round(script.duration_s * 1e6)
-                while sil.plant.time_us < end_us:
+                while sil.drive_out.time_us < end_us:
                     host.tick()
                 recorder.finish(host_s=sil.time_s)
                 host.close()
@@ -270,7 +270,7 @@ class _Run:
     def _after_tick(self) -> None:
         sil = self.sil
         t_s = sil.time_s
-        self.window.append(t_s, sil.plant.rope_speed_mps, self._guide_travel_m())
+        self.window.append(t_s, sil.drive_out.rope_speed_mps, self._guide_travel_m())
         self._emit_due(t_s)
         if self.progress is not None and sil.ticks % 200 == 0:
             now = time.perf_counter()
@@ -314,7 +314,7 @@ class _Run:
             self.first_airborne_s = t_s
 
     def _write_truth(self, frame: Frame, t_s: float, loop_length_m: float) -> None:
-        sil, plant = self.sil, self.sil.plant
+        sil, plant = self.sil, self.sil.drive_out
         xz = frame.loop_plane_xz_m()
         record = {
             "time_s": t_s, "rope_speed_mps": plant.rope_speed_mps, "esc_pulse_us": float(sil.last_esc_pulse_us),
@@ -324,7 +324,7 @@ class _Run:
             "nip_traction_n": frame.traction_n, "exit_tension_n": frame.exit_tension_n,
             "return_tension_n": frame.return_tension_n, "loop_length_m": loop_length_m,
             "loop_depth_m": float(-np.min(xz[:, 1])), "loop_reach_m": float(np.max(xz[:, 0])),
-            "guide_position_m": sil.spindle.guide_position_mm * 1e-3, "phi_rad": frame.phi_rad,
+            "guide_position_m": sil.spindle_out.guide_position_mm * 1e-3, "phi_rad": frame.phi_rad,
         }
         self.writer.write("/sim/plant_truth", record, log_time_ns=round(t_s * 1e9))
 
@@ -334,7 +334,7 @@ class _Run:
         live = bool(getattr(self.progress, "isatty", lambda: False)())  # a terminal: one line, rewritten
         print(f"{chr(13) if live else ''}  recording {self.path.name}: t = {sil.time_s:6.2f} / "
               f"{self.script.duration_s:.2f} s sim, "
-              f"state {rec.latest_state or '-'}, rope {sil.plant.rope_speed_mps:5.2f} m/s, "
+              f"state {rec.latest_state or '-'}, rope {sil.drive_out.rope_speed_mps:5.2f} m/s, "
               f"loop {'flying ' if self.loop_airborne else 'hanging'}, {rec.telemetry_count} telemetry, "
               f"{self.observations} frames, {sil.time_s / wall_s:5.2f} sim s/wall s",
               end="" if live and not final else "\n", file=self.progress, flush=True)

@@ -1,7 +1,7 @@
 """Simulation commands: `wrangler sil` (a SIL device on UDP) and `wrangler demo` (the end-to-end demo).
 
-They need the simulator package (robowrangler_sim) and the native SIL build; both are imported only when
-these commands run, so the rest of the CLI works on a host without them.
+Plugins of `wrangler` from the simulator distribution (robowrangler-sim, entry point group `robowrangler.cli`):
+the host package never imports this module. The native SIL build is looked up when a command runs.
 """
 
 from __future__ import annotations
@@ -27,10 +27,8 @@ class ScenarioFailed(RoboWranglerError):
 
 
 def _scenario_names() -> tuple[str, ...]:
-    try:
-        from robowrangler_sim.scenarios.catalogue import scenario_names
-    except ImportError:  # pragma: no cover - only without the sim package
-        return ()
+    from robowrangler_sim.scenarios.catalogue import scenario_names
+
     return scenario_names()
 
 
@@ -62,10 +60,8 @@ class ScenarioName(click.ParamType):
 
 
 def _sil_modules():
-    try:
-        from robowrangler_sim import demo, sil
-    except ImportError as exc:  # pragma: no cover - only without the sim package
-        raise SimulatorUnavailable(f"the simulator package is not installed ({exc}); run ./run.sh demo") from exc
+    from robowrangler_sim import demo, sil
+
     return sil, demo
 
 
