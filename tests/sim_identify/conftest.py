@@ -71,3 +71,9 @@ def rewrite_manifest(src: PhotoSetFixture, dst: Path, *, keep=None, **changes) -
 def manifest_copy():
     """rewrite_manifest, for the tests (conftest modules are not importable under --import-mode=importlib)."""
     return rewrite_manifest
+
+
+@pytest.fixture(scope="session")
+def small_setup() -> PhotoSetup:
+    """The camera and scene of the test photo sets."""
+    return SMALL_SETUP

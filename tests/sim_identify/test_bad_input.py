@@ -113,19 +113,3 @@ def test_marker_not_in_photo(photo_set, tmp_path, manifest_copy):
                                 calibration={"marker": {"side_m": 0.15, "id": 7}})
     with pytest.raises(CalibrationError, match=r"marker DICT_4X4_50 id 7 not found in the photo \(found ids \[0\]\)"):
         identify_manifest(manifest, workers=1)
-
-
-def test_failed_identification_leaves_no_table(photo_set, tmp_path, manifest_copy):
-    from robowrangler_sim.cli.identify import identify_command
-
-    good = manifest_copy(photo_set, tmp_path / "g", keep=(-30.0, -20.0))
-    data = json.loads(good.read_text())
-    shutil.copy(photo_set.folder / "loop_phi-20.0_v5.0.png", tmp_path / "g" / "copy.png")
-    data["photos"][1]["file"] = str(tmp_path / "g" / "garbage.png")
-    (tmp_path / "g" / "garbage.png").write_bytes(b"\x89PNG broken")
-    good.write_text(json.dumps(data))
-    out = tmp_path / "table.json"
-    with pytest.raises(PhotoUnreadable):
-        identify_command.main([str(good), "--out", str(out)], standalone_mode=False)
-    assert not out.exists()
-    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".table")] == []
