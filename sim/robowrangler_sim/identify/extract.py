@@ -17,7 +17,8 @@ from robowrangler_sim.identify.binarise import binarise, rope_response
 from robowrangler_sim.identify.calibration import PlaneCalibration, calibration_for_photo
 from robowrangler_sim.identify.centreline import (ordered_centre_line, refine_centre_line, resample_polyline,
                                                   trim_ends)
-from robowrangler_sim.identify.errors import CalibrationError, ManifestError, SeveralLoops
+from robowrangler_sim.identify.errors import CalibrationError, ManifestError, NoLoopFound, SeveralLoops
+from robowrangler_sim.identify.gaps import bridge_gaps
 from robowrangler_sim.identify.loop_finder import find_loop
 from robowrangler_sim.identify.photos import PhotoEntry, read_gray
 
@@ -36,6 +37,7 @@ class ExtractOptions:
         touch_radius_m: the loop must come this close to the exit point (the module hides the rest).
         max_rope_width_m: wider components are not rope.
         min_loop_length_m: shorter components are not the loop.
+        max_gap_m: longest gap in the rope bridged when the loop is found only in pieces (gaps.py); 0: never.
         end_trim_m: rope dropped at each end of the visible band before joining it to the exit and the
             return point with straight lines (near the module, its edges and the converging branches
             disturb the band; the rope there runs straight).
@@ -48,6 +50,7 @@ class ExtractOptions:
     max_rope_width_m: float = 0.02
     min_loop_length_m: float = 0.3
     end_trim_m: float = 0.02
+    max_gap_m: float = 0.2
     dense_spacing_m: float = 1.0e-3
 
 
@@ -63,6 +66,7 @@ class PhotoResult:
         loop_length_m: the contour's arc length.
         exit_plane_m: shape (2,), the exit in the calibration's plane frame; sense: +1 if the table's x is
             the plane's X, -1 if mirrored (robot on the right).
+        gaps_bridged: gaps in the rope bridged to close the loop (gaps.py).
     """
 
     entry: PhotoEntry
@@ -72,6 +76,7 @@ class PhotoResult:
     loop_length_m: float
     exit_plane_m: np.ndarray
     sense: float
+    gaps_bridged: int = 0
 
     def table_to_image(self, points_m: np.ndarray) -> np.ndarray:
         """Table-frame points (K, 2) -> image pixels (K, 2) of this photo."""
@@ -105,9 +110,19 @@ def extract_photo(entry: PhotoEntry, calibration_spec: dict, *, options: Extract
     rope_px = max(opt.rope_width_m / mpp, 2.0)
     response = rope_response(gray, rope_width_px=rope_px, polarity=opt.rope_polarity)
     mask = binarise(response)
-    loop = find_loop(mask, entry.exit_px, touch_radius_px=opt.touch_radius_m / mpp,
-                     min_length_px=opt.min_loop_length_m / mpp, max_width_px=opt.max_rope_width_m / mpp,
-                     rope_width_px=rope_px, path=path)
+    find = dict(touch_radius_px=opt.touch_radius_m / mpp, min_length_px=opt.min_loop_length_m / mpp,
+                max_width_px=opt.max_rope_width_m / mpp, rope_width_px=rope_px, path=path)
+    bridges = 0
+    try:
+        loop = find_loop(mask, entry.exit_px, **find)
+    except NoLoopFound:
+        if opt.max_gap_m <= 0:
+            raise
+        mask, bridges = bridge_gaps(mask, rope_width_px=rope_px, max_gap_px=opt.max_gap_m / mpp,
+                                    min_piece_px=0.03 / mpp, max_width_px=opt.max_rope_width_m / mpp)
+        if bridges == 0:
+            raise
+        loop = find_loop(mask, entry.exit_px, **find)
     u0, v0 = loop.origin_px
     hh, ww = loop.mask.shape
     coarse, spread = ordered_centre_line(loop.band, response[v0:v0 + hh, u0:u0 + ww])
@@ -137,4 +152,4 @@ def extract_photo(entry: PhotoEntry, calibration_spec: dict, *, options: Extract
     dense = resample_polyline(poly, opt.dense_spacing_m)
     length = float(np.sum(np.linalg.norm(np.diff(dense, axis=0), axis=1)))
     return PhotoResult(entry=entry, calibration=cal, centre_line_px=line_px, contour_m=dense, loop_length_m=length,
-                       exit_plane_m=exit_plane, sense=sense)
+                       exit_plane_m=exit_plane, sense=sense, gaps_bridged=bridges)
