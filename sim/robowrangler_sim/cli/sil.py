@@ -89,10 +89,13 @@ def _sil_modules():
 @click.option("--viewer", is_flag=True,
               help="With --scenario: watch the run in MuJoCo's interactive viewer, paced by --speedup (--unpaced: as "
                    "fast as it goes). Needs a display (DISPLAY or WAYLAND_DISPLAY) and MUJOCO_GL unset or glfw.")
+@click.option("--shape-table", "shape_table", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="With --scenario: the rope chain's shape table (JSON, e.g. from `wrangler identify`) instead of "
+                   "the shipped default.")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
                 duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
-                render_dir: str | None, viewer: bool, model_file: str | None = None) -> None:
+                render_dir: str | None, viewer: bool, shape_table: str | None, model_file: str | None = None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
@@ -110,9 +113,15 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     if viewer and render_dir is not None:
         raise click.UsageError("--viewer and --render cannot be combined: MuJoCo uses one OpenGL backend per process "
                                "(GLFW windows for --viewer, headless OSMesa for --render)")
+    table = None
+    if shape_table is not None:
+        if scenario is None:
+            raise click.UsageError("--shape-table needs --scenario (the shape table drives the rope chain, which only "
+                                   "a scenario simulates)")
+        table = _load_shape_table(shape_table)
     if scenario is not None:
         _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir, viewer=viewer,
-                      viewer_speedup=None if unpaced else speedup)
+                      viewer_speedup=None if unpaced else speedup, table=table)
         return
     if render_dir is not None:
         raise click.UsageError("--render needs --scenario")
@@ -151,8 +160,19 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
                f"SIL stopped after {session.time_s:.3f} simulated seconds")
 
 
+def _load_shape_table(path: str):
+    """The shape table at ``path``; a missing or malformed file is a usage error naming it."""
+    from robowrangler_sim.shape_table import ShapeTable, ShapeTableError
+
+    try:
+        return ShapeTable.load(path)
+    except (OSError, ShapeTableError) as exc:
+        detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise click.BadParameter(f"{path}: {detail}", param_hint="--shape-table") from exc
+
+
 def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None,
-                  viewer: bool = False, viewer_speedup: float | None = 1.0) -> None:
+                  viewer: bool = False, viewer_speedup: float | None = 1.0, table=None) -> None:
     watch = None
     if viewer:  # before anything runs (or imports MuJoCo's viewer): say what is missing
         from robowrangler_sim.scenarios.viewer import HEADLESS_HINT, ScenarioViewer, display_problem, glfw_problem
@@ -172,7 +192,7 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
 
     try:
         outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
-                               watch=watch)
+                               watch=watch, table=table)
     except ScenarioInterrupted as stop:
         ctx.note(_what_was_left(name, stop, render_dir))
         raise KeyboardInterrupt from None
@@ -196,7 +216,8 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
             "firmware_path": ["->".join(step[:2]) + f" ({step[2]})" for step in outcome.firmware_path],
             "diverged": outcome.diverged, "simulated_s": round(outcome.simulated_s, 3),
             "wall_s": round(outcome.wall_s, 2), "seed": seed, "links": n_links, "files": outcome.frames_written,
-            "viewer_updates": None if watch is None else watch.synced}
+            "viewer_updates": None if watch is None else watch.synced,
+            "shape_table": outcome.shape_table_source}
     files = f"; {len(outcome.frames_written)} files in {render_dir}" if outcome.frames_written else ""
     path = outcome.firmware_path
     states = " -> ".join([path[0][0]] + [f"{to} ({cause})" for _, to, cause in path]) if path else "-"
