@@ -149,6 +149,9 @@ static verdict cmd_param_set(rw_core *core, const rw_msg_param_set *msg)
         }
     }
     int result = rw_core_set_param(core, msg->param_id, msg->value);
+    if (result == RW_NACK_REASON_PARAM_CONFLICT) { /* detail: the other parameter of the rule */
+        return refuse((uint8_t)result, rw_params_conflict(&core->params, msg->param_id, msg->value));
+    }
     if (result != RW_DECODE_OK) {
         return refuse((uint8_t)result, msg->param_id);
     }

@@ -984,7 +984,7 @@ const rw_param_info rw_param_table[RW_PARAM_COUNT] = {
     { "arm_hold_s", 0.2f, 5.0f, 0.5f, RW_PARAM_FLAG_LOCKED },
     { "encoder_timeout_s", 0.02f, 2.0f, 0.25f, 0u },
     { "lead_mm_per_rev", 0.5f, 20.0f, 8.0f, RW_PARAM_FLAG_LOCKED },
-    { "guide_min_mm", 0.0f, 180.0f, 0.0f, 0u },
+    { "guide_min_mm", 0.0f, 179.0f, 0.0f, 0u },
     { "guide_max_mm", 1.0f, 180.0f, 180.0f, 0u },
     { "spindle_kp_per_s", 0.1f, 50.0f, 4.0f, 0u },
     { "spindle_max_speed_mmps", 0.5f, 15.0f, 6.0f, 0u },

@@ -73,8 +73,9 @@ typedef enum {
     RW_NACK_REASON_NO_KEY = 22, /* Never sent: the device has no key provisioned and drops every frame over WiFi but HELLO (SESSION_INFO says key_set 0) until one is set over USB serial. */
     RW_NACK_REASON_STORE_FAILED = 23, /* PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed. */
     RW_NACK_REASON_BURST_BUSY = 24, /* BURST_START while a burst is being captured or streamed; NACK.detail = samples still to capture plus samples still to send. */
+    RW_NACK_REASON_PARAM_CONFLICT = 25, /* PARAM_SET: the value is in range but breaks a rule between parameters (guide_min_mm < guide_max_mm; tov_mps x tov_margin <= max_rope_speed_mps); nothing changed. NACK.detail = the id of the other parameter of the rule. */
 } rw_nack_reason;
-#define RW_NACK_REASON_COUNT 25u
+#define RW_NACK_REASON_COUNT 26u
 
 /* Event kinds (EVENT.event). */
 typedef enum {
@@ -386,7 +387,7 @@ void rw_msg_param_get_pack(const rw_msg_param_get *msg, uint8_t *payload);
 void rw_msg_param_get_unpack(rw_msg_param_get *msg, const uint8_t *payload);
 size_t rw_msg_param_get_encode(const rw_msg_param_get *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED); answered by ACK then PARAM_VALUE. */
+/* PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED; checked with the parameters it must hold together with: PARAM_CONFLICT); answered by ACK then PARAM_VALUE. */
 #define RW_MSG_PARAM_SET_LEN 5u
 #define RW_MSG_PARAM_SET_CRC_EXTRA 0x5862u
 typedef struct {
@@ -643,7 +644,7 @@ typedef enum {
     RW_PARAM_RAMP_DOWN_MPS2 = 6, /* [m/s^2] Setpoint ramp when slowing down and for SPINDOWN. */
     RW_PARAM_WHEEL_RADIUS_M = 7, /* [m] Drive wheel radius (rope speed = 2 pi r x wheel rev/s). */
     RW_PARAM_ENCODER_COUNTS_PER_REV = 8, /* [counts/rev] Encoder edges per wheel revolution. */
-    RW_PARAM_HEARTBEAT_TIMEOUT_S = 9, /* [s] Host silence after which the device spins the rope down. */
+    RW_PARAM_HEARTBEAT_TIMEOUT_S = 9, /* [s] Host silence after which the device spins the rope down and stops the guide where it is: the rope and the guide move only while a host is alive. */
     RW_PARAM_MAX_ROPE_SPEED_MPS = 10, /* [m/s] Largest accepted SET_ROPE_SPEED. */
     RW_PARAM_MOTOR_KV_RPM_PER_V = 11, /* [rpm/V] Motor velocity constant, for the feed-forward throttle map. */
     RW_PARAM_ESC_MIN_US = 12, /* [us] ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher). */

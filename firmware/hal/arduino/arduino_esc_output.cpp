@@ -7,7 +7,13 @@
  *
  * A pulse write goes to the buffered compare registers CCB0/CCB1; the TCC copies them into CC0/CC1 at the
  * next overflow (UPDATE), so a period never mixes an old and a new width. Lock update (CTRLB.LUPD) is set
- * while both CCBs are written and cleared after, so both ESCs switch in the same period. */
+ * while both CCBs are written and cleared after, so both ESCs switch in the same period.
+ *
+ * The core's write (rw_hal_esc_output, inside the tick; microseconds or the timer's thirds of a microsecond)
+ * only stages the pulse, in counts; the tick interrupt applies it
+ * first thing in the next tick (rw_arduino_esc_output_apply), so the moment the registers are written is a
+ * fixed offset from the tick, whatever the previous tick did (a command, a telemetry frame): the ESC update
+ * has the jitter of the interrupt's entry only, for one tick (1 ms) of added, constant delay. */
 #include "arduino_esc_output.h"
 
 #include <Arduino.h>
@@ -29,14 +35,15 @@ void tcc1_sync(uint32_t mask)
     }
 }
 
-void write_esc(void *ctx, uint16_t pulse_us)
+void stage_esc(void *ctx, uint16_t pulse_us)
 {
-    rw_arduino_esc_output_write_us(static_cast<rw_arduino_esc_output *>(ctx), pulse_us);
+    static_cast<rw_arduino_esc_output *>(ctx)->staged_third_us =
+        static_cast<uint16_t>(static_cast<uint32_t>(pulse_us) * TCC_COUNTS_PER_US);
 }
 
-void write_esc_third(void *ctx, uint16_t pulse_third_us)
+void stage_esc_third(void *ctx, uint16_t pulse_third_us)
 {
-    rw_arduino_esc_output_write_third_us(static_cast<rw_arduino_esc_output *>(ctx), pulse_third_us);
+    static_cast<rw_arduino_esc_output *>(ctx)->staged_third_us = pulse_third_us;
 }
 
 } // namespace
@@ -50,6 +57,7 @@ bool rw_arduino_esc_output_begin(rw_arduino_esc_output *esc, uint16_t min_us, ui
     esc->max_us = max_us;
     esc->pulse_us = min_us;
     esc->pulse_counts = static_cast<uint32_t>(min_us) * TCC_COUNTS_PER_US;
+    esc->staged_third_us = static_cast<uint16_t>(esc->pulse_counts);
     esc->out_of_range = 0u;
 
     /* GCLK0 -> TCC0/TCC1 clock channel (the APB clock of TCC1 is enabled by the core's init()). */
@@ -129,11 +137,16 @@ void rw_arduino_esc_output_write_third_us(rw_arduino_esc_output *esc, uint16_t p
     esc->pulse_us = static_cast<uint16_t>(((counts + 1u) * 21846u) >> 16); /* / 3 rounded, no division on the M0+ */
 }
 
+void rw_arduino_esc_output_apply(rw_arduino_esc_output *esc)
+{
+    rw_arduino_esc_output_write_third_us(esc, esc->staged_third_us);
+}
+
 rw_hal_esc_output rw_arduino_esc_output_hal(rw_arduino_esc_output *esc)
 {
     rw_hal_esc_output hal;
     hal.ctx = esc;
-    hal.write_pulse_us = write_esc;
-    hal.write_pulse_third_us = write_esc_third;
+    hal.write_pulse_us = stage_esc;
+    hal.write_pulse_third_us = stage_esc_third;
     return hal;
 }

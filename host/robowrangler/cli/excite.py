@@ -12,7 +12,7 @@ import click
 
 from robowrangler.cli.context import CliContext, pass_context
 from robowrangler.cli.exit_status import ExitStatus
-from robowrangler.cli.record import _default_source
+from robowrangler.cli.record import check_recording_path, default_source
 from robowrangler.client import Client
 from robowrangler.excite.profile import Limits, check_limits, list_profiles, load_profile
 from robowrangler.excite.runner import run_profile
@@ -31,9 +31,10 @@ PROFILE_METADATA = "/excite/profile"
 @click.option("--source", type=click.Choice(["board", "sil", "other"]), default=None,
               help="What is recorded (meta source) [default: sil for a loopback UDP URL, else board].")
 @click.option("--description", default="", help="Free text stored in the meta record.")
+@click.option("--force", is_flag=True, help="Replace REC.mcap if it exists (refused otherwise, as `record` does).")
 @pass_context
 def excite(ctx: CliContext, profile_name: str, out: Path | None, list_only: bool, source: str | None,
-           description: str) -> ExitStatus:
+           description: str, force: bool) -> ExitStatus:
     """Run an excitation profile on the device and record it to REC.mcap.
 
     The profile is checked against the device's limits (ToV guard, top speed, guide stroke, burst size) before
@@ -49,7 +50,8 @@ def excite(ctx: CliContext, profile_name: str, out: Path | None, list_only: bool
         raise click.UsageError("--out REC.mcap is required (or --list)")
     profile = load_profile(profile_name)  # unknown or malformed: ProfileError (usage) before any link
     check_limits(profile, Limits.defaults())  # out of the default band: refused before connecting
-    with RecordingSession(out, source=source or _default_source(ctx.url), device_url=ctx.url,
+    check_recording_path(out, force=force)
+    with RecordingSession(out, source=source or default_source(ctx.url), device_url=ctx.url,
                           description=description or f"wrangler excite --profile {profile.name}") as recording:
         if profile.path is not None:
             recording.writer.add_metadata(PROFILE_METADATA, {"name": profile.name,

@@ -109,6 +109,8 @@ class NackReason(IntEnum):
     """PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed."""
     BURST_BUSY = 24
     """BURST_START while a burst is being captured or streamed; NACK.detail = samples still to capture plus samples still to send."""
+    PARAM_CONFLICT = 25
+    """PARAM_SET: the value is in range but breaks a rule between parameters (guide_min_mm < guide_max_mm; tov_mps x tov_margin <= max_rope_speed_mps); nothing changed. NACK.detail = the id of the other parameter of the rule."""
 
 
 class EventKind(IntEnum):
@@ -775,7 +777,7 @@ class ParamGet(Message):
 
 @dataclass(frozen=True)
 class ParamSet(Message):
-    """PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED); answered by ACK then PARAM_VALUE.
+    """PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED; checked with the parameters it must hold together with: PARAM_CONFLICT); answered by ACK then PARAM_VALUE.
 
     Fields:
         param_id: uint8 Parameter id.
@@ -1289,7 +1291,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(6, 'ramp_down_mps2', 'm/s^2', 0.5, 200.0, 10.0, False, False, 'Setpoint ramp when slowing down and for SPINDOWN.'),
     ParamSpec(7, 'wheel_radius_m', 'm', 0.005, 0.05, 0.015, True, False, 'Drive wheel radius (rope speed = 2 pi r x wheel rev/s).'),
     ParamSpec(8, 'encoder_counts_per_rev', 'counts/rev', 1.0, 4096.0, 64.0, True, True, 'Encoder edges per wheel revolution.'),
-    ParamSpec(9, 'heartbeat_timeout_s', 's', 0.1, 10.0, 0.5, False, False, 'Host silence after which the device spins the rope down.'),
+    ParamSpec(9, 'heartbeat_timeout_s', 's', 0.1, 10.0, 0.5, False, False, 'Host silence after which the device spins the rope down and stops the guide where it is: the rope and the guide move only while a host is alive.'),
     ParamSpec(10, 'max_rope_speed_mps', 'm/s', 1.0, 25.0, 20.0, False, False, 'Largest accepted SET_ROPE_SPEED.'),
     ParamSpec(11, 'motor_kv_rpm_per_v', 'rpm/V', 100.0, 5000.0, 1250.0, False, False, 'Motor velocity constant, for the feed-forward throttle map.'),
     ParamSpec(12, 'esc_min_us', 'us', 1000.0, 1200.0, 1000.0, True, False, 'ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher).'),
@@ -1298,7 +1300,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(15, 'arm_hold_s', 's', 0.2, 5.0, 0.5, True, False, 'After boot the ESC gets its minimum pulse this long before ARM is accepted (BLHeli arms after ~0.2 s).'),
     ParamSpec(16, 'encoder_timeout_s', 's', 0.02, 2.0, 0.25, False, False, 'No encoder edge for this long with the throttle above idle -> ENCODER_SILENT fault.'),
     ParamSpec(17, 'lead_mm_per_rev', 'mm/rev', 0.5, 20.0, 8.0, True, False, 'Lead screw lead: guide travel per spindle revolution.'),
-    ParamSpec(18, 'guide_min_mm', 'mm', 0.0, 180.0, 0.0, False, False, 'Soft limit at the home end (largest loop).'),
+    ParamSpec(18, 'guide_min_mm', 'mm', 0.0, 179.0, 0.0, False, False, 'Soft limit at the home end (largest loop).'),
     ParamSpec(19, 'guide_max_mm', 'mm', 1.0, 180.0, 180.0, False, False, 'Soft limit at the retracted end (smallest loop).'),
     ParamSpec(20, 'spindle_kp_per_s', '1/s', 0.1, 50.0, 4.0, False, False, 'Guide position loop: commanded guide speed (mm/s) per mm of position error.'),
     ParamSpec(21, 'spindle_max_speed_mmps', 'mm/s', 0.5, 15.0, 6.0, False, False, 'Fastest commanded guide speed.'),
