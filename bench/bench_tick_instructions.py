@@ -89,7 +89,7 @@ TICK_PARTS = (
     ("mac finish+send", "rw_signer_finish"),
     ("rx verify", "rw_frame_tag_valid"),
     ("reply sign", "rw_frame_sign"),
-    ("burst pack", "rw_msg_burst_data_encode"),
+    ("burst pack", "rw_msg_burst_data_pack"),
 )
 
 
