@@ -14,7 +14,6 @@ from pathlib import Path
 import click
 
 from robowrangler.cli.context import CliContext, pass_context
-from robowrangler.cli.record import _json_option
 from robowrangler.errors import RoboWranglerError
 
 
@@ -78,7 +77,6 @@ def _ray_many(paths: list[Path], model, effects, out: Path | None, address: str 
               help="Report folder (default: REC.diagnosis next to the recording).")
 @click.option("--effects", default=None, metavar="ID,...", help="Candidate effects to try (default: the whole library).")
 @click.option("--address", default=None, help="Ray cluster address for a folder of recordings (default: local).")
-@_json_option
 @pass_context
 def diagnose_command(ctx: CliContext, recording: Path, model_file: Path | None, out_dir: Path | None,
                      effects: str | None, address: str | None) -> None:
