@@ -190,7 +190,7 @@ def speed(duration_s: float = 60.0) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="plain cases and 4 effect-free runs per set only")
-    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--workers", type=int, default=2, help="Ray workers (0: no Ray, in this process)")
     ap.add_argument("--address", default=None, help="Ray cluster address (default: a local one)")
     ap.add_argument("--duration", type=float, default=10.0, help="recording length, s")
     ap.add_argument("--json", default=None, help="write every row as JSON here")
@@ -200,8 +200,6 @@ def main() -> None:
         speed()
         return
 
-    import ray
-
     from robowrangler_sim.diagnose.proof.cases import CONCEALMENTS, proof_cases
 
     conc = ("plain",) if args.quick else CONCEALMENTS
@@ -210,17 +208,23 @@ def main() -> None:
                                concealments=conc),
             "heldout": proof_cases(seeds=HELDOUT_SEEDS, clean_seeds=HELDOUT_CLEAN[:n_clean],
                                    duration_s=args.duration, concealments=conc)}
-    if args.address:
-        ray.init(address=args.address, log_to_driver=False)
-    else:
-        ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False)
-    task = ray.remote(num_cpus=1)(run_case)
+    import ray
+
     t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
-        futures = {name: [task.remote(c, work) for c in cases] for name, cases in sets.items()}
-        results = {name: ray.get(f) for name, f in futures.items()}
+    if args.workers == 0 and not args.address:  # in this process, one after the other (no Ray)
+        with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
+            results = {name: [run_case(c, work) for c in cases] for name, cases in sets.items()}
+    else:
+        if args.address:
+            ray.init(address=args.address, log_to_driver=False)
+        else:
+            ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False)
+        task = ray.remote(num_cpus=1)(run_case)
+        with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
+            futures = {name: [task.remote(c, work) for c in cases] for name, cases in sets.items()}
+            results = {name: ray.get(f) for name, f in futures.items()}
+        ray.shutdown()
     wall = time.perf_counter() - t0
-    ray.shutdown()
     for name, rows in results.items():
         _table(rows, f"{name} seeds")
     print(f"\nsweep wall time {wall:.0f} s on {args.workers} worker(s)")

@@ -36,25 +36,35 @@ def _one(path: Path, model, effects, out: Path | None, ctx: CliContext) -> dict:
     return doc
 
 
-def _ray_many(paths: list[Path], model, effects, out: Path | None, address: str | None) -> list[dict]:
-    import ray  # lazy: only `wrangler diagnose DIR` needs it
-
+def _job(p: str, model, effects, out: Path | None) -> dict:
     from robowrangler_sim.diagnose import DiagnoseError, diagnose
     from robowrangler_sim.diagnose.report import write_report
 
-    @ray.remote
-    def job(p: str) -> dict:
-        try:
-            res = diagnose(p, model=model, effects=effects)
-        except DiagnoseError as err:
-            return {"recording": p, "error": str(err)}
-        target = (out / Path(p).stem) if out is not None else Path(p).with_suffix(".diagnosis")
-        write_report(res, target)
-        return res.report
-
-    ray.init(address=address, ignore_reinit_error=True, include_dashboard=False, log_to_driver=False)
     try:
-        return ray.get([job.remote(str(p)) for p in paths])
+        res = diagnose(p, model=model, effects=effects)
+    except DiagnoseError as err:
+        return {"recording": p, "error": str(err)}
+    target = (out / Path(p).stem) if out is not None else Path(p).with_suffix(".diagnosis")
+    doc = res.report
+    doc["outputs"] = {k: str(v) for k, v in write_report(res, target).items()}
+    return doc
+
+
+def _ray_many(paths: list[Path], model, effects, out: Path | None, address: str | None, ctx: CliContext) -> list[dict]:
+    """One Ray job per recording (local Ray by default); if Ray cannot start (not installed, or its node does
+    not come up on a loaded machine) and no --address was given, one after the other in this process."""
+    try:
+        import ray  # lazy: only `wrangler diagnose DIR` needs it
+
+        ray.init(address=address, ignore_reinit_error=True, include_dashboard=False, log_to_driver=False)
+    except Exception as err:  # noqa: BLE001 - Ray raises plain Exception when its node does not start
+        if address is not None:
+            raise DiagnosisFailed(f"--address {address}: Ray cluster not reachable: {err}") from None
+        ctx.note(f"Ray could not start ({type(err).__name__}: {str(err)[:120]}); diagnosing one after the other")
+        return [_job(str(p), model, effects, out) for p in paths]
+    try:
+        job = ray.remote(_job)
+        return ray.get([job.remote(str(p), model, effects, out) for p in paths])
     finally:
         ray.shutdown()
 
@@ -91,7 +101,7 @@ def diagnose_command(ctx: CliContext, recording: Path, model_file: Path | None, 
         paths = sorted(recording.glob("*.mcap"))
         if not paths:
             raise DiagnosisFailed(f"{recording}: no .mcap recordings in this folder")
-        docs = _ray_many(paths, model, ids, out_dir, address)
+        docs = _ray_many(paths, model, ids, out_dir, address, ctx)
         failed = [d for d in docs if "error" in d]
         for d in docs:
             ctx.result(d, d.get("error") or f"{Path(d['recording']).name}: {d['summary']}")

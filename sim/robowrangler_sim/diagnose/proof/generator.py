@@ -113,14 +113,16 @@ class _MtEstimator:
 
 
 def _telemetry(t_s: float, seq: int, state: str, pulse_us: int, speed_mps: float, battery_v: float,
-               counters: int) -> dict:
+               counters: int, encoder_counts: int, encoder_edge_us: int) -> dict:
     rpm = int(round(speed_mps / (2.0 * math.pi * DriveParams().wheel_radius_m) * 60.0))
     return {"time_s": round(t_s, 3), "state": state, "fault_bits": [], "rope_speed_target_mps": 0.0,
             "rope_speed_setpoint_mps": 0.0, "rope_speed_mps": round(speed_mps, 3), "motor_rpm": rpm,
             "esc_pulse_us": int(pulse_us), "battery_v": round(battery_v, 3), "heartbeat_age_s": 0.02,
             "rx_ok": counters % 65536, "rx_bad": 0, "rx_duplicates": 0, "nacks": 0, "events": 0, "tick_overruns": 0,
             "guide_position_m": 0.0, "guide_target_m": 0.0, "spindle_load_permille": 0, "spindle_flags": ["HOMED"],
-            "spindle_rejected": 0, "rx_auth_failed": 0, "rx_replayed": 0, "tx_dropped": 0, "seq": seq % 65536}
+            "spindle_rejected": 0, "rx_auth_failed": 0, "rx_replayed": 0, "tx_dropped": 0, "seq": seq % 65536,
+            "esc_pulse_fine_us": float(pulse_us), "spindle_moving_speed_raw": 0,
+            "encoder_counts": encoder_counts % 2 ** 32, "encoder_edge_us": encoder_edge_us % 2 ** 32}
 
 
 def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: int, duration_s: float = 10.0,
@@ -163,7 +165,8 @@ def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: in
                 v = abs(plant.rope_speed_mps)
                 state = "ARMED" if v < 0.05 else ("AIRBORNE" if v > TOV_MPS else "SPINUP")
                 w.write("/device/telemetry", _telemetry(t_s, seq, state, int(pulse_us[k]), meas,
-                                                        plant.battery_adc_v, k // TELEMETRY_PERIOD_TICKS))
+                                                        plant.battery_adc_v, k // TELEMETRY_PERIOD_TICKS,
+                                                        abs(plant.encoder_counts), plant.encoder_last_edge_us))
                 w.write("/sim/plant_truth", {"time_s": round(t_s, 3), "rope_speed_mps": plant.rope_speed_mps,
                                              "battery_v": plant.battery_v,
                                              "external_rope_load_n": plant.external_rope_load_n})
