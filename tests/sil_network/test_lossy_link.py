@@ -11,7 +11,6 @@ The device-side truth comes from the proxy's log (link_ledger): what the firmwar
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import pytest
