@@ -13,7 +13,8 @@ single rw_core_tick calls:
      (SET_ROPE_SPEED: tag check, execution, the ACK signed at once), PARAM_SET (+ event and PARAM_VALUE
      queued, parameters re-applied), a HEARTBEAT (no reply), a replayed and a forged command (dropped
      unanswered after the tag check);
-  3. rw_siphash24 alone on the signed part of typical frames (SET_ROPE_SPEED, ACK, TELEMETRY).
+  3. a 1000-sample burst (BURST_START): the ticks while it samples and while its frames stream out, by kind;
+  4. rw_siphash24 alone on the signed part of typical frames (SET_ROPE_SPEED, ACK, TELEMETRY).
 
 The link is signed (protocol v2): the harness's fake flash holds the test key, every host frame is signed
 for the session with a growing counter, and every frame the core sends over WiFi is checked to be signed.
@@ -88,6 +89,7 @@ TICK_PARTS = (
     ("mac finish+send", "rw_signer_finish"),
     ("rx verify", "rw_frame_tag_valid"),
     ("reply sign", "rw_frame_sign"),
+    ("burst pack", "rw_msg_burst_data_encode"),
 )
 
 
@@ -244,6 +246,23 @@ def main() -> None:
     assert last_telemetry.rx_replayed == PHASES and last_telemetry.rx_auth_failed == PHASES, last_telemetry
     assert emu.state() == proto.State.AIRBORNE
 
+    # 3. A burst (BURST_START, 1000 samples): every tick samples for 1 s, then the frames stream out; the periodic
+    # ticks of both phases profiled (the tick that takes the command is a command tick, as in 2).
+    sent, _ = sc.tick(sc.frame(proto.BurstStart(samples=1000)))
+    assert sent and isinstance(sent[0], proto.Ack), f"BURST_START not acknowledged: {sent}"
+    burst_cycle = []  # capture, then the first 200 ticks of the stream; a heartbeat every 100 ticks (not profiled)
+    for i in range(1000 + 200):
+        if i % 100 == 99:
+            sc.tick(sc.frame(proto.Heartbeat(host_time_ms=sc.now_us // 1000)))
+            continue
+        _, profile = sc.tick(None, count=True)
+        burst_cycle.append((tick_label(profile), profile))
+    burst_by_label: dict[str, list["ah.CallProfile"]] = {}
+    for label, profile in burst_cycle:
+        burst_by_label.setdefault(label, []).append(profile)
+    burst_worst_label, burst_worst = max(burst_cycle, key=lambda item: item[1].cycles)
+    assert emu.state() == proto.State.AIRBORNE, f"not airborne during the burst: state {emu.state()}"
+
     cycles_per_tick = CPU_HZ / TICK_HZ
     print(f"ELF: {elf}")
     print(f"rw_core_tick on Cortex-M0+ (unicorn), AIRBORNE at {TARGET_MMPS} mm/s, spindle moving, signed link, "
@@ -268,6 +287,15 @@ def main() -> None:
     verdict_1_5 = "meets" if worst_1_5 < 0.1 * cycles_per_tick else "MISSES"
     print(f"worst periodic tick with one flash wait state (x{FLASH_WAIT_FACTOR}): {worst_1_5:.0f} cycles = "
           f"{worst_1_5 / cycles_per_tick:.1%} at 1 kHz: {verdict_1_5} the 10 % target")
+
+    print("\n3. a 1000-sample burst: 1,000 ticks sampling, then 200 ticks of its stream (nothing received)")
+    print(header)
+    for label, profiles in sorted(burst_by_label.items(), key=lambda kv: -max(p.cycles for p in kv[1])):
+        worst = max(profiles, key=lambda p: p.cycles)
+        print(profile_row(f"{label} (x{len(profiles)})", worst))
+    verdict = "meets" if burst_worst.cycles < 0.1 * cycles_per_tick else "MISSES"
+    print(f"worst tick with a burst: '{burst_worst_label}', {burst_worst.cycles} cycles = "
+          f"{burst_worst.cycles / cycles_per_tick:.1%} at 1 kHz: {verdict} the 10 % target")
 
     print(f"\n2. a datagram received, worst over {PHASES} consecutive schedule phases (label = what else ran)")
     print(header)

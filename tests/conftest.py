@@ -4,9 +4,15 @@ from __future__ import annotations
 
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
+
+if str(Path(__file__).resolve().parent) not in sys.path:  # tests/build_lock.py for the build helpers below
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from build_lock import exclusive  # noqa: E402
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 BUILD_DIR = Path(os.environ.get("ROBOWRANGLER_BUILD_DIR", REPO_ROOT / "build" / "native"))
@@ -14,11 +20,11 @@ BUILD_DIR = Path(os.environ.get("ROBOWRANGLER_BUILD_DIR", REPO_ROOT / "build" / 
 
 def build_native() -> Path:
     """Configure and build firmware/ natively with CMake (incremental); returns the build directory."""
-    BUILD_DIR.mkdir(parents=True, exist_ok=True)
-    if not (BUILD_DIR / "CMakeCache.txt").exists():
-        subprocess.run(["cmake", "-S", str(REPO_ROOT / "firmware"), "-B", str(BUILD_DIR)],
-                       check=True, capture_output=True, text=True)
-    result = subprocess.run(["cmake", "--build", str(BUILD_DIR), "-j2"], capture_output=True, text=True)
+    with exclusive(BUILD_DIR):
+        if not (BUILD_DIR / "CMakeCache.txt").exists():
+            subprocess.run(["cmake", "-S", str(REPO_ROOT / "firmware"), "-B", str(BUILD_DIR)],
+                           check=True, capture_output=True, text=True)
+        result = subprocess.run(["cmake", "--build", str(BUILD_DIR), "-j2"], capture_output=True, text=True)
     if result.returncode != 0:
         raise RuntimeError(f"native firmware build failed:\n{result.stdout}\n{result.stderr}")
     return BUILD_DIR

@@ -11,7 +11,8 @@
  *     send() copy the frame into harness_tx[] and count it (harness_tx_kind tells which of the two);
  *   - spindle: an AX-12A in wheel mode that always answers; it turns at the written moving speed (1023 =
  *     59 rpm, about 12 position units per 10 ms read), reads 1023 in its 60 degree dead zone, load
- *     harness_spindle_load_raw, limit switch harness_spindle_switch (so HOME can finish by switch);
+ *     harness_spindle_load_raw, limit switch harness_spindle_switch (so HOME can finish by switch); no reply
+ *     at all while harness_spindle_silent is set;
  *   - config store: a fresh device provisioned with the test key harness_test_key (bytes 0..15, never a
  *     real one): harness_init puts rw_config_defaults + rw_config_set_key in harness_flash, load() reads it,
  *     save() keeps what the core writes (its boot counter: the first boot is session 1). Frames on the link
@@ -39,6 +40,7 @@ uint32_t harness_tx_count;                 /* out: datagrams out since init */
 uint32_t harness_pulse_us;                 /* out: last ESC pulse written, microseconds */
 uint32_t harness_spindle_switch;           /* in: home limit switch closed (1) or open (0) */
 uint16_t harness_spindle_load_raw;         /* in: present load register */
+uint32_t harness_spindle_silent;           /* in: 1 = no reply to the reads (a servo timeout, a lost reply) */
 const uint8_t harness_test_key[RW_KEY_LEN] = { 0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u };
 rw_config harness_flash;                   /* the fake flash: the stored configuration record */
 uint32_t harness_flash_saves;              /* out: save() calls since init */
@@ -82,6 +84,13 @@ static void fake_esc_write(void *ctx, uint16_t pulse_us)
 {
     (void)ctx;
     harness_pulse_us = pulse_us;
+}
+
+/* the board's HAL writes thirds of a microsecond (TCC1): the harness takes that path as the board does */
+static void fake_esc_write_third(void *ctx, uint16_t pulse_third_us)
+{
+    (void)ctx;
+    harness_pulse_us = (uint16_t)(((pulse_third_us + 1u) * 21846u) >> 16); /* as the board's HAL: no division */
 }
 
 static size_t fake_link_recv(void *ctx, uint8_t *buf, size_t cap)
@@ -132,6 +141,9 @@ static struct {
 static bool fake_spindle_read(void *ctx, rw_spindle_reading *out)
 {
     (void)ctx;
+    if (harness_spindle_silent != 0u) {
+        return false;
+    }
     uint32_t step_q8 = 3u * (fake_servo.moving_speed_raw & 0x03FFu); /* 1023 -> 12 units per read */
     if ((fake_servo.moving_speed_raw & 0x0400u) == 0u) {
         fake_servo.angle_q8 = (fake_servo.angle_q8 + step_q8) % FAKE_SERVO_TURN_Q8;
@@ -179,7 +191,7 @@ static bool fake_config_save(void *ctx, const void *buf, size_t len)
     return true;
 }
 
-static const rw_hal_esc_output harness_esc = { NULL, fake_esc_write };
+static const rw_hal_esc_output harness_esc = { NULL, fake_esc_write, fake_esc_write_third };
 static const rw_hal_encoder harness_encoder = { NULL, fake_encoder_read };
 static const rw_hal_battery harness_battery = { NULL, fake_battery_read_mv };
 static const rw_hal_link harness_link = { NULL, fake_link_recv, fake_link_reply, fake_link_accept_peer, fake_link_send };
@@ -210,6 +222,7 @@ void harness_init(void)
     fake_servo.angle_q8 = 512u * 256u;
     harness_spindle_switch = 0u;
     harness_spindle_load_raw = 0u;
+    harness_spindle_silent = 0u;
     harness_wheel_rpm = 0u;
     harness_battery_mv = 14800u;
     harness_rx_len = 0u;

@@ -95,6 +95,8 @@ void rw_core_init(rw_core *core)
     core->state.state = RW_STATE_DISARMED;
     core->state.peer_link = RW_LINK_WIFI; /* until a host is heard, the WiFi HAL drops what has no peer */
     core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
+    core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
+    rw_burst_reset(&core->state.burst);
 }
 
 /* Bindings hand rw_config_set_params the core's address for its parameter values. */
@@ -196,6 +198,15 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
 
     /* 1. sensors: the encoder every tick (supervision watches its count), the estimator on speed ticks */
     rw_encoder_sample enc = hal->encoder->read(hal->encoder->ctx);
+    /* for TELEMETRY and bursts: edges since boot and the latest edge's time on the uptime clock (us), so what
+     * the host sees does not depend on where the HAL's counters and tick clock started */
+    if (!core->state.encoder_origin_set) {
+        core->state.encoder_origin_set = true;
+        core->state.encoder_boot_counts = enc.counts;
+    }
+    const uint32_t uptime_us = core->state.uptime_ms * 1000u + core->state.uptime_rem_us;
+    core->state.encoder_counts = enc.counts - core->state.encoder_boot_counts;
+    core->state.encoder_edge_us = uptime_us - (now_us - enc.last_edge_us);
     uint32_t counts_delta = enc.counts - loop->estimator.state.last_count;
     bool primed = loop->estimator.state.primed;
     float speed_dt_s = 0.0f;
@@ -253,7 +264,20 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         (void)rw_speed_loop_step(loop, mode, core->state.target_mps, now_us, speed_dt_s);
     }
     core->state.pulse_us = rw_speed_loop_pulse_us(loop);
-    hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
+    if (hal->esc->write_pulse_third_us != NULL) { /* the timer's resolution (TCC1: 1/3 us) */
+        core->state.pulse_third_us = rw_speed_loop_pulse_third_us(loop);
+        hal->esc->write_pulse_third_us(hal->esc->ctx, core->state.pulse_third_us);
+    } else { /* whole microseconds only: that is the pulse the ESCs get */
+        core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
+        hal->esc->write_pulse_us(hal->esc->ctx, core->state.pulse_us);
+    }
+    if (rw_burst_capturing(&core->state.burst)) {
+        const rw_burst_sample sample = { .encoder_counts = (uint16_t)core->state.encoder_counts,
+                                         .encoder_edge_us = (uint16_t)core->state.encoder_edge_us,
+                                         .esc_pulse_third_us = core->state.pulse_third_us,
+                                         .battery_mv = battery_mv };
+        rw_burst_record(&core->state.burst, core->state.uptime_ms, uptime_us, dt_us, &sample);
+    }
 
     /* 5. telemetry, then at most one datagram out per tick */
     if (job == RW_CORE_JOB_TELEMETRY) {
@@ -263,9 +287,14 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         late_ms = late_ms <= RW_CORE_SCHEDULE_MAX_HOLD_MS ? late_ms : 0u;
         core->state.telemetry_due_ms = core->state.uptime_ms + core->state.telemetry_period_ms - late_ms;
     }
-    const uint32_t mac_budget = speed_tick ? 0u
-                                : job == RW_CORE_JOB_NONE    ? RW_CORE_MAC_TICK_BUDGET
-                                : job == RW_CORE_JOB_BATTERY ? RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BATTERY_COST
-                                                             : 0u;
+    uint32_t mac_budget = speed_tick ? 0u
+                          : job == RW_CORE_JOB_NONE    ? RW_CORE_MAC_TICK_BUDGET
+                          : job == RW_CORE_JOB_BATTERY ? RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BATTERY_COST
+                                                       : 0u;
+    if ((job == RW_CORE_JOB_NONE || job == RW_CORE_JOB_BATTERY) && !speed_tick &&
+        rw_burst_streaming(&core->state.burst) && rw_core_queue_burst_frame(core)) {
+        mac_budget = 0u; /* this tick's work was the burst frame's pack (as a telemetry tick's is), with at most
+                            the battery division beside it */
+    }
     rw_core_send_queued(core, hal, sent, mac_budget);
 }

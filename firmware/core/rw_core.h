@@ -21,6 +21,9 @@
  *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
  *   5. telemetry at telemetry_rate_hz; one queued frame to the peer (over a keyed WiFi link: signed over idle
  *      ticks first, see below)
+ *   burst (BURST_START, rw_burst.h): while capturing, every tick stores its sample (encoder, the pulse it wrote,
+ *      battery) after step 4; once captured, an idle tick with an empty outbox and nothing being signed packs
+ *      one BURST_DATA frame instead of signing (its pack costs what a telemetry pack does)
  *
  * Schedule: the calls alternate between two kinds of tick, so that the expensive periodic jobs never
  * share a tick (the worst-case tick is one job plus the per-tick work, not their sum; on the M0+ every
@@ -50,6 +53,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rw_burst.h"
 #include "rw_config.h"
 #include "rw_duplicate_cache.h"
 #include "rw_hal.h"
@@ -75,9 +79,12 @@
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
 /* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
  * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
- * and what finishing it costs (the last two blocks, four finalization rounds, the send). */
-#define RW_CORE_MAC_TICK_BUDGET 8u
-#define RW_CORE_MAC_BEGIN_COST 4u
+ * and what finishing it costs (the last two blocks, four finalization rounds, the send). A full 64-byte
+ * payload (TELEMETRY, BURST_DATA: 73 bytes + session id = 9 fixed blocks) is then signed and sent in two idle
+ * ticks: begin + 4 blocks, then 5 blocks + finish; each under 10 % of a 1 kHz tick on the M0+
+ * (bench/bench_tick_instructions.py). */
+#define RW_CORE_MAC_TICK_BUDGET 9u
+#define RW_CORE_MAC_BEGIN_COST 5u
 #define RW_CORE_MAC_FINISH_COST 4u
 /* An idle tick that also refreshes the feed-forward's battery factor (one float division, ~500 cycles) signs
  * this much less. */
@@ -148,6 +155,12 @@ typedef struct rw_core {
         float battery_v;
         uint16_t battery_mv;
         uint16_t pulse_us;
+        uint16_t pulse_third_us;  /* the same pulse in thirds of a microsecond (what a TCC1 HAL outputs) */
+        uint32_t encoder_counts;  /* edges since the first tick (TELEMETRY, burst samples) */
+        uint32_t encoder_edge_us; /* the latest edge's time on the uptime clock, us (wraps) */
+        uint32_t encoder_boot_counts; /* the HAL's count at the first tick */
+        bool encoder_origin_set;
+        rw_burst burst;           /* burst capture (BURST_START, rw_burst.h): last, it is the big one */
     } state;
 } rw_core;
 

@@ -149,6 +149,9 @@ static verdict cmd_param_set(rw_core *core, const rw_msg_param_set *msg)
         }
     }
     int result = rw_core_set_param(core, msg->param_id, msg->value);
+    if (result == RW_NACK_REASON_PARAM_CONFLICT) { /* detail: the other parameter of the rule */
+        return refuse((uint8_t)result, rw_params_conflict(&core->params, msg->param_id, msg->value));
+    }
     if (result != RW_DECODE_OK) {
         return refuse((uint8_t)result, msg->param_id);
     }
@@ -296,6 +299,13 @@ static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
         return cmd_retract(core, hal);
     case RW_MSG_ID_RELEASE:
         return cmd_release(core, hal);
+    case RW_MSG_ID_BURST_START: {
+        rw_msg_burst_start msg;
+        rw_msg_burst_start_unpack(&msg, frame->payload);
+        int32_t detail = 0;
+        const uint8_t reason = rw_burst_start(&core->state.burst, msg.samples, &detail);
+        return reason == 0u ? ACCEPT : refuse(reason, detail);
+    }
     default:
         return refuse(RW_NACK_REASON_NOT_A_COMMAND, 0);
     }

@@ -48,6 +48,9 @@ bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link);
 /* ---- rw_core_telemetry.c ---- */
 /* Pack a TELEMETRY frame into the outbox (a full outbox drops it, counted). */
 void rw_core_queue_telemetry(rw_core *core, const rw_hal *hal);
+/* An unsigned frame of msg_id with a packed payload of payload_len bytes around it, seq 0 and the checksum
+ * left 0: what rw_frame_renumber and rw_frame_sign_begin take and complete when it leaves. Its length. */
+size_t rw_core_unnumbered_frame(uint8_t *frame, uint8_t msg_id, uint8_t payload_len);
 /* round(1000 / telemetry_rate_hz), ms (one float division: from rw_core_apply_params). */
 uint32_t rw_core_telemetry_period_ms(const rw_core *core);
 
@@ -68,5 +71,9 @@ void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t m
 /* ---- rw_core_boot.c ---- */
 /* First tick: the stored configuration (key, parameters) and a new session, then the BOOT event. */
 void rw_core_boot(rw_core *core, const rw_hal *hal);
+
+/* The next BURST_DATA frame of a captured burst into the outbox, when it is empty and nothing is being signed
+ * (rw_core_burst.c); true when one was packed. */
+bool rw_core_queue_burst_frame(rw_core *core);
 
 #endif /* RW_CORE_INTERNAL_H */

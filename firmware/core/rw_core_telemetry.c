@@ -19,9 +19,7 @@ static uint8_t spindle_flags(const rw_spindle *sp)
     return flags;
 }
 
-/* An unsigned frame of msg_id with a packed payload of payload_len bytes around it, seq 0 and the checksum
- * left 0: what rw_frame_renumber and rw_frame_sign_begin take and complete when it leaves. Its length. */
-static size_t unnumbered_frame(uint8_t *frame, uint8_t msg_id, uint8_t payload_len)
+size_t rw_core_unnumbered_frame(uint8_t *frame, uint8_t msg_id, uint8_t payload_len)
 {
     frame[0] = RW_PROTOCOL_MAGIC;
     frame[1] = RW_PROTOCOL_VERSION;
@@ -63,12 +61,16 @@ void rw_core_queue_telemetry(rw_core *core, const rw_hal *hal)
         .rx_auth_failed = c->rx_auth_failed,
         .rx_replayed = c->rx_replayed,
         .tx_dropped = rw_outbox_dropped(&core->state.outbox),
+        .esc_pulse_third_us = core->state.pulse_third_us,
+        .spindle_moving_speed_raw = core->state.spindle.state.moving_speed_raw,
+        .encoder_counts = core->state.encoder_counts,
+        .encoder_edge_us = core->state.encoder_edge_us,
     };
     /* packed straight into its outbox slot (no copy); a full outbox drops it (counted), as a push would */
     rw_outbox_slot *slot = rw_outbox_reserve(&core->state.outbox, RW_OUTBOX_TELEMETRY);
     if (slot != NULL) {
         rw_msg_telemetry_pack(&msg, slot->bytes + RW_FRAME_HEADER_LEN);
-        const size_t len = unnumbered_frame(slot->bytes, RW_MSG_ID_TELEMETRY, RW_MSG_TELEMETRY_LEN);
+        const size_t len = rw_core_unnumbered_frame(slot->bytes, RW_MSG_ID_TELEMETRY, RW_MSG_TELEMETRY_LEN);
         rw_outbox_commit(&core->state.outbox, slot, RW_OUTBOX_TELEMETRY, len);
     }
 }

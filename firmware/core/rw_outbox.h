@@ -18,6 +18,7 @@ typedef enum {
     RW_OUTBOX_REPLY = 0,     /* PARAM_VALUE after an ACK */
     RW_OUTBOX_EVENT = 1,     /* to the peer */
     RW_OUTBOX_TELEMETRY = 2, /* to the peer */
+    RW_OUTBOX_BURST = 3,     /* BURST_DATA to the peer: queued only into an empty outbox, sent after everything */
 } rw_outbox_class;
 
 typedef struct rw_outbox_slot {

@@ -78,6 +78,7 @@ void rw_speed_loop_reset(rw_speed_loop *loop)
     rw_ramp_reset(&loop->ramp);
     loop->state.setpoint_q16 = 0;
     loop->state.pulse_us = loop->throttle.cfg.pulse_min_us;
+    loop->state.pulse_third_us = (uint16_t)(3u * loop->throttle.cfg.pulse_min_us);
 }
 
 void rw_speed_loop_start(rw_speed_loop *loop)
@@ -145,6 +146,7 @@ uint16_t rw_speed_loop_step(rw_speed_loop *loop, rw_speed_loop_mode mode, float 
     if (mode == RW_SPEED_LOOP_LAND && setpoint_q16 <= 0) {
         rw_pi_controller_reset(&loop->pi);
         loop->state.pulse_us = esc_min;
+        loop->state.pulse_third_us = (uint16_t)(3u * esc_min);
         return esc_min;
     }
     if (encoder_stale(loop, setpoint_q16, now_us)) {
@@ -157,14 +159,26 @@ uint16_t rw_speed_loop_step(rw_speed_loop *loop, rw_speed_loop_mode mode, float 
         mode == RW_SPEED_LOOP_AIRBORNE ? rw_throttle_map_feed_forward(&loop->throttle, loop->state.guard_q16, battery_v) : 0);
     const int32_t u_q16 = rw_pi_controller_step(&loop->pi, setpoint_q16,
                                                 rw_mt_speed_estimator_rope_mps_q16(&loop->estimator), ff_q16, dt_s);
-    const uint16_t pulse = rw_throttle_map_pulse_us(&loop->throttle, u_q16);
-    loop->state.pulse_us = pulse < esc_min ? esc_min : pulse;
-    return loop->state.pulse_us;
+    /* at the timer's resolution (1/3 us); its whole microseconds are what rw_throttle_map_pulse_us gives */
+    uint16_t pulse_third = rw_throttle_map_pulse_third_us(&loop->throttle, u_q16);
+    uint16_t pulse = rw_throttle_map_third_us_to_us(pulse_third);
+    if (pulse < esc_min) {
+        pulse = esc_min;
+        pulse_third = (uint16_t)(3u * esc_min);
+    }
+    loop->state.pulse_us = pulse;
+    loop->state.pulse_third_us = pulse_third;
+    return pulse;
 }
 
 uint16_t rw_speed_loop_pulse_us(const rw_speed_loop *loop)
 {
     return loop->state.pulse_us;
+}
+
+uint16_t rw_speed_loop_pulse_third_us(const rw_speed_loop *loop)
+{
+    return loop->state.pulse_third_us;
 }
 
 float rw_speed_loop_setpoint_mps(const rw_speed_loop *loop)

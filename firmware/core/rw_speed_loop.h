@@ -67,6 +67,7 @@ typedef struct rw_speed_loop {
         float battery_v;          /**< the battery voltage the feed-forward uses (rw_speed_loop_set_battery) */
         int32_t setpoint_q16;     /**< ramped setpoint, m/s Q16.16 */
         uint16_t pulse_us;        /**< last ESC pulse */
+        uint16_t pulse_third_us;  /**< the same in thirds of a microsecond (the PWM timer's resolution) */
     } state;                      /**< private: history and the prepared values */
 } rw_speed_loop;
 
@@ -92,6 +93,9 @@ uint16_t rw_speed_loop_step(rw_speed_loop *loop, rw_speed_loop_mode mode, float 
                             float dt_s);
 /** Last ESC pulse, microseconds. */
 uint16_t rw_speed_loop_pulse_us(const rw_speed_loop *loop);
+/** The same pulse in thirds of a microsecond (what a TCC1 output gives the ESCs); rounded half up to the
+ *  microsecond it is rw_speed_loop_pulse_us. */
+uint16_t rw_speed_loop_pulse_third_us(const rw_speed_loop *loop);
 /** Ramped setpoint, m/s (exact: a Q16.16 value). */
 float rw_speed_loop_setpoint_mps(const rw_speed_loop *loop);
 /** Measured rope speed, m/s Q16.16 (the estimator's last step). */

@@ -203,9 +203,14 @@ static int32_t position_um_of(const rw_spindle *s, int32_t angle_ticks)
     return clamp_i32(um_q32 >> 32, -RW_SPINDLE_MAX_UM, RW_SPINDLE_MAX_UM);
 }
 
-/* The stall/home condition: pushing against something (|load| over threshold) and not moving. */
-static bool held_for(rw_spindle *s, bool condition, uint32_t dt_ms)
+/* The stall/home condition: pushing against something (|load| over threshold) and not moving. A step without a
+ * reading (a lost reply, the bus late) cannot see the load: the time held so far is kept, neither advanced nor
+ * reset, so one lost reply neither restarts a homing stall nor lets a retract pull on past the secured load. */
+static bool held_for(rw_spindle *s, bool measured, bool condition, uint32_t dt_ms)
 {
+    if (!measured) {
+        return false;
+    }
     const uint32_t held_ms = s->state.stall_ms + dt_ms;
     s->state.stall_ms = condition ? (held_ms < dt_ms ? UINT32_MAX : held_ms) : 0u;
     return rw_f32_ms_past(s->state.stall_ms, s->cfg.stall_time_s, true);
@@ -218,6 +223,7 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
     rw_spindle_outcome outcome = RW_SPINDLE_NOTHING;
     int32_t load_permille = 0;
     bool switch_closed = false;
+    const bool measured = reading != NULL;
 
     /* 1. measurement */
     if (reading != NULL) {
@@ -258,7 +264,7 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
         break;
     case RW_SPINDLE_HOMING:
         cmd_umps = -d->homing_speed_umps;
-        if (switch_closed || held_for(s, abs_load >= d->homing_load_permille && still, dt_ms)) {
+        if (switch_closed || held_for(s, measured, abs_load >= d->homing_load_permille && still, dt_ms)) {
             s->state.home_ticks = s->state.turns.state.angle_ticks;
             s->state.position_um = 0;
             s->state.target_mm = 0.0f;
@@ -288,7 +294,7 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
             const int32_t drive_raw = (int32_t)(moving_speed_raw(d, cmd_umps) & RW_AX12_MAGNITUDE_MASK);
             const bool loaded = abs_load * 1023 >= RW_SPINDLE_STALL_DRIVE_PERMILLE_PER_RAW * drive_raw ||
                                 abs_load >= d->stall_load_permille;
-            if (held_for(s, drive_raw >= RW_SPINDLE_MIN_STALL_DRIVE_RAW && loaded && still, dt_ms)) {
+            if (held_for(s, measured, drive_raw >= RW_SPINDLE_MIN_STALL_DRIVE_RAW && loaded && still, dt_ms)) {
                 outcome = RW_SPINDLE_STALLED;
                 rw_spindle_stop(s);
                 cmd_umps = 0;
@@ -301,7 +307,7 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
         /* secured: the rope resists with at least secure_load_pct for stall_time_s (the load spike of
          * starting from rest is over within a few servo time constants, far less than that) */
         const bool at_end = pos_um >= d->guide_max_um - RW_SPINDLE_END_MARGIN_UM;
-        if (held_for(s, load_permille >= d->secure_load_permille, dt_ms)) {
+        if (held_for(s, measured, load_permille >= d->secure_load_permille, dt_ms)) {
             outcome = at_end ? RW_SPINDLE_STROKE_END : RW_SPINDLE_SECURED;
             rw_spindle_stop(s);
             cmd_umps = 0;

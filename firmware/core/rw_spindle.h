@@ -9,7 +9,8 @@
  *              tolerance_mm; stall (load over stall_load_pct, no motion, stall_time_s) -> STALL
  *   RETRACT    towards guide_max at retract_speed_mmps until the load resisting retraction stays over
  *              secure_load_pct for stall_time_s (SECURED) or the stroke ends (STROKE_END)
- * Any moving mode stops at the soft limits. No answer from the servo for timeout_s -> NO_ANSWER, IDLE.
+ * Any moving mode stops at the soft limits. No answer from the servo for timeout_s -> NO_ANSWER, IDLE. A step
+ * without a reading keeps the stall/secure time held so far (it cannot see the load).
  * Call rw_spindle_step at the spindle period with the latest reading; write moving_speed_raw out. */
 #ifndef RW_SPINDLE_H
 #define RW_SPINDLE_H

@@ -139,6 +139,24 @@ uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, int32_t throttle_q16
     return (uint16_t)pulse_us;
 }
 
+uint16_t rw_throttle_map_pulse_third_us(const rw_throttle_map *m, int32_t throttle_q16)
+{
+    uint16_t lo_us;
+    uint16_t hi_us;
+    effective_range_us(m, &lo_us, &hi_us);
+    const uint32_t lo = 3u * lo_us;
+    const uint32_t hi = 3u * hi_us;
+    if (throttle_q16 <= 0) {
+        return (uint16_t)lo;
+    }
+    if (throttle_q16 >= RW_Q16_ONE) {
+        return (uint16_t)hi;
+    }
+    /* round half up: throttle < 2^16 and span <= 3000 thirds, the product fits 32 bits */
+    uint32_t pulse = lo + (((uint32_t)throttle_q16 * (hi - lo) + 32768u) >> 16);
+    return (uint16_t)(pulse > hi ? hi : pulse);
+}
+
 float rw_throttle_map_throttle_from_pulse(const rw_throttle_map *m, uint16_t pulse_us)
 {
     const uint16_t lo_us = m->state.pulse_lo_us;

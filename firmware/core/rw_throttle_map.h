@@ -69,6 +69,18 @@ float rw_throttle_map_no_load_rope_mps(const rw_throttle_map *m, float throttle,
  * configured range outside 1000..2000 us the range is first narrowed into it.
  */
 uint16_t rw_throttle_map_pulse_us(const rw_throttle_map *m, int32_t throttle_q16);
+/**
+ * The same pulse at the PWM timer's resolution, in thirds of a microsecond (TCC1 counts at 3 MHz): 3 pulse_min_us
+ * + throttle 3 (pulse_max_us - pulse_min_us), rounded half up to the third. Same limits as rw_throttle_map_pulse_us;
+ * rw_throttle_map_third_us_to_us of it is exactly what rw_throttle_map_pulse_us gives for the same throttle.
+ */
+uint16_t rw_throttle_map_pulse_third_us(const rw_throttle_map *m, int32_t throttle_q16);
+/** A pulse in thirds of a microsecond rounded half up to the microsecond ((t + 1) / 3, without a division). */
+static inline uint16_t rw_throttle_map_third_us_to_us(uint16_t pulse_third_us)
+{
+    /* (x 21846) >> 16 is x / 3 rounded down for x < 32768 (error under x / 98304 < 1/3) */
+    return (uint16_t)((((uint32_t)pulse_third_us + 1u) * 21846u) >> 16);
+}
 /** Throttle fraction in [0, 1] of a pulse (inverse of rw_throttle_map_pulse_us). */
 float rw_throttle_map_throttle_from_pulse(const rw_throttle_map *m, uint16_t pulse_us);
 /** true when kv and radius are finite and > 0 and 1000 <= pulse_min_us < pulse_max_us <= 2000. */

@@ -335,7 +335,7 @@ static bool store_save(void *ctx, const void *buf, size_t len)
     return ok;
 }
 
-static const rw_hal_esc_output ESC = { NULL, esc_write };
+static const rw_hal_esc_output ESC = { NULL, esc_write, NULL };
 static const rw_hal_encoder ENCODER = { NULL, encoder_read };
 static const rw_hal_battery BATTERY = { NULL, battery_read };
 static const rw_hal_scheduler SCHEDULER = { NULL, overruns };

@@ -1,15 +1,19 @@
 /* Arduino entry for the MKR WiFi 1010: wires the arduino HAL (firmware/hal/arduino) to the firmware core.
  *
+ * Two contexts (docs/board.md, "Tick and background loop"):
+ *  - the control tick, in the TC3 interrupt every 1 ms: the ESC pulse staged by the previous tick is applied,
+ *    the encoder latched, rw_core_tick run, the watchdog fed. It never waits on a bus: the core's link and
+ *    spindle calls only move frames and readings through RAM (the HAL's queues and split transaction).
+ *  - the background loop (loop()): the spindle's bus transactions, WiFiNINA, USB serial, the status LED and
+ *    the USB status lines, each bounded; WiFi connection steps only while the rope is down.
+ *
  * setup: watchdog (long period while booting) -> core -> ESC PWM at the protocol's bottom pulse (the ESCs
- * start arming on it) -> encoder, battery, LED, USB serial, spindle (wheel mode) -> HAL wired -> the
- * core's first tick, which loads the configuration record through hal.config and writes it back with the
- * boot counter raised (its parameters, key and WiFi credentials are the core's from then on) -> WiFi with
- * the record's credentials (blocking at most RW_LINK_BOOT_CONNECT_TIMEOUT_MS, watchdog fed) -> 1 kHz tick
- * timer -> watchdog at its running period.
- * loop: on each tick flag, latch the encoder with the tick time, run rw_core_tick, feed the watchdog,
- * hand the USB serial its next packet, follow a PROVISION_COMMIT with the WiFi link, service the WiFi
- * connection (reconnects only while the ESCs are at idle) and the status LED. */
+ * start arming on it) -> encoder, battery, LED, USB serial, spindle -> HAL wired -> the core's first tick,
+ * which loads the configuration record through hal.config and writes it back with the boot counter raised ->
+ * WiFi with the record's credentials (NINA reset and ready line awaited at most 2 s, then blocking at most
+ * RW_LINK_BOOT_CONNECT_TIMEOUT_MS, watchdog fed) -> watchdog at its running period -> 1 kHz tick interrupt. */
 #include <Arduino.h>
+#include <string.h>
 
 extern "C" {
 #include "rw_core.h"
@@ -18,6 +22,7 @@ extern "C" {
 
 #include "arduino_battery.h"
 #include "arduino_board.h"
+#include "arduino_board_report.h"
 #include "arduino_config_store.h"
 #include "arduino_encoder.h"
 #include "arduino_esc_output.h"
@@ -32,6 +37,10 @@ namespace {
 
 const uint32_t BOOT_WATCHDOG_MS = 4000u; /* covers the NINA reset (~0.75 s) between WiFiNINA's own feeds */
 const uint32_t RUN_WATCHDOG_MS = 250u;   /* 250 missed ticks */
+/* The tick feeds the watchdog while the background loop has made a pass within this many ticks, or while the
+ * rope is driven (a stalled background loop passes no host frame: the core lands the rope on heartbeat loss,
+ * then the watchdog resets the board). */
+const uint32_t BACKGROUND_STALL_TICKS = 100u;
 
 rw_core core;
 rw_arduino_esc_output esc;
@@ -41,6 +50,7 @@ rw_arduino_link link;
 rw_arduino_serial_link serial_link;
 rw_arduino_spindle spindle;
 rw_arduino_config_store config_store;
+rw_arduino_board_report report;
 
 rw_hal_esc_output esc_hal;
 rw_hal_encoder encoder_hal;
@@ -52,11 +62,41 @@ rw_hal_spindle spindle_hal;
 rw_hal_config_store config_hal;
 rw_hal hal;
 
-uint32_t link_commits; /* core.state.config.commits the WiFi link's credentials were taken at */
+uint32_t link_commits;      /* background: core.state.config.commits the WiFi link's credentials were taken at */
+rw_config committed_config; /* background: copy of the core's record, taken with the tick masked */
+volatile uint32_t background_passes;
+uint32_t tick_seen_passes;  /* tick: background_passes at the last change it saw */
+uint32_t tick_stalled;      /* tick: ticks since background_passes last changed */
 
-bool esc_at_idle(uint8_t state)
+/* States that drive the rope: connection steps wait for the others. */
+bool rope_down(uint8_t state)
 {
-    return state != RW_STATE_SPINUP && state != RW_STATE_AIRBORNE && state != RW_STATE_SPINDOWN;
+    return state != RW_STATE_SPINUP && state != RW_STATE_AIRBORNE && state != RW_STATE_SPINDOWN &&
+           state != RW_STATE_RELAX;
+}
+
+/* The core's state, read by the background loop (a byte the tick writes: one load). */
+uint8_t core_state_now()
+{
+    return *static_cast<volatile const uint8_t *>(&core.state.state);
+}
+
+/* The control tick (TC3 interrupt). */
+void control_tick()
+{
+    rw_arduino_esc_output_apply(&esc);
+    const uint32_t now_us = rw_arduino_encoder_latch(&encoder);
+    rw_core_tick(&core, &hal, now_us);
+    const uint32_t passes = background_passes;
+    if (passes != tick_seen_passes) {
+        tick_seen_passes = passes;
+        tick_stalled = 0u;
+    } else if (tick_stalled < BACKGROUND_STALL_TICKS) {
+        ++tick_stalled;
+    }
+    if (tick_stalled < BACKGROUND_STALL_TICKS || !rope_down(core.state.state)) {
+        (void)rw_arduino_watchdog_feed();
+    }
 }
 
 } // namespace
@@ -77,12 +117,12 @@ void setup()
     rw_arduino_encoder_begin(&encoder);
     rw_arduino_battery_begin(&battery, RW_BATTERY_DEFAULT_FULL_SCALE_MV);
     rw_arduino_serial_link_begin(&serial_link);
-    (void)rw_arduino_spindle_begin(&spindle); /* no answer: retried from the spindle reads */
+    rw_arduino_spindle_begin(&spindle); /* wheel mode is set up by the background loop */
 
     esc_hal = rw_arduino_esc_output_hal(&esc);
     encoder_hal = rw_arduino_encoder_hal(&encoder);
     battery_hal = rw_arduino_battery_hal(&battery);
-    link_hal = rw_arduino_link_hal(&link); /* not up yet: receives nothing, sends nowhere */
+    link_hal = rw_arduino_link_hal(&link); /* its queues are empty until the link begins */
     serial_hal = rw_arduino_serial_link_hal(&serial_link);
     scheduler_hal = rw_arduino_scheduler_hal();
     spindle_hal = rw_arduino_spindle_hal(&spindle);
@@ -97,32 +137,42 @@ void setup()
     hal.config = &config_hal;
 
     /* First tick: the record is loaded (and saved with the new boot counter) before the WiFi link needs its
-     * credentials; the next tick follows the WiFi connection, up to 15 s later (DISARMED meanwhile). */
+     * credentials; the next tick follows the WiFi connection, up to 17 s later (DISARMED meanwhile). */
     rw_core_tick(&core, &hal, rw_arduino_encoder_latch(&encoder));
     link_commits = core.state.config.commits;
     (void)rw_arduino_link_begin(&link, &core.state.config, RW_LINK_UDP_PORT);
+    rw_arduino_board_report_begin(&report, millis());
 
-    rw_arduino_scheduler_begin();
-    (void)rw_arduino_watchdog_begin(RUN_WATCHDOG_MS);
+    (void)rw_arduino_watchdog_begin(RUN_WATCHDOG_MS); /* before the tick starts feeding it */
+    rw_arduino_scheduler_begin(control_tick);
 }
 
 void loop()
 {
-    if (!rw_arduino_scheduler_take_tick()) {
-        return;
-    }
-    const uint32_t now_us = rw_arduino_encoder_latch(&encoder);
-    rw_core_tick(&core, &hal, now_us);
-    (void)rw_arduino_watchdog_feed();
-    rw_arduino_serial_link_service(&serial_link);
-
+    const uint32_t start_us = micros();
     const uint32_t now_ms = millis();
-    const bool idle = esc_at_idle(rw_core_state(&core));
-    if (core.state.config.commits != link_commits && idle) {
-        link_commits = core.state.config.commits;
-        rw_arduino_link_reconfigure(&link, &core.state.config);
+    const bool down = rope_down(core_state_now());
+    rw_arduino_spindle_service(&spindle, now_ms);
+    rw_arduino_link_service(&link, now_ms, down);
+    rw_arduino_serial_link_service(&serial_link);
+    if (down) {
+        /* a PROVISION_COMMIT (DISARMED only): the committed record, copied with the tick kept out */
+        rw_arduino_scheduler_mask_tick();
+        const bool committed = core.state.config.commits != link_commits;
+        if (committed) {
+            memcpy(&committed_config, &core.state.config, sizeof committed_config);
+        }
+        rw_arduino_scheduler_unmask_tick();
+        if (committed) {
+            link_commits = committed_config.commits;
+            rw_arduino_link_reconfigure(&link, &committed_config);
+        }
     }
-    rw_arduino_link_service(&link, now_ms, idle);
-    rw_arduino_status_led_update(now_ms, static_cast<rw_link_state>(link.state));
-    rw_arduino_scheduler_end_tick();
+    rw_arduino_status_led_update(now_ms, rw_arduino_link_state(&link));
+    rw_arduino_board_report_service(&report, now_ms, &serial_link, &link, &spindle);
+    background_passes = background_passes + 1u;
+    const uint32_t took_us = micros() - start_us;
+    if (took_us > report.max_pass_us) {
+        report.max_pass_us = took_us;
+    }
 }

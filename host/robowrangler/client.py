@@ -88,6 +88,7 @@ class ClientStats:
     telemetry_dropped: int = 0
     events_received: int = 0
     events_lost: int = 0
+    burst_frames: int = 0  # BURST_DATA frames received (a recorder on the transport keeps their content)
     unexpected_messages: int = 0
     auth_failures: int = 0
     replayed: int = 0  # signed device frames dropped as stale (an older session or a counter already seen)
@@ -184,6 +185,7 @@ class Client:
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self._connected = False
+        self._heartbeat_idle: Callable[[], bool] | None = None
 
     # ----------------------------------------------------------------- lifecycle
 
@@ -385,6 +387,14 @@ class Client:
         """DISARMED or ARMED with the rope stopped: drive the guide to the home end (stall or limit
         switch), position 0 there. Returns when accepted; telemetry spindle_flags gets HOMED when done."""
         return State(self._command(gen.Home()).state)
+
+    def start_burst(self, samples: int) -> State:
+        """BURST_START: the device samples every control tick (1 kHz) for `samples` ticks (1..1000), then streams
+        them as BURST_DATA (a recorder writes them to /device/burst). Refused (NackError) while a burst is
+        captured or streamed (BURST_BUSY) or for a size out of range (OUT_OF_RANGE, detail = the maximum)."""
+        if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= 0xFFFF:
+            raise InvalidArgument("samples", "an integer 1..1000 (the device's burst buffer)", samples)
+        return State(self._command(gen.BurstStart(samples)).state)
 
     # ----------------------------------------------------------------- provisioning (USB serial only)
 
@@ -677,14 +687,32 @@ class Client:
         raise LinkTimeout(f"{spec.name}: ACKed by {self.url} but no PARAM_VALUE arrived after "
                           f"{self.retries + 1} requests", url=self.url, waited_s=waited_s)
 
+    def request(self, message: gen.Message) -> gen.Ack | gen.Nack:
+        """Send any command message and return the device's answer, its ACK or its NACK (not raised).
+
+        For a tool that carries other hosts' commands (wrangler proxy); retries and LinkTimeout as for
+        every command. PARAM_GET/PARAM_SET: use get_param/set_param, which also wait for the PARAM_VALUE.
+        """
+        try:
+            return self._command(message)
+        except CommandRefused as err:
+            return gen.Nack(message.MSG_ID, 0, int(err.reason), int(err.state), err.detail)
+
+    def pause_heartbeats_while(self, idle: Callable[[], bool] | None) -> None:
+        """Send no HEARTBEAT while idle() is true (None: always send). A proxy passes "no local tool is
+        alive", so that the device's live-host rule (heartbeat_timeout_s) still follows the tools."""
+        self._heartbeat_idle = idle
+
     def _heartbeat_loop(self) -> None:
         period_s = 1.0 / self.heartbeat_hz
         next_s = time.monotonic()
         while not self._stop.is_set():
             try:
-                self._send_new(gen.Heartbeat(units.s_to_ms_u32(time.monotonic())))
-                with self._lock:
-                    self._stats.heartbeats_sent += 1
+                idle = self._heartbeat_idle
+                if idle is None or not idle():
+                    self._send_new(gen.Heartbeat(units.s_to_ms_u32(time.monotonic())))
+                    with self._lock:
+                        self._stats.heartbeats_sent += 1
             except NotConnected:
                 return
             next_s += period_s
@@ -769,6 +797,9 @@ class Client:
             self._on_telemetry(TelemetrySample.from_wire(msg, received_s=received_s))
         elif msg_id == MsgId.EVENT:
             self._on_event(DeviceEvent.from_wire(msg, received_s=received_s))
+        elif msg_id == MsgId.BURST_DATA:
+            with self._lock:
+                self._stats.burst_frames += 1
         else:
             with self._lock:
                 self._stats.unexpected_messages += 1

@@ -119,6 +119,8 @@ class CommandRefused(RoboWranglerError):
             return (f"{_fmt(self.value)} m/s is under the ToV guard {guard:.2f} m/s while airborne; "
                     "command spindown to land")
         if r == NackReason.OUT_OF_RANGE:
+            if cmd == MsgId.SET_ROPE_SPEED and self.value is not None and self.value == 0:
+                return "0 m/s is not a speed target: to stop the rope, command spindown (`wrangler spindown`)"
             if cmd == MsgId.SET_ROPE_SPEED:
                 limit = units.mmps_to_mps(self.detail)
                 return (f"rope speed {_fmt(self.value)} m/s is out of range (limit crossed: {limit:g} m/s; "
@@ -130,6 +132,9 @@ class CommandRefused(RoboWranglerError):
                         "valid: guide_min_mm..guide_max_mm)")
             spec = PARAMS_BY_NAME.get(self.param or "")
             if spec is not None:
+                if (spec.integer and self.value is not None and spec.min <= self.value <= spec.max
+                        and self.value != int(self.value)):
+                    return f"{spec.name} = {_fmt(self.value)} is not an integer ({spec.units})"
                 return (f"{spec.name} = {_fmt(self.value)} is outside [{spec.min:g}, {spec.max:g}] {spec.units}"
                         + ("; it must be an integer" if spec.integer else ""))
             return f"a field is out of range (limit crossed: {self.detail}, wire units)"
@@ -140,6 +145,12 @@ class CommandRefused(RoboWranglerError):
         if r == NackReason.UNKNOWN_PARAM:
             return (f"the device has no parameter {self.param!r}: host and firmware parameter tables "
                     "differ; update one of them")
+        if r == NackReason.PARAM_CONFLICT:
+            other = PARAMS[self.detail].name if 0 <= self.detail < len(PARAMS) else f"parameter #{self.detail}"
+            rule = ("guide_min_mm must stay below guide_max_mm" if other.startswith("guide_")
+                    else "tov_mps x tov_margin (the ToV guard) must stay at or below max_rope_speed_mps")
+            return (f"{self.param} = {_fmt(self.value)} breaks a rule with {other}: {rule}; "
+                    f"change {other} first (`wrangler param get {other}`)")
         if r == NackReason.PARAM_LOCKED:
             return f"{self.param} can only be set while DISARMED (state is {st}); disarm first"
         if r == NackReason.NOT_HOMED:

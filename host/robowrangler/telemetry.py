@@ -27,7 +27,9 @@ class TelemetrySample:
     time_s: device time since boot [s]; received_s: host time.monotonic() at reception [s].
     Speeds in m/s at the wheel surface; guide positions in m from home (valid when spindle_flags has
     HOMED); spindle_load_pct in % of the AX-12A's maximum torque, + = resisting retraction; counters are
-    the device's wrapping uint16 counters.
+    the device's wrapping uint16 counters. esc_pulse_fine_us is the pulse at the PWM timer's 1/3 us;
+    encoder_counts (edges since boot) and encoder_edge_us (latest edge, us since boot) wrap at 2^32: between
+    two samples their differences give the raw M/T edge period (robowrangler.recorder.encoder_period).
     """
 
     time_s: float
@@ -54,6 +56,10 @@ class TelemetrySample:
     rx_auth_failed: int
     rx_replayed: int
     tx_dropped: int
+    esc_pulse_fine_us: float
+    spindle_moving_speed_raw: int
+    encoder_counts: int
+    encoder_edge_us: int
     received_s: float
 
     @classmethod
@@ -83,6 +89,10 @@ class TelemetrySample:
             rx_auth_failed=msg.rx_auth_failed,
             rx_replayed=msg.rx_replayed,
             tx_dropped=msg.tx_dropped,
+            esc_pulse_fine_us=msg.esc_pulse_third_us / 3,
+            spindle_moving_speed_raw=msg.spindle_moving_speed_raw,
+            encoder_counts=msg.encoder_counts,
+            encoder_edge_us=msg.encoder_edge_us,
             received_s=received_s,
         )
 

@@ -34,11 +34,11 @@ def _to_int32(argument: str, value: object, *, scale: float, what: str, symbol: 
               si_unit: str) -> int:
     """value x scale rounded to the nearest int32; InvalidArgument for NaN, inf and what int32 cannot hold."""
     x = check_real(argument, value, allow_inf=False)
-    wire = round(x * scale)
-    if not INT32_MIN <= wire <= INT32_MAX:
+    scaled = x * scale  # inf for a finite x near the float limit (1e308): refused like any value beyond int32
+    if not (math.isfinite(scaled) and INT32_MIN <= round(scaled) <= INT32_MAX):
         raise InvalidArgument(argument, f"a {what} encodable as int32 {wire_unit} "
                               f"(|{symbol}| <= {INT32_MAX / scale:g} {si_unit})", x)
-    return wire
+    return round(scaled)
 
 
 def mps_to_mmps(rope_speed_mps: object, *, argument: str = "rope_speed_mps") -> int:

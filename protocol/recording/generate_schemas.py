@@ -52,6 +52,7 @@ UNIT_CONVERSIONS = {
     "rpm": ("_rpm", "_rpm", 1, "rev/min"),
     "um": ("_um", "_m", 1000000, "m"),
     "permille": ("_permille", "_permille", 1, "per mille (1/1000 of the full scale the description names)"),
+    "us/3": ("_third_us", "_fine_us", 3, "us (from the PWM timer's counts of 1/3 us: a multiple of 1/3)"),
 }
 # the unit suffixes an extra /sim/plant_truth value may carry
 SI_SUFFIXES = ("s", "mps", "mps2", "m", "mm", "rad", "rad_s", "n", "nm", "v", "a", "w", "kg", "hz", "us", "rpm", "j")
@@ -205,6 +206,41 @@ def command_schema(spec: generate.Spec) -> tuple[dict, dict[str, list[dict]]]:
     return schema, conversions
 
 
+def burst_schema(spec: generate.Spec) -> tuple[dict, list[dict], list[dict]]:
+    """/device/burst: one BURST_DATA frame, its header fields converted as TELEMETRY's, its packed samples
+    unpacked into one array per sample field (only the samples the frame carries)."""
+    b = spec.burst_sample
+    if b is None:
+        raise SchemaGenError("the spec has no [burst_sample]; the /device/burst channel needs it")
+    msg = _message(spec, b.message)
+    props, required, conv = {}, [], []
+    for f in msg.fields:
+        if f.name == b.array_field:
+            continue
+        name, schema, entry = _field_schema(spec, msg, f)
+        props[name], conv = schema, conv + [entry]
+        required.append(name)
+    sample_conv = []
+    for f in b.fields:
+        name, schema, entry = _field_schema(spec, msg, f)
+        props[name] = {"type": "array", "items": {k: v for k, v in schema.items() if k != "description"},
+                       "minItems": 1, "maxItems": b.samples_per_frame,
+                       "description": f"One value per sample of this frame, sample first_sample + i at index i: "
+                                      + schema["description"]}
+        required.append(name)
+        sample_conv.append(entry)
+    props["seq"] = dict(SEQ_SCHEMA, description=f"Frame sequence number of the {b.message} frame (uint16, wraps): "
+                        "the device numbers it with TELEMETRY and EVENT, so a lost one also shows in /link/gap.")
+    required.append("seq")
+    desc = (f"One {b.message} frame of protocol v{spec.version}: samples first_sample .. first_sample + n - 1 of "
+            "burst burst_id (n = the length of the sample arrays, all equal). Sample i of the burst was taken at "
+            "start_time_s + i tick_us / 1e6 (device time). A burst is complete when the frames of one burst_id cover "
+            "0 .. sample_count - 1; sample indices no frame carries were lost on the link (a gap, never filled "
+            "in). The counters are the device's low 16 bits: unwrap encoder_counts and encoder_edge_us against "
+            "the previous sample. " + " ".join(b.description.split()) + " log_time: host reception.")
+    return _object("/device/burst", desc, props, required), conv, sample_conv
+
+
 def gap_schema() -> dict:
     nullable_int = {"type": ["integer", "null"], "minimum": 0, "maximum": 65535}
     props = {
@@ -301,6 +337,7 @@ CHANNEL_FILES = {  # topic -> (file stem, MCAP schema name)
     "/link/gap": "link_gap",
     "/sim/plant_truth": "sim_plant_truth",
     "/loop/observation": "loop_observation",
+    "/device/burst": "device_burst",
 }
 
 
@@ -308,8 +345,10 @@ def build(spec: generate.Spec) -> dict[Path, str]:
     tele, tele_conv = telemetry_schema(spec)
     event, event_conv = event_schema(spec)
     cmd, cmd_conv = command_schema(spec)
+    burst, burst_conv, burst_sample_conv = burst_schema(spec)
     schemas = {"/device/telemetry": tele, "/device/event": event, "/host/command": cmd, "/link/gap": gap_schema(),
-               "/sim/plant_truth": plant_truth_schema(), "/loop/observation": loop_observation_schema()}
+               "/sim/plant_truth": plant_truth_schema(), "/loop/observation": loop_observation_schema(),
+               "/device/burst": burst}
     outputs: dict[Path, str] = {}
     texts: dict[str, tuple[str, str, str]] = {}
     for topic, stem in CHANNEL_FILES.items():
@@ -324,11 +363,12 @@ def build(spec: generate.Spec) -> dict[Path, str]:
     meta["$comment"] = BANNER
     meta_text = json.dumps(meta, indent=2) + "\n"
     outputs[SCHEMA_DIR / "meta.schema.json"] = meta_text
-    outputs[OUT_PYTHON] = python_module(spec, texts, meta_text, tele_conv, event_conv, cmd_conv)
+    outputs[OUT_PYTHON] = python_module(spec, texts, meta_text, tele_conv, event_conv, cmd_conv, burst_conv,
+                                        burst_sample_conv)
     return outputs
 
 
-def python_module(spec, texts, meta_text, tele_conv, event_conv, cmd_conv) -> str:
+def python_module(spec, texts, meta_text, tele_conv, event_conv, cmd_conv, burst_conv, burst_sample_conv) -> str:
     o: list[str] = []
     w = o.append
     w(f'"""{BANNER}')
@@ -361,6 +401,8 @@ def python_module(spec, texts, meta_text, tele_conv, event_conv, cmd_conv) -> st
     w(f"TELEMETRY_FIELDS: tuple[dict, ...] = {tuple(tele_conv)!r}")
     w(f"EVENT_FIELDS: tuple[dict, ...] = {tuple(event_conv)!r}")
     w(f"COMMAND_FIELDS: dict[str, tuple[dict, ...]] = {{k: tuple(v) for k, v in {cmd_conv!r}.items()}}")
+    w(f"BURST_FIELDS: tuple[dict, ...] = {tuple(burst_conv)!r}")
+    w(f"BURST_SAMPLE_FIELDS: tuple[dict, ...] = {tuple(burst_sample_conv)!r}")
     return "\n".join(o) + "\n"
 
 

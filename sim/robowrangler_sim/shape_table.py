@@ -22,7 +22,10 @@ Frame and ordering: points lie in the loop plane, in metres, origin at the guide
 pointing away from the robot (the launch direction projected on the horizontal), z up (gravity is -z).
 phi is the inclination of the module's launch axis above the horizontal. Each contour starts at the
 exit point, runs out along the upper branch, round the tip and back along the lower branch, and ends at
-the return point; its points are equally spaced in arc length (first and last included).
+the return point (first and last point included). Tables from the simulator space the points equally in
+arc length; `wrangler identify` (robowrangler_sim.identify) by default places them densest round the tip,
+with the tip itself a point at the same index at every phi. Consumers resample by arc length (the chain:
+chain/targets.py) and so read either.
 """
 
 from __future__ import annotations

@@ -24,6 +24,7 @@ import bisect
 import os
 import shutil
 import subprocess
+import sys
 import struct
 from collections import Counter
 from dataclasses import dataclass, field
@@ -66,13 +67,17 @@ def build_arm(*, build_dir: Path = ARM_BUILD_DIR) -> Path:
     """
     if not toolchain_available():
         raise ArmToolchainMissing("arm-none-eabi-gcc not found: apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi")
-    build_dir.mkdir(parents=True, exist_ok=True)
-    if not (build_dir / "CMakeCache.txt").exists():
-        cfg = subprocess.run(["cmake", "-S", str(REPO_ROOT / "firmware"), "-B", str(build_dir),
-                              f"-DCMAKE_TOOLCHAIN_FILE={TOOLCHAIN_FILE}"], capture_output=True, text=True)
-        if cfg.returncode != 0:
-            raise ArmBuildError(f"ARM configure failed:\n{cfg.stdout}\n{cfg.stderr}")
-    result = subprocess.run(["cmake", "--build", str(build_dir), "-j2"], capture_output=True, text=True)
+    if str(Path(__file__).resolve().parents[1]) not in sys.path:  # tests/build_lock.py, also from bench/
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from build_lock import exclusive
+
+    with exclusive(build_dir):
+        if not (build_dir / "CMakeCache.txt").exists():
+            cfg = subprocess.run(["cmake", "-S", str(REPO_ROOT / "firmware"), "-B", str(build_dir),
+                                  f"-DCMAKE_TOOLCHAIN_FILE={TOOLCHAIN_FILE}"], capture_output=True, text=True)
+            if cfg.returncode != 0:
+                raise ArmBuildError(f"ARM configure failed:\n{cfg.stdout}\n{cfg.stderr}")
+        result = subprocess.run(["cmake", "--build", str(build_dir), "-j2"], capture_output=True, text=True)
     if result.returncode != 0:
         raise ArmBuildError(f"ARM build failed:\n{result.stdout}\n{result.stderr}")
     return build_dir / HARNESS_ELF_NAME

@@ -48,7 +48,7 @@ _Overruns = ctypes.CFUNCTYPE(c_uint32, c_void_p)
 
 
 class _HalEsc(ctypes.Structure):
-    _fields_ = [("ctx", c_void_p), ("write_pulse_us", _EscWrite)]
+    _fields_ = [("ctx", c_void_p), ("write_pulse_us", _EscWrite), ("write_pulse_third_us", _EscWrite)]
 
 
 class _HalEncoder(ctypes.Structure):

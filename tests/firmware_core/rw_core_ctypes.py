@@ -146,6 +146,7 @@ _SIGNATURES = {
     "rw_throttle_map_feed_forward": (c_int32, ["Throttle*", c_int32, c_float]),
     "rw_throttle_map_no_load_rope_mps": (c_float, ["Throttle*", c_float, c_float]),
     "rw_throttle_map_pulse_us": (c_uint16, ["Throttle*", c_int32]),
+    "rw_throttle_map_pulse_third_us": (c_uint16, ["Throttle*", c_int32]),
     "rw_throttle_map_throttle_from_pulse": (c_float, ["Throttle*", c_uint16]),
     "rw_throttle_map_config_is_valid": (c_bool, ["ThrottleConfig*"]),
     "rw_throttle_map_prepare": (None, ["Throttle*"]),
@@ -381,6 +382,10 @@ class ThrottleMap(_Guarded):
 
     def pulse_us_q16(self, throttle_q16: int) -> int:
         return self._call("rw_throttle_map_pulse_us", throttle_q16)
+
+    def pulse_third_us_q16(self, throttle_q16: int) -> int:
+        """The pulse in thirds of a microsecond (the PWM timer's counts)."""
+        return self._call("rw_throttle_map_pulse_third_us", throttle_q16)
 
     def throttle_from_pulse(self, pulse_us: int) -> float:
         return self._call("rw_throttle_map_throttle_from_pulse", pulse_us)

@@ -303,6 +303,38 @@ def test_retract_secures_a_real_object_after_the_load_has_held(rw_core):
     assert len(rig.outcomes) == 1
 
 
+def test_lost_replies_while_the_load_holds_neither_restart_nor_fake_the_hold(rw_core):
+    """The split bus on the board makes a lost reply a step without a reading: the time the secure load has held
+    is kept through it (not restarted, so the retract does not pull on for another stall_time_s; not advanced,
+    so a load never seen does not count)."""
+    rig = Rig(rw_core)
+    rig.home()
+    rig.plant.object_circumference_m = 1.8
+    rig.sp.retract()
+    secure_permille = DEFAULT_CONFIG["secure_load_pct"] * 10
+    for _ in range(4000):  # until the load has held for half the stall time
+        rig.step()
+        held = 0
+        for s in reversed(rig.trace):
+            if s["load"] < secure_permille:
+                break
+            held += 1
+        if held >= STALL_STEPS // 2 and rig.t_s > 1.0:
+            break
+    assert held >= STALL_STEPS // 2, "the retract never loaded the rope"
+    lost = 3
+    for _ in range(lost):  # an interrupt burst: three replies lost, the servo keeps pulling
+        p = rig.plant
+        assert rig.sp.step(None, DT_S) == Outcome.NOTHING
+        p.moving_speed_raw = rig.sp.moving_speed_raw
+        p.step(DT_S)
+    steps = 0
+    while rig.step() != Outcome.SECURED:
+        steps += 1
+        assert steps < STALL_STEPS, "the hold restarted after the lost replies"
+    assert steps + 1 == STALL_STEPS - held, "the hold resumed where it was: the lost steps did not count"
+
+
 def test_retract_start_up_spike_shorter_than_the_stall_time_does_not_secure(rw_core):
     sp = _homed_at_zero(rw_core)
     sp.retract()

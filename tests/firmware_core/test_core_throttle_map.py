@@ -154,3 +154,18 @@ def test_defaults(rw_core):
     for bad in (ThrottleConfig(0.0, 0.015, 1000, 2000), ThrottleConfig(KV, float("nan"), 1000, 2000),
                 ThrottleConfig(KV, 0.015, 2000, 2000)):
         assert not rw_core.rw_throttle_map_config_is_valid(ctypes.byref(bad))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(min_value=-2**31, max_value=2**31 - 1), st.sampled_from([(1000, 2000), (1080, 1900), (1000, 1001)]))
+def test_the_third_microsecond_pulse_rounds_to_the_whole_microsecond_pulse(rw_core, throttle_q16, span):
+    """The pulse at the timer's resolution is the exact throttle law to 1/3 us, and its rounding to the
+    microsecond is what the whole-microsecond pulse gives (so a board without the fine output loses nothing else)."""
+    lo, hi = span
+    m = make(rw_core, pulse_min_us=lo, pulse_max_us=hi)
+    third = m.pulse_third_us_q16(throttle_q16)
+    assert 3 * lo <= third <= 3 * hi
+    assert (third + 1) // 3 == m.pulse_us_q16(throttle_q16)
+    t = min(max(throttle_q16, 0), 65536)
+    exact_third = 3 * lo + t * 3 * (hi - lo) / 65536
+    assert abs(third - exact_third) <= 0.5

@@ -13,6 +13,7 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,13 +43,17 @@ def build(build_dir: Path = DEFAULT_BUILD_DIR) -> Path:
     clang = clang_path()
     if clang is None:
         raise ClangMissing("clang not found on PATH (Debian: apt-get install clang libclang-rt-14-dev)")
-    build_dir.mkdir(parents=True, exist_ok=True)
-    if not (build_dir / "CMakeCache.txt").exists():
-        configure = subprocess.run(["cmake", "-S", str(FUZZ_SOURCE_DIR), "-B", str(build_dir),
-                                    f"-DCMAKE_C_COMPILER={clang}"], capture_output=True, text=True)
-        if configure.returncode != 0:
-            raise RuntimeError(f"fuzz configure failed:\n{configure.stdout}\n{configure.stderr}")
-    result = subprocess.run(["cmake", "--build", str(build_dir), "-j2"], capture_output=True, text=True)
+    if str(Path(__file__).resolve().parents[1]) not in sys.path:  # tests/build_lock.py, also from bench/
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from build_lock import exclusive
+
+    with exclusive(build_dir):
+        if not (build_dir / "CMakeCache.txt").exists():
+            configure = subprocess.run(["cmake", "-S", str(FUZZ_SOURCE_DIR), "-B", str(build_dir),
+                                        f"-DCMAKE_C_COMPILER={clang}"], capture_output=True, text=True)
+            if configure.returncode != 0:
+                raise RuntimeError(f"fuzz configure failed:\n{configure.stdout}\n{configure.stderr}")
+        result = subprocess.run(["cmake", "--build", str(build_dir), "-j2"], capture_output=True, text=True)
     if result.returncode != 0:
         hint = ("\n(the libFuzzer/sanitizer runtime is missing: Debian package libclang-rt-<clang major>-dev)"
                 if "libclang_rt" in result.stdout + result.stderr else "")

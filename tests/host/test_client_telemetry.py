@@ -141,7 +141,7 @@ def test_values_from_a_newer_firmware_are_kept_not_fatal(core_lib) -> None:
     assert stats.decode_errors == 0
 
 
-SI_NAMES = {"_mmps": "_mps", "_um": "_m", "_mv": "_v", "_ms": "_s", "_permille": "_pct"}
+SI_NAMES = {"_mmps": "_mps", "_um": "_m", "_mv": "_v", "_ms": "_s", "_permille": "_pct", "_third_us": "_fine_us"}
 
 
 def _si_name(wire_name: str) -> str:

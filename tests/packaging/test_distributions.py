@@ -42,7 +42,7 @@ def test_the_simulator_registers_its_verbs_through_the_entry_point():
     loaded = load_plugins(ENTRY_POINT_GROUP)
     assert loaded.problems == ()
     names = {command.name for command in loaded.commands}
-    assert {"sil", "demo"} <= names
+    assert {"sil", "demo", "identify"} <= names
     assert names <= set(SIMULATOR_VERBS), "a plugin verb the host's stand-in list does not know"
 
 

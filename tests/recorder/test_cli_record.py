@@ -116,13 +116,41 @@ def _recorder_process(url: str, out: Path, sig: int, *, lines: int,
     return proc, progress, stdout
 
 
-def test_ctrl_c_ends_the_recording_with_a_complete_file_and_exit_0(live_sil: SilSession, tmp_path: Path,
-                                                                    key_file: Path) -> None:
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_ctrl_c_and_sigterm_finish_the_file_for_any_mcap_reader(live_sil: SilSession, tmp_path: Path,
+                                                                 key_file: Path, sig: int) -> None:
+    """`kill PID` (SIGTERM) ends a recording as Ctrl-C does: summary and footer written, the mcap library's
+    indexed reader opens it, the chunks are zstd."""
+    from mcap.reader import make_reader
+
     out = tmp_path / "stopped.mcap"
-    proc, progress, stdout = _recorder_process(live_sil.cmd_url, out, signal.SIGINT, lines=1, key_file=key_file)
+    proc, progress, stdout = _recorder_process(live_sil.cmd_url, out, sig, lines=1, key_file=key_file)
     assert proc.returncode == ExitStatus.OK and "recorded" in stdout
     rec = read_recording(out)
     assert not rec.truncated and len(rec.telemetry["seq"]) >= progress[-1]
+    with open(out, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None and {ci.compression for ci in summary.chunk_indexes} == {"zstd"}
+        telemetry = sum(1 for _ in reader.iter_messages(topics=["/device/telemetry"]))
+    assert telemetry == len(rec.telemetry["seq"])
+
+
+def test_record_refuses_an_existing_file_unless_forced_and_a_non_mcap_name(tmp_path: Path, wrangler) -> None:
+    existing = tmp_path / "run.mcap"
+    existing.write_bytes(b"precious")
+    status, out, err = wrangler("--url", "udp://127.0.0.1:9", "record", str(existing), "--duration", "0.2")
+    assert status == ExitStatus.USAGE and out == "" and "add --force to replace it" in err
+    assert existing.read_bytes() == b"precious"
+    status, _, err = wrangler("--url", "udp://127.0.0.1:9", "--timeout", "0.1", "record", str(existing),
+                              "--duration", "0.2", "--force")
+    assert status == ExitStatus.LINK_TIMEOUT and read_recording(existing).meta["source"] == "sil"
+    status, _, err = wrangler("--url", "udp://127.0.0.1:9", "record", str(tmp_path / "run.csv"))
+    assert status == ExitStatus.USAGE and "ending in .mcap" in err and not (tmp_path / "run.csv").exists()
+    for bad in ("nan", "inf", "-1", "0"):
+        status, _, err = wrangler("--url", "udp://127.0.0.1:9", "record", str(tmp_path / "d.mcap"), "--duration", bad)
+        assert status == ExitStatus.USAGE and "--duration" in err, (bad, err)
+    assert not (tmp_path / "d.mcap").exists()
 
 
 def test_kill_9_mid_recording_leaves_every_chunk_but_the_last(live_sil: SilSession, tmp_path: Path, key_file: Path,

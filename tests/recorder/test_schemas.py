@@ -15,7 +15,7 @@ from robowrangler.recorder.json_schema_check import SchemaKeywordError, check_ke
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_DIR = ROOT / "protocol" / "recording" / "schemas"
-WIRE_TO_RECORDING = {"_ms": "_s", "_mmps": "_mps", "_mv": "_v", "_um": "_m"}
+WIRE_TO_RECORDING = {"_ms": "_s", "_mmps": "_mps", "_mv": "_v", "_um": "_m", "_third_us": "_fine_us"}
 
 
 def test_generated_schemas_are_fresh() -> None:

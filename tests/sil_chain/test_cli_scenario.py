@@ -48,6 +48,9 @@ def test_scenario_runs_with_progress_and_a_json_verdict(native_build_dir: Path) 
     assert result["grasp_end"] == "STROKE_END" and result["diverged"] is None
     assert "RETRACT->ARMED (STROKE_END)" in result["firmware_path"]
     assert "GRASP" in err and "pull" in err  # progress on stderr
+    explained = err.strip().splitlines()[-1]  # what the verdict means, and what the figures say happened
+    assert explained.startswith("wrangler: secured = over the judged part of the pull the object followed")
+    assert "at least 0.5" in explained and "at least 80 %" in explained and ". Here: " in explained
 
 
 @pytest.mark.slow
@@ -89,3 +92,24 @@ def test_divergence_exits_1_with_the_outcome_on_stdout(native_build_dir: Path, m
     lines = [json.loads(line) for line in out.strip().splitlines()]
     assert lines[0]["verdict"] == "diverged" and "nonfinite" in lines[0]["diverged"]
     assert "scenario mug: diverged" in err
+
+
+def test_an_interrupted_scenario_says_where_it_stopped_and_what_it_left(native_build_dir: Path, monkeypatch) -> None:
+    """Ctrl-C in the middle of a wrangle: exit 130, one line naming the phase, the simulated time, the firmware's
+    states so far and that the SIL firmware was stopped (frames and MP4 with --render: see the slow render test)."""
+    from robowrangler_sim.chain.plant import ChainPlant
+
+    step = ChainPlant.step
+
+    def interrupted_step(self, inputs=None):
+        step(self, inputs)
+        if self.time_s >= 2.0:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(ChainPlant, "step", interrupted_step)
+    status, out, err = _run("sil", "--scenario", "mug", "--links", "10")
+    assert status == ExitStatus.CTRL_C and out == ""
+    left = next(line for line in err.splitlines() if "interrupted in phase" in line)
+    assert left.startswith("wrangler: scenario mug interrupted in phase home at 2.0 simulated s, no verdict")
+    assert "firmware states unchanged since boot" in left and "the SIL firmware is stopped" in left
+    assert err.splitlines()[-1] == "wrangler: interrupted"

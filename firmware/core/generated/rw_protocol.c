@@ -60,11 +60,12 @@ static const rw_msg_info msg_infos[] = {
     { 0u, RW_MSG_KIND_HEARTBEAT, 4u, 0xAEABu, "HEARTBEAT" },
     { 1u, RW_MSG_KIND_REPLY, 4u, 0x2620u, "ACK" },
     { 2u, RW_MSG_KIND_REPLY, 9u, 0x9533u, "NACK" },
-    { 3u, RW_MSG_KIND_TELEMETRY, 52u, 0x0420u, "TELEMETRY" },
+    { 3u, RW_MSG_KIND_TELEMETRY, 64u, 0xF5D0u, "TELEMETRY" },
     { 4u, RW_MSG_KIND_EVENT, 13u, 0x69CAu, "EVENT" },
     { 5u, RW_MSG_KIND_REPLY, 6u, 0xDBDCu, "PARAM_VALUE" },
     { 6u, RW_MSG_KIND_REPLY, 11u, 0xC5E6u, "SESSION_INFO" },
     { 7u, RW_MSG_KIND_REPLY, 46u, 0x1E2Cu, "PROVISION_STATUS" },
+    { 8u, RW_MSG_KIND_BURST, 64u, 0x1EC2u, "BURST_DATA" },
     { 10u, RW_MSG_KIND_COMMAND, 0u, 0xF3B4u, "ARM" },
     { 11u, RW_MSG_KIND_COMMAND, 0u, 0x4382u, "DISARM" },
     { 12u, RW_MSG_KIND_COMMAND, 4u, 0x10BAu, "SET_ROPE_SPEED" },
@@ -79,13 +80,14 @@ static const rw_msg_info msg_infos[] = {
     { 21u, RW_MSG_KIND_COMMAND, 0u, 0x4B96u, "RELEASE" },
     { 22u, RW_MSG_KIND_COMMAND, 0u, 0x319Cu, "HOME" },
     { 23u, RW_MSG_KIND_HELLO, 4u, 0x1C38u, "HELLO" },
+    { 24u, RW_MSG_KIND_COMMAND, 2u, 0xF94Bu, "BURST_START" },
     { 30u, RW_MSG_KIND_PROVISION, 16u, 0xE014u, "PROVISION_SET_KEY" },
     { 31u, RW_MSG_KIND_PROVISION, 33u, 0x5F44u, "PROVISION_SET_WIFI_SSID" },
     { 32u, RW_MSG_KIND_PROVISION, 64u, 0xE069u, "PROVISION_SET_WIFI_PASSWORD" },
     { 33u, RW_MSG_KIND_PROVISION, 4u, 0x606Bu, "PROVISION_COMMIT" },
     { 34u, RW_MSG_KIND_PROVISION, 0u, 0x9719u, "PROVISION_GET" },
     { 100u, RW_MSG_KIND_SIL, 26u, 0x06DBu, "SIL_SENSORS" },
-    { 101u, RW_MSG_KIND_SIL, 8u, 0x01BFu, "SIL_ACTUATORS" },
+    { 101u, RW_MSG_KIND_SIL, 10u, 0xFEDEu, "SIL_ACTUATORS" },
 };
 
 const rw_msg_info *rw_msg_info_find(uint8_t msg_id)
@@ -342,6 +344,10 @@ void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload)
     put_u16(payload + 46, (uint16_t)msg->rx_auth_failed);
     put_u16(payload + 48, (uint16_t)msg->rx_replayed);
     put_u16(payload + 50, (uint16_t)msg->tx_dropped);
+    put_u16(payload + 52, (uint16_t)msg->esc_pulse_third_us);
+    put_u16(payload + 54, (uint16_t)msg->spindle_moving_speed_raw);
+    put_u32(payload + 56, (uint32_t)msg->encoder_counts);
+    put_u32(payload + 60, (uint32_t)msg->encoder_edge_us);
 }
 
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
@@ -370,6 +376,10 @@ void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload)
     msg->rx_auth_failed = (uint16_t)get_u16(payload + 46);
     msg->rx_replayed = (uint16_t)get_u16(payload + 48);
     msg->tx_dropped = (uint16_t)get_u16(payload + 50);
+    msg->esc_pulse_third_us = (uint16_t)get_u16(payload + 52);
+    msg->spindle_moving_speed_raw = (uint16_t)get_u16(payload + 54);
+    msg->encoder_counts = (uint32_t)get_u32(payload + 56);
+    msg->encoder_edge_us = (uint32_t)get_u32(payload + 60);
 }
 
 size_t rw_msg_telemetry_encode(const rw_msg_telemetry *msg, uint16_t seq, uint8_t *out, size_t out_cap)
@@ -478,6 +488,35 @@ size_t rw_msg_provision_status_encode(const rw_msg_provision_status *msg, uint16
     uint8_t payload[RW_MSG_PROVISION_STATUS_LEN + 1u] = { 0u };
     rw_msg_provision_status_pack(msg, payload);
     return rw_frame_encode(RW_MSG_ID_PROVISION_STATUS, seq, payload, RW_MSG_PROVISION_STATUS_LEN, out, out_cap);
+}
+
+void rw_msg_burst_data_pack(const rw_msg_burst_data *msg, uint8_t *payload)
+{
+    put_u16(payload + 0, (uint16_t)msg->burst_id);
+    put_u32(payload + 2, (uint32_t)msg->start_time_ms);
+    put_u32(payload + 6, (uint32_t)msg->start_time_us);
+    put_u16(payload + 10, (uint16_t)msg->tick_us);
+    put_u16(payload + 12, (uint16_t)msg->sample_count);
+    put_u16(payload + 14, (uint16_t)msg->first_sample);
+    memcpy(payload + 16, msg->samples, 48u);
+}
+
+void rw_msg_burst_data_unpack(rw_msg_burst_data *msg, const uint8_t *payload)
+{
+    msg->burst_id = (uint16_t)get_u16(payload + 0);
+    msg->start_time_ms = (uint32_t)get_u32(payload + 2);
+    msg->start_time_us = (uint32_t)get_u32(payload + 6);
+    msg->tick_us = (uint16_t)get_u16(payload + 10);
+    msg->sample_count = (uint16_t)get_u16(payload + 12);
+    msg->first_sample = (uint16_t)get_u16(payload + 14);
+    memcpy(msg->samples, payload + 16, 48u);
+}
+
+size_t rw_msg_burst_data_encode(const rw_msg_burst_data *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_BURST_DATA_LEN + 1u] = { 0u };
+    rw_msg_burst_data_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_BURST_DATA, seq, payload, RW_MSG_BURST_DATA_LEN, out, out_cap);
 }
 
 void rw_msg_arm_pack(const rw_msg_arm *msg, uint8_t *payload)
@@ -738,6 +777,23 @@ size_t rw_msg_hello_encode(const rw_msg_hello *msg, uint16_t seq, uint8_t *out, 
     return rw_frame_encode(RW_MSG_ID_HELLO, seq, payload, RW_MSG_HELLO_LEN, out, out_cap);
 }
 
+void rw_msg_burst_start_pack(const rw_msg_burst_start *msg, uint8_t *payload)
+{
+    put_u16(payload + 0, (uint16_t)msg->samples);
+}
+
+void rw_msg_burst_start_unpack(rw_msg_burst_start *msg, const uint8_t *payload)
+{
+    msg->samples = (uint16_t)get_u16(payload + 0);
+}
+
+size_t rw_msg_burst_start_encode(const rw_msg_burst_start *msg, uint16_t seq, uint8_t *out, size_t out_cap)
+{
+    uint8_t payload[RW_MSG_BURST_START_LEN + 1u] = { 0u };
+    rw_msg_burst_start_pack(msg, payload);
+    return rw_frame_encode(RW_MSG_ID_BURST_START, seq, payload, RW_MSG_BURST_START_LEN, out, out_cap);
+}
+
 void rw_msg_provision_set_key_pack(const rw_msg_provision_set_key *msg, uint8_t *payload)
 {
     memcpy(payload + 0, msg->key, 16u);
@@ -867,6 +923,7 @@ void rw_msg_sil_actuators_pack(const rw_msg_sil_actuators *msg, uint8_t *payload
     put_u32(payload + 0, (uint32_t)msg->time_us);
     put_u16(payload + 4, (uint16_t)msg->esc_pulse_us);
     put_u16(payload + 6, (uint16_t)msg->spindle_moving_speed_raw);
+    put_u16(payload + 8, (uint16_t)msg->esc_pulse_third_us);
 }
 
 void rw_msg_sil_actuators_unpack(rw_msg_sil_actuators *msg, const uint8_t *payload)
@@ -874,6 +931,7 @@ void rw_msg_sil_actuators_unpack(rw_msg_sil_actuators *msg, const uint8_t *paylo
     msg->time_us = (uint32_t)get_u32(payload + 0);
     msg->esc_pulse_us = (uint16_t)get_u16(payload + 4);
     msg->spindle_moving_speed_raw = (uint16_t)get_u16(payload + 6);
+    msg->esc_pulse_third_us = (uint16_t)get_u16(payload + 8);
 }
 
 size_t rw_msg_sil_actuators_encode(const rw_msg_sil_actuators *msg, uint16_t seq, uint8_t *out, size_t out_cap)
@@ -886,6 +944,26 @@ size_t rw_msg_sil_actuators_encode(const rw_msg_sil_actuators *msg, uint16_t seq
 /* no 64-bit fields in this schema */
 void rw_protocol_unused_u64_(uint8_t *p);
 void rw_protocol_unused_u64_(uint8_t *p) { put_u64(p, get_u64(p)); }
+
+void rw_burst_sample_put(uint8_t samples[RW_BURST_SAMPLES_PER_FRAME * RW_BURST_SAMPLE_LEN], unsigned index, const rw_burst_sample *sample)
+{
+    uint8_t *payload = samples + index * RW_BURST_SAMPLE_LEN;
+    const rw_burst_sample *msg = sample;
+    put_u16(payload + 0, (uint16_t)msg->encoder_counts);
+    put_u16(payload + 2, (uint16_t)msg->encoder_edge_us);
+    put_u16(payload + 4, (uint16_t)msg->esc_pulse_third_us);
+    put_u16(payload + 6, (uint16_t)msg->battery_mv);
+}
+
+void rw_burst_sample_get(const uint8_t samples[RW_BURST_SAMPLES_PER_FRAME * RW_BURST_SAMPLE_LEN], unsigned index, rw_burst_sample *sample)
+{
+    const uint8_t *payload = samples + index * RW_BURST_SAMPLE_LEN;
+    rw_burst_sample *msg = sample;
+    msg->encoder_counts = (uint16_t)get_u16(payload + 0);
+    msg->encoder_edge_us = (uint16_t)get_u16(payload + 2);
+    msg->esc_pulse_third_us = (uint16_t)get_u16(payload + 4);
+    msg->battery_mv = (uint16_t)get_u16(payload + 6);
+}
 
 const rw_param_info rw_param_table[RW_PARAM_COUNT] = {
     { "tov_mps", 0.5f, 10.0f, 2.6f, 0u },
@@ -906,7 +984,7 @@ const rw_param_info rw_param_table[RW_PARAM_COUNT] = {
     { "arm_hold_s", 0.2f, 5.0f, 0.5f, RW_PARAM_FLAG_LOCKED },
     { "encoder_timeout_s", 0.02f, 2.0f, 0.25f, 0u },
     { "lead_mm_per_rev", 0.5f, 20.0f, 8.0f, RW_PARAM_FLAG_LOCKED },
-    { "guide_min_mm", 0.0f, 180.0f, 0.0f, 0u },
+    { "guide_min_mm", 0.0f, 179.0f, 0.0f, 0u },
     { "guide_max_mm", 1.0f, 180.0f, 180.0f, 0u },
     { "spindle_kp_per_s", 0.1f, 50.0f, 4.0f, 0u },
     { "spindle_max_speed_mmps", 0.5f, 15.0f, 6.0f, 0u },

@@ -11,7 +11,7 @@ extern "C" {
 
 #define RW_PROTOCOL_VERSION 2u
 #define RW_PROTOCOL_MAGIC 0xB7u
-#define RW_PROTOCOL_SCHEMA_HASH 0x1C52u
+#define RW_PROTOCOL_SCHEMA_HASH 0x3D79u
 #define RW_FRAME_HEADER_LEN 7u
 #define RW_FRAME_CHECKSUM_LEN 2u
 #define RW_MAX_PAYLOAD_LEN 64u
@@ -72,8 +72,10 @@ typedef enum {
     RW_NACK_REASON_REPLAYED = 21, /* Never sent: a frame from another session, or whose counter is not above the last accepted, is dropped and counted (rx_replayed). */
     RW_NACK_REASON_NO_KEY = 22, /* Never sent: the device has no key provisioned and drops every frame over WiFi but HELLO (SESSION_INFO says key_set 0) until one is set over USB serial. */
     RW_NACK_REASON_STORE_FAILED = 23, /* PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed. */
+    RW_NACK_REASON_BURST_BUSY = 24, /* BURST_START while a burst is being captured or streamed; NACK.detail = samples still to capture plus samples still to send. */
+    RW_NACK_REASON_PARAM_CONFLICT = 25, /* PARAM_SET: the value is in range but breaks a rule between parameters (guide_min_mm < guide_max_mm; tov_mps x tov_margin <= max_rope_speed_mps); nothing changed. NACK.detail = the id of the other parameter of the rule. */
 } rw_nack_reason;
-#define RW_NACK_REASON_COUNT 24u
+#define RW_NACK_REASON_COUNT 26u
 
 /* Event kinds (EVENT.event). */
 typedef enum {
@@ -143,6 +145,7 @@ typedef enum {
     RW_MSG_ID_PARAM_VALUE = 5,
     RW_MSG_ID_SESSION_INFO = 6,
     RW_MSG_ID_PROVISION_STATUS = 7,
+    RW_MSG_ID_BURST_DATA = 8,
     RW_MSG_ID_ARM = 10,
     RW_MSG_ID_DISARM = 11,
     RW_MSG_ID_SET_ROPE_SPEED = 12,
@@ -157,6 +160,7 @@ typedef enum {
     RW_MSG_ID_RELEASE = 21,
     RW_MSG_ID_HOME = 22,
     RW_MSG_ID_HELLO = 23,
+    RW_MSG_ID_BURST_START = 24,
     RW_MSG_ID_PROVISION_SET_KEY = 30,
     RW_MSG_ID_PROVISION_SET_WIFI_SSID = 31,
     RW_MSG_ID_PROVISION_SET_WIFI_PASSWORD = 32,
@@ -175,6 +179,7 @@ typedef enum {
     RW_MSG_KIND_SIL = 5,
     RW_MSG_KIND_HELLO = 6,
     RW_MSG_KIND_PROVISION = 7,
+    RW_MSG_KIND_BURST = 8,
 } rw_msg_kind;
 
 /* HEARTBEAT (id 0, heartbeat): Host is alive. Any valid frame from the host also counts; a host sends at least this at 5-10 Hz. */
@@ -214,8 +219,8 @@ void rw_msg_nack_unpack(rw_msg_nack *msg, const uint8_t *payload);
 size_t rw_msg_nack_encode(const rw_msg_nack *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
 /* TELEMETRY (id 3, telemetry): Device state at telemetry_rate_hz, unicast to the host that last sent a valid frame. */
-#define RW_MSG_TELEMETRY_LEN 52u
-#define RW_MSG_TELEMETRY_CRC_EXTRA 0x0420u
+#define RW_MSG_TELEMETRY_LEN 64u
+#define RW_MSG_TELEMETRY_CRC_EXTRA 0xF5D0u
 typedef struct {
     uint32_t time_ms; /* [ms] Device time since boot. */
     uint8_t state; /* (rw_state) State machine state. */
@@ -241,6 +246,10 @@ typedef struct {
     uint16_t rx_auth_failed; /* Frames dropped for a missing or wrong signature (wraps). */
     uint16_t rx_replayed; /* Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps). */
     uint16_t tx_dropped; /* Frames the device queued but dropped from its full send queue (telemetry goes first). Queued frames are numbered when they leave, so a gap in seq is always the network's (wraps). */
+    uint16_t esc_pulse_third_us; /* [us/3] ESC pulse width at the PWM timer's resolution (TCC1 counts at 3 MHz: 1/3 us); the pulse both ESCs get is exactly this many counts (esc_pulse_us is it rounded to the microsecond). */
+    uint16_t spindle_moving_speed_raw; /* AX-12A moving speed register the spindle loop wrote last (wheel mode: 0-1023, bit 10 = direction, 1 = retracting): the spindle's commanded speed as the servo sees it. */
+    uint32_t encoder_counts; /* Encoder edges since boot at this frame (wraps), latched with encoder_edge_us: between two frames, (edge_us difference) / (counts difference) is the raw mean edge period (M/T), unfiltered, beside the filtered rope_speed_mmps. */
+    uint32_t encoder_edge_us; /* [us] Capture time of the latest encoder edge, device time since boot in microseconds (time_ms's clock; wraps after 71.6 min). */
 } rw_msg_telemetry;
 void rw_msg_telemetry_pack(const rw_msg_telemetry *msg, uint8_t *payload);
 void rw_msg_telemetry_unpack(rw_msg_telemetry *msg, const uint8_t *payload);
@@ -302,6 +311,22 @@ void rw_msg_provision_status_pack(const rw_msg_provision_status *msg, uint8_t *p
 void rw_msg_provision_status_unpack(rw_msg_provision_status *msg, const uint8_t *payload);
 size_t rw_msg_provision_status_encode(const rw_msg_provision_status *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
+/* BURST_DATA (id 8, burst): A slice of a burst capture (BURST_START), streamed after the capture ends, oldest first, one frame at a time when the send queue is empty (never before TELEMETRY, events or replies; over a keyed WiFi link a frame is signed over idle ticks like any other). Every frame says which samples it carries (first_sample, sample_count), so a lost frame shows as missing sample indices. samples holds burst_samples_per_frame samples of 8 bytes, little-endian: encoder_counts u16 (low 16 bits of the cumulative edge count), encoder_edge_us u16 (low 16 bits of the latest edge's capture time, us since boot), esc_pulse_third_us u16 (the pulse the tick wrote, 1/3 us), battery_mv u16 (the battery reading of the tick); unused samples of the last frame are zero. Sample i was taken by the control tick at start_time_us + i tick_us. */
+#define RW_MSG_BURST_DATA_LEN 64u
+#define RW_MSG_BURST_DATA_CRC_EXTRA 0x1EC2u
+typedef struct {
+    uint16_t burst_id; /* Counts the bursts since boot (wraps); all frames of a burst share it. */
+    uint32_t start_time_ms; /* [ms] Device time since boot of sample 0 (the clock of TELEMETRY.time_ms). */
+    uint32_t start_time_us; /* [us] Device time since boot of sample 0 in microseconds (the clock of encoder_edge_us, wraps). */
+    uint16_t tick_us; /* [us] Control tick period: the time between samples. */
+    uint16_t sample_count; /* Samples in the whole burst (as BURST_START asked). */
+    uint16_t first_sample; /* Index in the burst of the first sample of this frame. */
+    uint8_t samples[48]; /* 6 samples of 8 bytes (layout above); the frame carries min(6, sample_count - first_sample) of them. */
+} rw_msg_burst_data;
+void rw_msg_burst_data_pack(const rw_msg_burst_data *msg, uint8_t *payload);
+void rw_msg_burst_data_unpack(rw_msg_burst_data *msg, const uint8_t *payload);
+size_t rw_msg_burst_data_encode(const rw_msg_burst_data *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
 /* ARM (id 10, command): DISARMED -> ARMED. Refused (NOT_READY) during the ESC arming hold after boot. */
 #define RW_MSG_ARM_LEN 0u
 #define RW_MSG_ARM_CRC_EXTRA 0xF3B4u
@@ -362,7 +387,7 @@ void rw_msg_param_get_pack(const rw_msg_param_get *msg, uint8_t *payload);
 void rw_msg_param_get_unpack(rw_msg_param_get *msg, const uint8_t *payload);
 size_t rw_msg_param_get_encode(const rw_msg_param_get *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED); answered by ACK then PARAM_VALUE. */
+/* PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED; checked with the parameters it must hold together with: PARAM_CONFLICT); answered by ACK then PARAM_VALUE. */
 #define RW_MSG_PARAM_SET_LEN 5u
 #define RW_MSG_PARAM_SET_CRC_EXTRA 0x5862u
 typedef struct {
@@ -443,6 +468,16 @@ void rw_msg_hello_pack(const rw_msg_hello *msg, uint8_t *payload);
 void rw_msg_hello_unpack(rw_msg_hello *msg, const uint8_t *payload);
 size_t rw_msg_hello_encode(const rw_msg_hello *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
+/* BURST_START (id 24, command): Capture a burst: every control tick from the one that accepts it (1 kHz) samples the encoder count and edge time, the ESC pulse and the battery into the device's burst buffer (burst_max_samples), then streams it as BURST_DATA. Accepted in every state (it only records); refused while a burst is captured or streamed (BURST_BUSY). */
+#define RW_MSG_BURST_START_LEN 2u
+#define RW_MSG_BURST_START_CRC_EXTRA 0xF94Bu
+typedef struct {
+    uint16_t samples; /* Ticks to capture, 1..burst_max_samples (else OUT_OF_RANGE, detail = burst_max_samples). */
+} rw_msg_burst_start;
+void rw_msg_burst_start_pack(const rw_msg_burst_start *msg, uint8_t *payload);
+void rw_msg_burst_start_unpack(rw_msg_burst_start *msg, const uint8_t *payload);
+size_t rw_msg_burst_start_encode(const rw_msg_burst_start *msg, uint16_t seq, uint8_t *out, size_t out_cap);
+
 /* PROVISION_SET_KEY (id 30, provision): USB serial only: the 128-bit link key (SipHash-2-4). Never sent over WiFi, never printed, never recorded. Takes effect at PROVISION_COMMIT. */
 #define RW_MSG_PROVISION_SET_KEY_LEN 16u
 #define RW_MSG_PROVISION_SET_KEY_CRC_EXTRA 0xE014u
@@ -513,12 +548,13 @@ void rw_msg_sil_sensors_unpack(rw_msg_sil_sensors *msg, const uint8_t *payload);
 size_t rw_msg_sil_sensors_encode(const rw_msg_sil_sensors *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
 /* SIL_ACTUATORS (id 101, sil): SIL firmware -> plant, once per control tick: the outputs the board would drive. */
-#define RW_MSG_SIL_ACTUATORS_LEN 8u
-#define RW_MSG_SIL_ACTUATORS_CRC_EXTRA 0x01BFu
+#define RW_MSG_SIL_ACTUATORS_LEN 10u
+#define RW_MSG_SIL_ACTUATORS_CRC_EXTRA 0xFEDEu
 typedef struct {
     uint32_t time_us; /* [us] Echo of the SIL_SENSORS time this answers. */
     uint16_t esc_pulse_us; /* [us] Pulse width for both ESCs. */
     uint16_t spindle_moving_speed_raw; /* AX-12A moving speed register written this tick (wheel mode: 0-1023, bit 10 = direction). */
+    uint16_t esc_pulse_third_us; /* [us/3] The same pulse at the PWM timer's resolution (1/3 us, as TCC1 outputs it): the plant applies this one. */
 } rw_msg_sil_actuators;
 void rw_msg_sil_actuators_pack(const rw_msg_sil_actuators *msg, uint8_t *payload);
 void rw_msg_sil_actuators_unpack(rw_msg_sil_actuators *msg, const uint8_t *payload);
@@ -581,6 +617,19 @@ size_t rw_frame_sign_tag(uint8_t *frame, size_t len, uint64_t tag);
 /* True if a decoded signed frame's tag is right for key (constant-time comparison). */
 int rw_frame_tag_valid(const rw_frame *frame, const uint8_t key[RW_KEY_LEN]);
 
+/* BURST_DATA.samples: RW_BURST_SAMPLES_PER_FRAME records of RW_BURST_SAMPLE_LEN bytes, little-endian. */
+#define RW_BURST_SAMPLES_PER_FRAME 6u
+#define RW_BURST_SAMPLE_LEN 8u
+typedef struct {
+    uint16_t encoder_counts; /* Encoder edges since boot, low 16 bits. */
+    uint16_t encoder_edge_us; /* [us] Capture time of the latest edge, device time since boot in us, low 16 bits (at most 65.5 ms old to be unwrapped against the sample's own time). */
+    uint16_t esc_pulse_third_us; /* [us/3] ESC pulse the tick wrote, 1/3 us (TCC1 counts). */
+    uint16_t battery_mv; /* [mV] Battery voltage the tick read (ADC, divider undone). */
+} rw_burst_sample;
+/* Write sample number index (0..RW_BURST_SAMPLES_PER_FRAME-1) into the array / read it back. */
+void rw_burst_sample_put(uint8_t samples[RW_BURST_SAMPLES_PER_FRAME * RW_BURST_SAMPLE_LEN], unsigned index, const rw_burst_sample *sample);
+void rw_burst_sample_get(const uint8_t samples[RW_BURST_SAMPLES_PER_FRAME * RW_BURST_SAMPLE_LEN], unsigned index, rw_burst_sample *sample);
+
 /* Parameters (SI units, float32 on the wire). */
 #define RW_PARAM_COUNT 36u
 #define RW_PARAM_FLAG_LOCKED 0x01u  /* settable only while DISARMED */
@@ -595,7 +644,7 @@ typedef enum {
     RW_PARAM_RAMP_DOWN_MPS2 = 6, /* [m/s^2] Setpoint ramp when slowing down and for SPINDOWN. */
     RW_PARAM_WHEEL_RADIUS_M = 7, /* [m] Drive wheel radius (rope speed = 2 pi r x wheel rev/s). */
     RW_PARAM_ENCODER_COUNTS_PER_REV = 8, /* [counts/rev] Encoder edges per wheel revolution. */
-    RW_PARAM_HEARTBEAT_TIMEOUT_S = 9, /* [s] Host silence after which the device spins the rope down. */
+    RW_PARAM_HEARTBEAT_TIMEOUT_S = 9, /* [s] Host silence after which the device spins the rope down and stops the guide where it is: the rope and the guide move only while a host is alive. */
     RW_PARAM_MAX_ROPE_SPEED_MPS = 10, /* [m/s] Largest accepted SET_ROPE_SPEED. */
     RW_PARAM_MOTOR_KV_RPM_PER_V = 11, /* [rpm/V] Motor velocity constant, for the feed-forward throttle map. */
     RW_PARAM_ESC_MIN_US = 12, /* [us] ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher). */

@@ -7,7 +7,13 @@
  *
  * A pulse write goes to the buffered compare registers CCB0/CCB1; the TCC copies them into CC0/CC1 at the
  * next overflow (UPDATE), so a period never mixes an old and a new width. Lock update (CTRLB.LUPD) is set
- * while both CCBs are written and cleared after, so both ESCs switch in the same period. */
+ * while both CCBs are written and cleared after, so both ESCs switch in the same period.
+ *
+ * The core's write (rw_hal_esc_output, inside the tick; microseconds or the timer's thirds of a microsecond)
+ * only stages the pulse, in counts; the tick interrupt applies it
+ * first thing in the next tick (rw_arduino_esc_output_apply), so the moment the registers are written is a
+ * fixed offset from the tick, whatever the previous tick did (a command, a telemetry frame): the ESC update
+ * has the jitter of the interrupt's entry only, for one tick (1 ms) of added, constant delay. */
 #include "arduino_esc_output.h"
 
 #include <Arduino.h>
@@ -29,9 +35,15 @@ void tcc1_sync(uint32_t mask)
     }
 }
 
-void write_esc(void *ctx, uint16_t pulse_us)
+void stage_esc(void *ctx, uint16_t pulse_us)
 {
-    rw_arduino_esc_output_write_us(static_cast<rw_arduino_esc_output *>(ctx), pulse_us);
+    static_cast<rw_arduino_esc_output *>(ctx)->staged_third_us =
+        static_cast<uint16_t>(static_cast<uint32_t>(pulse_us) * TCC_COUNTS_PER_US);
+}
+
+void stage_esc_third(void *ctx, uint16_t pulse_third_us)
+{
+    static_cast<rw_arduino_esc_output *>(ctx)->staged_third_us = pulse_third_us;
 }
 
 } // namespace
@@ -44,6 +56,8 @@ bool rw_arduino_esc_output_begin(rw_arduino_esc_output *esc, uint16_t min_us, ui
     esc->min_us = min_us;
     esc->max_us = max_us;
     esc->pulse_us = min_us;
+    esc->pulse_counts = static_cast<uint32_t>(min_us) * TCC_COUNTS_PER_US;
+    esc->staged_third_us = static_cast<uint16_t>(esc->pulse_counts);
     esc->out_of_range = 0u;
 
     /* GCLK0 -> TCC0/TCC1 clock channel (the APB clock of TCC1 is enabled by the core's init()). */
@@ -82,7 +96,7 @@ void rw_arduino_esc_output_write_us(rw_arduino_esc_output *esc, uint16_t pulse_u
         us = esc->max_us;
         ++esc->out_of_range;
     }
-    if (us == esc->pulse_us) {
+    if (static_cast<uint32_t>(us) * TCC_COUNTS_PER_US == esc->pulse_counts) {
         return; /* nothing to do: saves two synchronised register writes per tick */
     }
     const uint32_t counts = static_cast<uint32_t>(us) * TCC_COUNTS_PER_US;
@@ -94,12 +108,45 @@ void rw_arduino_esc_output_write_us(rw_arduino_esc_output *esc, uint16_t pulse_u
     tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
     TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
     esc->pulse_us = us;
+    esc->pulse_counts = counts;
+}
+
+void rw_arduino_esc_output_write_third_us(rw_arduino_esc_output *esc, uint16_t pulse_third_us)
+{
+    uint32_t counts = pulse_third_us; /* TCC1 counts 1/3 us: the pulse is exactly this many counts */
+    const uint32_t lo = static_cast<uint32_t>(esc->min_us) * TCC_COUNTS_PER_US;
+    const uint32_t hi = static_cast<uint32_t>(esc->max_us) * TCC_COUNTS_PER_US;
+    if (counts < lo) {
+        counts = lo;
+        ++esc->out_of_range;
+    } else if (counts > hi) {
+        counts = hi;
+        ++esc->out_of_range;
+    }
+    if (counts == esc->pulse_counts) {
+        return; /* nothing to do: saves two synchronised register writes per tick */
+    }
+    tcc1_sync(TCC_SYNCBUSY_CTRLB);
+    TCC1->CTRLBSET.reg = TCC_CTRLBSET_LUPD;
+    tcc1_sync(TCC_SYNCBUSY_CTRLB | TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
+    TCC1->CCB[0].reg = counts;
+    TCC1->CCB[1].reg = counts;
+    tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
+    TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
+    esc->pulse_counts = counts;
+    esc->pulse_us = static_cast<uint16_t>(((counts + 1u) * 21846u) >> 16); /* / 3 rounded, no division on the M0+ */
+}
+
+void rw_arduino_esc_output_apply(rw_arduino_esc_output *esc)
+{
+    rw_arduino_esc_output_write_third_us(esc, esc->staged_third_us);
 }
 
 rw_hal_esc_output rw_arduino_esc_output_hal(rw_arduino_esc_output *esc)
 {
     rw_hal_esc_output hal;
     hal.ctx = esc;
-    hal.write_pulse_us = write_esc;
+    hal.write_pulse_us = stage_esc;
+    hal.write_pulse_third_us = stage_esc_third;
     return hal;
 }

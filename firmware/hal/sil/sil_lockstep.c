@@ -1,5 +1,7 @@
 #include "sil_lockstep.h"
 
+#include "rw_throttle_map.h"
+
 #include <arpa/inet.h>
 #include <errno.h>
 #include <poll.h>
@@ -17,6 +19,7 @@ bool sil_lockstep_open(sil_lockstep *ls, uint16_t port)
         return false;
     }
     ls->esc_pulse_us = 0u; /* no pulse until the core's first tick */
+    ls->esc_pulse_third_us = 0u;
     return true;
 }
 
@@ -64,7 +67,7 @@ void sil_lockstep_send_actuators(sil_lockstep *ls)
         return;
     }
     rw_msg_sil_actuators msg = {
-        .time_us = ls->sensors.time_us, .esc_pulse_us = ls->esc_pulse_us, .spindle_moving_speed_raw = ls->spindle_moving_speed_raw,
+        .time_us = ls->sensors.time_us, .esc_pulse_us = ls->esc_pulse_us, .esc_pulse_third_us = ls->esc_pulse_third_us, .spindle_moving_speed_raw = ls->spindle_moving_speed_raw,
     };
     uint8_t frame[RW_MAX_FRAME_LEN];
     size_t len = rw_msg_sil_actuators_encode(&msg, ls->tx_seq++, frame, sizeof frame);
@@ -87,7 +90,19 @@ static uint16_t battery_read_mv(void *ctx)
 static void esc_write_pulse_us(void *ctx, uint16_t pulse_us)
 {
     sil_lockstep *ls = ctx;
-    ls->esc_pulse_us = pulse_us;
+    ls->esc_staged_third_us = (uint16_t)(3u * pulse_us);
+}
+
+static void esc_write_pulse_third_us(void *ctx, uint16_t pulse_third_us)
+{
+    sil_lockstep *ls = ctx;
+    ls->esc_staged_third_us = pulse_third_us;
+}
+
+void sil_lockstep_apply_esc(sil_lockstep *ls)
+{
+    ls->esc_pulse_third_us = ls->esc_staged_third_us;
+    ls->esc_pulse_us = rw_throttle_map_third_us_to_us(ls->esc_staged_third_us);
 }
 
 rw_hal_encoder sil_lockstep_encoder(sil_lockstep *ls)
@@ -104,31 +119,6 @@ rw_hal_battery sil_lockstep_battery(sil_lockstep *ls)
 
 rw_hal_esc_output sil_lockstep_esc(sil_lockstep *ls)
 {
-    rw_hal_esc_output hal = { .ctx = ls, .write_pulse_us = esc_write_pulse_us };
-    return hal;
-}
-
-static bool spindle_read(void *ctx, rw_spindle_reading *out)
-{
-    const sil_lockstep *ls = ctx;
-    if (!ls->sensors.spindle_answered) {
-        return false;
-    }
-    out->position_raw = ls->sensors.spindle_position_raw;
-    out->speed_raw = ls->sensors.spindle_speed_raw;
-    out->load_raw = ls->sensors.spindle_load_raw;
-    out->limit_switch = ls->sensors.limit_switch != 0u;
-    return true;
-}
-
-static void spindle_write(void *ctx, uint16_t raw)
-{
-    sil_lockstep *ls = ctx;
-    ls->spindle_moving_speed_raw = raw;
-}
-
-rw_hal_spindle sil_lockstep_spindle(sil_lockstep *ls)
-{
-    rw_hal_spindle hal = { .ctx = ls, .read = spindle_read, .write_moving_speed_raw = spindle_write };
+    rw_hal_esc_output hal = { .ctx = ls, .write_pulse_us = esc_write_pulse_us, .write_pulse_third_us = esc_write_pulse_third_us };
     return hal;
 }

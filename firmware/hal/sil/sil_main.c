@@ -1,12 +1,15 @@
 /* rw_sil: the firmware core with the sil HAL, as its own process.
  *
  *   rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N] [--state-file PATH]
+ *          [--spindle-bus-us N]
  *
  * Binds the command link (the host's UDP port, as the board's WiFi) and the plant port on 127.0.0.1
  * (0 = any free port), opens a pseudo-terminal as the board's USB serial (provisioning), prints
  * "rw_sil ready cmd_port=N plant_port=N serial=PATH" on stdout, then runs one core tick per SIL_SENSORS
  * datagram from the plant. --state-file is the board's flash (configuration record: key, parameters,
- * boot counter = session id); without it nothing persists and nothing can be committed. Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
+ * boot counter = session id); without it nothing persists and nothing can be committed.
+ * --spindle-bus-us is the bus time of one spindle transaction (sil_spindle_bus.h, default 350). On exit it
+ * prints the spindle bus counters on stderr ("rw_sil spindle_bus requests=N ..."). Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
  * for --plant-timeout-s (never hangs), 2 on bad arguments or sockets. */
 #include <errno.h>
 #include <signal.h>
@@ -19,6 +22,7 @@
 #include "sil_link.h"
 #include "sil_lockstep.h"
 #include "sil_serial.h"
+#include "sil_spindle_bus.h"
 
 static volatile sig_atomic_t stop_requested = 0;
 
@@ -67,13 +71,14 @@ static int parse_uint(const char *text, long max, long *out)
 
 static int usage(const char *msg)
 {
-    fprintf(stderr, "rw_sil: %s\nusage: rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N] [--state-file PATH]\n", msg);
+    fprintf(stderr, "rw_sil: %s\nusage: rw_sil [--cmd-port N] [--plant-port N] [--plant-timeout-s S] [--tick-us N] [--state-file PATH] [--spindle-bus-us N]\n", msg);
     return 2;
 }
 
 int main(int argc, char **argv)
 {
     long cmd_port = 14550, plant_port = 14560, plant_timeout_s = 10, tick_us = 1000;
+    long spindle_bus_us = SIL_SPINDLE_BUS_DEFAULT_TRANSACTION_US;
     static sil_config_store store = { { 0 } };
     for (int i = 1; i < argc; ++i) {
         long *target = NULL;
@@ -92,6 +97,9 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--plant-timeout-s") == 0) {
             target = &plant_timeout_s;
             max = 3600;
+        } else if (strcmp(argv[i], "--spindle-bus-us") == 0) {
+            target = &spindle_bus_us;
+            max = 1000000;
         } else if (strcmp(argv[i], "--tick-us") == 0) {
             target = &tick_us;
             max = 100000;
@@ -135,7 +143,9 @@ int main(int argc, char **argv)
     static sil_scheduler scheduler = { 0 };
     scheduler.tick_us = tick_us > 0 ? (uint32_t)tick_us : 1000u;
     rw_hal_scheduler scheduler_hal = { .ctx = &scheduler, .tick_overruns = tick_overruns };
-    rw_hal_spindle spindle_hal = sil_lockstep_spindle(&lockstep);
+    static sil_spindle_bus spindle_bus;
+    sil_spindle_bus_init(&spindle_bus, spindle_bus_us > 0 ? (uint32_t)spindle_bus_us : 1u, scheduler.tick_us);
+    rw_hal_spindle spindle_hal = sil_spindle_bus_hal(&spindle_bus);
     rw_hal hal = {
         .esc = &esc_hal, .encoder = &encoder_hal, .battery = &battery_hal, .link = &link_hal, .scheduler = &scheduler_hal,
         .spindle = &spindle_hal, .serial = &serial_hal, .config = store.path[0] != '\0' ? &store_hal : NULL,
@@ -165,9 +175,19 @@ int main(int argc, char **argv)
                     (unsigned)lockstep.sensors.host_frames_sent, (unsigned)link.received_total);
         }
         sil_scheduler_on_tick(&scheduler, lockstep.sensors.time_us);
+        sil_lockstep_apply_esc(&lockstep);
         rw_core_tick(&core, &hal, lockstep.sensors.time_us);
+        /* the background loop between this tick and the next: the spindle's bus transactions */
+        sil_spindle_bus_service(&spindle_bus, &lockstep.sensors);
+        lockstep.spindle_moving_speed_raw = spindle_bus.moving_speed_raw;
         sil_lockstep_send_actuators(&lockstep);
     }
+    const rw_spindle_exchange_counters *sc = &spindle_bus.exchange.counters;
+    fprintf(stderr,
+            "rw_sil spindle_bus requests=%u taken=%u missing=%u late=%u reads_ok=%u reads_failed=%u writes_ok=%u "
+            "writes_failed=%u\n",
+            (unsigned)sc->requests, (unsigned)sc->taken, (unsigned)sc->missing, (unsigned)sc->late,
+            (unsigned)sc->reads_ok, (unsigned)sc->reads_failed, (unsigned)sc->writes_ok, (unsigned)sc->writes_failed);
     sil_link_close(&link);
     sil_lockstep_close(&lockstep);
     sil_serial_close(&serial);

@@ -74,6 +74,24 @@ class CliContext:
         self.env.stderr.flush()
 
 
+class Seconds(click.FloatRange):
+    """A duration in seconds on the command line: a finite number >= 0 (> 0 with positive=True).
+
+    click's FloatRange lets NaN through (every comparison with NaN is false): `record --duration nan`
+    would run forever. NaN and inf are refused here as usage errors, as the motion arguments are."""
+
+    name = "seconds"
+
+    def __init__(self, *, positive: bool = False) -> None:
+        super().__init__(min=0.0, min_open=positive)
+
+    def convert(self, value, param, ctx):  # noqa: ANN001 - click's signature
+        x = click.FLOAT.convert(value, param, ctx)
+        if not math.isfinite(x):
+            self.fail(f"{value!r} is not a finite number of seconds.", param, ctx)
+        return super().convert(x, param, ctx)
+
+
 def read_key_file(path: str) -> bytes:
     """The link key from a file holding it as 32 hex digits (whitespace ignored). The key is never echoed:
     errors name the file and what is wrong with it, not its content."""

@@ -18,11 +18,12 @@ from typing import Any
 
 import click
 
-from robowrangler.cli import monitor, motion, param, plugins, provision, record, spindle
+from robowrangler.cli import excite, monitor, motion, param, plugins, provision, proxy, record, spindle
 from robowrangler.cli.context import (DEFAULT_TIMEOUT_S, KEY_FILE_ENV_VAR, URL_ENV_VAR, CliContext, OutputClosed,
-                                      read_key_file)
+                                      Seconds, read_key_file)
 from robowrangler.cli.environment import Environment
 from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.protocol.generated import PROTOCOL_VERSION
 from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArgument, LinkTimeout, RoboWranglerError,
                                  UnknownParameter)
 from robowrangler.transport import DEFAULT_URL, parse_url
@@ -32,18 +33,21 @@ COMMANDS: list[click.Command] = [
     spindle.home, spindle.loop, spindle.relax, spindle.retract, spindle.grasp, spindle.release,
     monitor.status, monitor.watch,
     param.param, provision.provision, provision.keygen,
-    record.record, record.inspect, record.replay,
+    record.record, record.inspect, record.replay, proxy.proxy,
+    excite.excite,
 ]
 
 _EXIT_HELP = "Exit status: " + ", ".join(f"{s.value} {s.name}" for s in ExitStatus) + "."
 
 
 @click.group(epilog=_EXIT_HELP)
+@click.version_option(package_name="robowrangler", prog_name="wrangler",
+                      message="%(prog)s %(version)s (protocol v" + str(PROTOCOL_VERSION) + ")")
 @click.option("--url", default=None, metavar="URL",
               help=f"Link: udp://HOST:PORT or serial:///dev/ttyACM0?baud=115200 "
                    f"[env {URL_ENV_VAR}; default {DEFAULT_URL}]")
 @click.option("--json", "json_mode", is_flag=True, help="Machine output on stdout: one JSON object, JSON lines for streams.")
-@click.option("--timeout", "timeout_s", type=click.FloatRange(min=0.0, min_open=True), default=DEFAULT_TIMEOUT_S,
+@click.option("--timeout", "timeout_s", type=Seconds(positive=True), default=DEFAULT_TIMEOUT_S,
               show_default=True, metavar="SECONDS",
               help="Connect timeout, longest telemetry gap, and ARM retry window.")
 @click.option("--key-file", "key_file", default=None, metavar="PATH",
@@ -60,7 +64,24 @@ def cli(click_ctx: click.Context, url: str | None, json_mode: bool, timeout_s: f
     click_ctx.obj = CliContext(env=env, url=url, timeout_s=timeout_s, json_mode=json_mode, key=key)
 
 
-for _command in COMMANDS:
+@click.command("help")
+@click.argument("command_path", nargs=-1, metavar="[COMMAND]...")
+@click.pass_context
+def help_command(click_ctx: click.Context, command_path: tuple[str, ...]) -> None:
+    """Show the help of COMMAND (`wrangler help param set`), or of wrangler itself."""
+    root = click_ctx.find_root()
+    command: click.Command = root.command
+    ctx = root
+    for name in command_path:
+        sub = command.get_command(ctx, name) if isinstance(command, click.Group) else None
+        if sub is None:
+            raise click.UsageError(f"No such command {' '.join(command_path)!r}", ctx=click_ctx)
+        ctx = click.Context(sub, info_name=name, parent=ctx)
+        command = sub
+    click.echo(command.get_help(ctx))
+
+
+for _command in [*COMMANDS, help_command]:
     cli.add_command(_command)
 
 _plugins_installed = False
@@ -83,6 +104,15 @@ def _install_plugins() -> None:
             cli.add_command(plugins.missing_verb(verb, loaded.problems))
 
 
+def _json_first(argv: list[str]) -> list[str]:
+    """`--json` anywhere before a `--` means the global --json: `wrangler watch --json` works as
+    `wrangler --json watch` does."""
+    end = argv.index("--") if "--" in argv else len(argv)
+    if "--json" not in argv[:end]:
+        return argv
+    return ["--json", *(a for a in argv[:end] if a != "--json"), *argv[end:]]
+
+
 def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> ExitStatus:
     """Run `wrangler` with argv (without the program name); returns the exit status.
 
@@ -90,7 +120,8 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
     """
     env = env or Environment.from_process()
     argv = list(sys.argv[1:] if argv is None else argv)
-    json_mode = "--json" in argv
+    argv = _json_first(argv)
+    json_mode = argv[:1] == ["--json"]
     try:
         _install_plugins()
         with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
@@ -99,6 +130,10 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
         return ExitStatus(rv) if isinstance(rv, int) and rv in ExitStatus._value2member_map_ else ExitStatus.OK
     except click.exceptions.Exit as exit_:
         return _status_from_code(exit_.exit_code)
+    except click.exceptions.NoArgsIsHelpError as err:  # `wrangler`, `wrangler param`: the help, as printed by --help
+        env.stderr.write(err.ctx.get_help() + "\n")
+        return _fail(env, json_mode, ExitStatus.USAGE, err,
+                     f"missing command: `{err.ctx.command_path} COMMAND` (the commands are listed above)")
     except click.UsageError as err:
         hint = f" (see `{err.ctx.command_path} --help`)" if err.ctx is not None else ""
         return _fail(env, json_mode, ExitStatus.USAGE, err, err.format_message() + hint)
@@ -116,7 +151,12 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
     except LinkTimeout as err:
         return _fail(env, json_mode, ExitStatus.LINK_TIMEOUT, err, str(err), url=err.url, waited_s=err.waited_s)
     except AuthenticationError as err:
-        return _fail(env, json_mode, ExitStatus.AUTH, err, str(err), url=err.url)
+        message = str(err)
+        if "--key-file" not in argv and not env.environ.get(KEY_FILE_ENV_VAR):  # the only cause without a key
+            message = (f"{err.url} requires signed frames and no link key was given: pass --key-file PATH or set "
+                       f"{KEY_FILE_ENV_VAR} (`wrangler keygen PATH` makes a key; provision the device with it "
+                       "over USB)")
+        return _fail(env, json_mode, ExitStatus.AUTH, err, message, url=err.url)
     except RoboWranglerError as err:
         return _fail(env, json_mode, ExitStatus.ERROR, err, str(err))
     except OSError as err:

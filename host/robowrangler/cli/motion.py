@@ -5,11 +5,17 @@ from __future__ import annotations
 import click
 
 from robowrangler import units
-from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.stream import stream_telemetry
+from robowrangler.errors import RoboWranglerError
 from robowrangler.protocol.generated import State
 
 SLOWEST_RAMP_MPS2 = 0.5  # lower bound of ramp_down_mps2: bounds the wait for the landing
+_HOLD_ENDERS = (State.ESTOP, State.FAULT, State.DISARMED)
+
+
+class HoldEnded(RoboWranglerError):
+    """spin --hold: the device left the spin by itself or by another host (ESTOP, FAULT, DISARMED)."""
 
 
 def _done(ctx: CliContext, command: str, state: State, human: str) -> None:
@@ -34,7 +40,7 @@ def disarm(ctx: CliContext) -> None:
 
 @click.command()
 @click.argument("mps", type=float, metavar="MPS")
-@click.option("--hold", "hold_s", type=click.FloatRange(min=0.0), default=None, metavar="SECONDS",
+@click.option("--hold", "hold_s", type=Seconds(), default=None, metavar="SECONDS",
               help="Keep the link alive and stream telemetry this long, then spin down and wait for ARMED.")
 @pass_context
 def spin(ctx: CliContext, mps: float, hold_s: float | None) -> None:
@@ -53,17 +59,40 @@ def spin(ctx: CliContext, mps: float, hold_s: float | None) -> None:
                        f"rope speed target {mps:g} m/s (state {state.name})")
             return
         landed = False
+        seen: list = []  # the latest sample (a list: set inside the callback)
+        flew = spinning = False
+
+        def ended(sample) -> bool:  # another host's ESTOP or DISARM, or a fault: holding is over
+            nonlocal flew, spinning
+            seen[:] = [sample]
+            flew = flew or sample.state == State.AIRBORNE
+            # the device answers at once but queues telemetry: the first samples after the ACK may predate
+            # the command (still ARMED, even DISARMED); only a stop after the spin was seen ends the hold
+            spinning = spinning or sample.state in (State.SPINUP, State.AIRBORNE)
+            return spinning and sample.state in _HOLD_ENDERS
         try:
-            samples = stream_telemetry(ctx, rw, duration_s=hold_s, events_from=first_event)
+            samples = stream_telemetry(ctx, rw, duration_s=hold_s, events_from=first_event, until=ended)
+            last = seen[0] if seen else rw.latest_telemetry
+            if spinning and last is not None and last.state in _HOLD_ENDERS:
+                landed = True  # nothing to spin down: the rope is stopped or stopping by the device's own rule
+                raise HoldEnded(f"spin --hold: the device went to {last.state.name} during the hold (another host or "
+                                f"a fault: see `wrangler status`); the rope is not driven")
             rw.spindown()
             final = rw.wait_for_state(State.ARMED, timeout_s=ctx.timeout_s + abs(mps) / SLOWEST_RAMP_MPS2)
             landed = True
         finally:
             if not landed and rw.connected:
                 _spindown_quietly(ctx, rw)
+        target = last.rope_speed_target_mps if last is not None else mps
+        held = f"held {mps:g} m/s for {hold_s:g} s"
+        if abs(target - mps) > 0.0005:
+            held = f"the target was changed to {target:g} m/s by another host during the {hold_s:g} s hold"
+        elif not flew:
+            held = (f"spun at {mps:g} m/s for {hold_s:g} s, but the loop never flew: {mps:g} m/s is under the ToV "
+                    "guard (tov_mps x tov_margin)")
         ctx.result({"command": "spin", "rope_speed_mps": mps, "hold_s": hold_s, "samples": samples,
-                    "state": final.state.name},
-                   f"held {mps:g} m/s for {hold_s:g} s, spun down (state {final.state.name})")
+                    "airborne": flew, "rope_speed_target_mps": target, "state": final.state.name},
+                   f"{held}, spun down (state {final.state.name})")
 
 
 def _spindown_quietly(ctx: CliContext, rw) -> None:
@@ -72,7 +101,7 @@ def _spindown_quietly(ctx: CliContext, rw) -> None:
         rw.spindown()
         ctx.note("spun down")
     except Exception as err:  # noqa: BLE001 - the original error is the one to report
-        ctx.note(f"spin-down after the interruption failed ({err}); the device lands on heartbeat loss")
+        ctx.note(f"spin-down failed ({err}); the device lands on heartbeat loss")
 
 
 @click.command()

@@ -29,16 +29,26 @@ def _human(status: ProvisionStatus) -> str:
     ])
 
 
-def generate_key_file(path: str) -> bytes:
-    """A new random link key written to path as hex (mode 0600); refuses to overwrite a file."""
+def generate_key_file(path: str, *, argument: str) -> bytes:
+    """A new random link key written to path as hex (mode 0600); refuses to overwrite a file.
+
+    Missing parent folders are created (mode 0700: ~/.config/robowrangler/ on a fresh HOME). argument
+    names what the user typed (PATH of keygen, --generate-key of provision set) in errors.
+    """
     key = secrets.token_bytes(KEY_LEN)
+    parent = os.path.dirname(os.path.abspath(path))
+    try:
+        os.makedirs(parent, mode=0o700, exist_ok=True)
+    except OSError as err:
+        raise InvalidArgument(argument, "a path whose folder exists or can be created",
+                              f"{path} ({parent}: {err.strerror})") from None
     try:
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except FileExistsError:
-        raise InvalidArgument("--generate-key", "a path that does not exist yet (a key is never overwritten)",
+        raise InvalidArgument(argument, "a path that does not exist yet (a key is never overwritten)",
                               path) from None
     except OSError as err:
-        raise InvalidArgument("--generate-key", "a writable path", f"{path} ({err.strerror})") from None
+        raise InvalidArgument(argument, "a writable path", f"{path} ({err.strerror})") from None
     with os.fdopen(fd, "w") as f:
         f.write(key.hex() + "\n")
     return key
@@ -89,7 +99,7 @@ def set_(ctx: CliContext, generate_key: str | None, link_key_file: str | None, w
             raise InvalidArgument("--wifi-password-file", "a readable file", f"{password_file} ({err.strerror})") from None
     key = read_key_file(link_key_file) if link_key_file else None
     if generate_key:
-        key = generate_key_file(generate_key)
+        key = generate_key_file(generate_key, argument="--generate-key")
     try:
         with ctx.client() as rw:
             st = rw.provision(key=key, wifi_ssid=wifi_ssid, wifi_password=password, commit=not no_commit)
@@ -110,5 +120,5 @@ def keygen(ctx: CliContext, path: str) -> None:
 
     Provision the device with it over USB (wrangler --url serial://PORT provision set --link-key-file PATH),
     then sign with it (wrangler --key-file PATH ...)."""
-    generate_key_file(path)
+    generate_key_file(os.path.expanduser(path), argument="PATH")
     ctx.result({"command": "keygen", "key_file": path}, f"new link key written to {path}")

@@ -5,143 +5,119 @@ The file format is protocol/recording/schema.md; the work is done by robowrangle
 
 from __future__ import annotations
 
-import json
+import math
 import time
 from pathlib import Path
 
 import click
 
-from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.cli.progress import Progress
+from robowrangler.cli.signals import sigterm_as_interrupt
 from robowrangler.client import Client
-from robowrangler.errors import LinkTimeout, RoboWranglerError
-from robowrangler.recorder.link import LinkRecorder, RecordingTransport
+from robowrangler.errors import InvalidArgument, LinkTimeout, RoboWranglerError
 from robowrangler.recorder.plot import plot_recording
 from robowrangler.recorder.reader import read_recording
 from robowrangler.recorder.summary import format_summary, summarize
-from robowrangler.recorder.writer import RecordingWriter
+from robowrangler.recorder.session import RecordingSession, read_device_params
 from robowrangler.transport import UdpUrl, open_transport, parse_url
 
-PROGRESS_PERIOD_S = 2.0  # a progress line on stderr this often (a live line on a terminal)
 TICK_S = 0.1
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 
-def _default_source(url: str) -> str:
+def default_source(url: str) -> str:
     parsed = parse_url(url)
     return "sil" if isinstance(parsed, UdpUrl) and parsed.host in LOOPBACK_HOSTS else "board"
 
 
-def _json_option(f):
-    """A local --json (same as the global one), so that `wrangler inspect FILE --json` works too."""
-    def callback(click_ctx: click.Context, _param: click.Parameter, value: bool) -> bool:
-        if value:
-            click_ctx.find_object(CliContext).json_mode = True
-        return value
-    return click.option("--json", "json_local", is_flag=True, expose_value=False, callback=callback,
-                        help="Machine output on stdout (same as the global --json).")(f)
-
-
-class _Progress:
-    """Progress on stderr: a live line on a terminal, else a line every PROGRESS_PERIOD_S."""
-
-    def __init__(self, ctx: CliContext) -> None:
-        self.ctx = ctx
-        self.tty = bool(getattr(ctx.env.stderr, "isatty", lambda: False)())
-        self.last_s = -1e9
-        self.live = False
-
-    def show(self, text: str, now_s: float) -> None:
-        period_s = 0.25 if self.tty else PROGRESS_PERIOD_S
-        if now_s - self.last_s < period_s:
-            return
-        self.last_s = now_s
-        if self.tty:
-            self.ctx.env.stderr.write(f"\rwrangler: {text}\033[K")
-            self.ctx.env.stderr.flush()
-            self.live = True
-        else:
-            self.ctx.note(text)
-
-    def note(self, text: str) -> None:
-        self.end_line()
-        self.ctx.note(text)
-
-    def end_line(self) -> None:
-        if self.live:
-            self.ctx.env.stderr.write("\n")
-            self.ctx.env.stderr.flush()
-            self.live = False
+def check_recording_path(out: Path, *, force: bool) -> None:
+    """OUT for a new recording: an .mcap name (a .csv would hold MCAP bytes), not an existing file unless
+    --force. Usage errors, raised before anything is opened."""
+    if out.suffix.lower() != ".mcap":
+        raise InvalidArgument("OUT", "a file name ending in .mcap (recordings are MCAP; `wrangler inspect --json` "
+                              "and the mcap tools export them)", str(out))
+    if out.exists() and not force:
+        raise InvalidArgument("OUT", "a file that does not exist yet (add --force to replace it)", str(out))
+    if not out.parent.is_dir():
+        raise InvalidArgument("OUT", "a path in an existing folder", str(out))
 
 
 @click.command("record")
 @click.argument("out", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--duration", "duration_s", type=click.FloatRange(min=0.0, min_open=True), default=None,
+@click.option("--duration", "duration_s", type=Seconds(positive=True), default=None,
               metavar="SECONDS", help="Stop after this long (default: until Ctrl-C).")
 @click.option("--source", type=click.Choice(["board", "sil", "other"]), default=None,
               help="What is recorded (meta source) [default: sil for a loopback UDP URL, else board].")
 @click.option("--seed", type=int, default=None, help="Seed of the SIL run, stored in the meta record.")
 @click.option("--description", default="", help="Free text stored in the meta record.")
 @click.option("--no-params", is_flag=True, help="Do not read the device parameters into /device/params.")
-@_json_option
+@click.option("--force", is_flag=True, help="Replace OUT if it exists (else an existing file is refused).")
 @pass_context
 def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | None, seed: int | None,
-           description: str, no_params: bool) -> ExitStatus:
-    """Record telemetry, events and commands to OUT (MCAP) until Ctrl-C or --duration.
+           description: str, no_params: bool, force: bool) -> ExitStatus:
+    """Record telemetry, events and commands to OUT (MCAP, zstd chunks) until Ctrl-C, SIGTERM or --duration.
 
     On link loss the gap is recorded and the recording goes on, waiting for the device; if no telemetry
-    came at all the file is still written and the exit status is LINK_TIMEOUT.
+    came at all the file is still written and the exit status is LINK_TIMEOUT. Ctrl-C and SIGTERM both
+    finish the file (summary and footer), so any MCAP reader opens it.
+
+    This process becomes the device's host: beside another commanding tool, record through
+    `wrangler proxy --record OUT` instead (it records everything the link carries).
     """
+    check_recording_path(out, force=force)
     start_s = time.monotonic()
     deadline_s = None if duration_s is None else start_s + duration_s
-    writer = RecordingWriter(out, source=source or _default_source(ctx.url), seed=seed, device_url=ctx.url,
-                             description=description)
-    recorder = LinkRecorder(writer)
-    progress = _Progress(ctx)
+    recording = RecordingSession(out, source=source or default_source(ctx.url), seed=seed, device_url=ctx.url,
+                                 description=description)
+    recorder = recording.recorder
+    progress = Progress(ctx)
     client: Client | None = None
     waiting_noted = lost = interrupted = False
     try:
-        while True:
-            now_s = time.monotonic()
-            remaining_s = None if deadline_s is None else deadline_s - now_s
-            if remaining_s is not None and remaining_s <= 0:
-                break
-            if client is None:
-                connect_s = ctx.timeout_s if remaining_s is None else min(ctx.timeout_s, remaining_s)
-                try:
-                    client = Client(ctx.url, connect_timeout_s=connect_s, key=ctx.key,
-                                    transport=RecordingTransport(open_transport(ctx.url), recorder)).connect()
-                except LinkTimeout:
-                    if not waiting_noted:
-                        progress.note(f"no telemetry from {ctx.url} yet; recording goes on, waiting for the device")
-                        waiting_noted = True
+        with sigterm_as_interrupt():
+            while True:
+                now_s = time.monotonic()
+                remaining_s = None if deadline_s is None else deadline_s - now_s
+                if remaining_s is not None and remaining_s <= 0:
+                    break
+                if client is None:
+                    connect_s = ctx.timeout_s if remaining_s is None else min(ctx.timeout_s, remaining_s)
+                    try:
+                        client = Client(ctx.url, connect_timeout_s=connect_s, key=ctx.key,
+                                        transport=recording.transport(open_transport(ctx.url))).connect()
+                    except LinkTimeout:
+                        if not waiting_noted:
+                            progress.note(f"no telemetry from {ctx.url} yet; recording goes on, waiting for the device")
+                            waiting_noted = True
+                        continue
+                    progress.note(f"recording {ctx.url} to {out}"
+                                  + ("" if duration_s is None else f" for {duration_s:g} s")
+                                  + " (Ctrl-C or SIGTERM ends it)")
+                    if not no_params:
+                        _record_params(client, recording, progress)
                     continue
-                progress.note(f"recording {ctx.url} to {out}" + ("" if duration_s is None else f" for {duration_s:g} s")
-                              + " (Ctrl-C ends it)")
-                if not no_params:
-                    _record_params(ctx, client, writer, progress)
-                continue
-            time.sleep(TICK_S if remaining_s is None else max(0.0, min(TICK_S, remaining_s)))
-            now_s = time.monotonic()
-            last_s = recorder.last_telemetry_host_s
-            silent_s = 0.0 if last_s is None else now_s - last_s
-            if not lost and silent_s > ctx.timeout_s:
-                lost = True
-                progress.note(f"link lost: no telemetry for {silent_s:.1f} s; still recording, waiting for it")
-            elif lost and silent_s < ctx.timeout_s:
-                lost = False
-                progress.note(f"link back: telemetry again ({recorder.frames_missing} frames missing so far)")
-            progress.show(f"{out.name}: {now_s - start_s:6.1f} s, {recorder.telemetry_count} telemetry, "
-                          f"{recorder.event_count} events, {recorder.command_count} commands, "
-                          f"{recorder.gaps_written} gaps, state {recorder.latest_state or '-'}", now_s)
+                time.sleep(TICK_S if remaining_s is None else max(0.0, min(TICK_S, remaining_s)))
+                now_s = time.monotonic()
+                last_s = recorder.last_telemetry_host_s
+                silent_s = 0.0 if last_s is None else now_s - last_s
+                if not lost and silent_s > ctx.timeout_s:
+                    lost = True
+                    progress.note(f"link lost: no telemetry for {silent_s:.1f} s; still recording, waiting for it")
+                elif lost and silent_s < ctx.timeout_s:
+                    lost = False
+                    progress.note(f"link back: telemetry again ({recorder.frames_missing} frames missing so far)")
+                progress.show(f"{out.name}: {now_s - start_s:6.1f} s, {recorder.telemetry_count} telemetry, "
+                              f"{recorder.event_count} events, {recorder.command_count} commands, "
+                              f"{recorder.gaps_written} gaps, state {recorder.latest_state or '-'}", now_s)
     except KeyboardInterrupt:
         interrupted = True
     finally:
         progress.end_line()
         if client is not None:
             client.close()
-        recorder.finish()
-        writer.close()
+        recording.close()
     elapsed_s = time.monotonic() - start_s
     if recorder.telemetry_count == 0:
         raise LinkTimeout(f"no TELEMETRY from {ctx.url} during the whole recording ({elapsed_s:.1f} s); {out} was "
@@ -155,25 +131,26 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
     return ExitStatus.OK
 
 
-def _record_params(ctx: CliContext, client: Client, writer: RecordingWriter, progress: _Progress) -> None:
+def _record_params(client: Client, recording: RecordingSession, progress: Progress) -> None:
     """Read every device parameter into the "/device/params" metadata record (best effort)."""
     try:
-        params = client.params()
+        params = read_device_params(client.get_param)
     except RoboWranglerError as err:
         progress.note(f"device parameters not recorded: {err}")
         return
-    writer.add_metadata("/device/params", {name: json.dumps(value) for name, value in params.items()})
+    recording.write_params(params)
 
 
 @click.command("inspect")
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@_json_option
 @pass_context
 def inspect(ctx: CliContext, file: Path) -> ExitStatus:
     """Summarise a recording: channels, message counts, duration, gaps, truncation."""
     rec = read_recording(file)
     if rec.truncated:
         ctx.note(f"{file} is truncated ({rec.truncation_reason})")
+    for damage in rec.damaged:
+        ctx.note(f"{file}: {damage}")
     summary = summarize(rec)
     ctx.result({"command": "inspect", **summary}, format_summary(summary))
     return ExitStatus.OK
@@ -183,14 +160,24 @@ def inspect(ctx: CliContext, file: Path) -> ExitStatus:
 @click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
               metavar="OUT.png", help="Write the plot here (PNG).")
-@_json_option
+@click.option("--from", "from_s", type=float, default=None, metavar="SECONDS",
+              help="Start of the window (device time).")
+@click.option("--to", "to_s", type=float, default=None, metavar="SECONDS", help="End of the window (device time).")
 @pass_context
-def replay(ctx: CliContext, file: Path, plot_path: Path) -> ExitStatus:
-    """Plot a recording: rope speed with setpoint and ToV, ESC pulse, battery, state timeline, gaps."""
+def replay(ctx: CliContext, file: Path, plot_path: Path, from_s: float | None, to_s: float | None) -> ExitStatus:
+    """Plot a recording: rope speed with setpoint and ToV guard, ESC pulse, guide and its target, spindle load,
+    battery, state timeline; events and gaps in every panel and in the legend."""
+    for name, value in (("--from", from_s), ("--to", to_s)):
+        if value is not None and not math.isfinite(value):
+            raise InvalidArgument(name, "a finite device time in seconds", value)
+    if from_s is not None and to_s is not None and to_s <= from_s:
+        raise InvalidArgument("--to", f"a time after --from ({from_s:g} s)", to_s)
     rec = read_recording(file)
     if rec.truncated:
         ctx.note(f"{file} is truncated ({rec.truncation_reason}); plotting what it holds")
-    out = plot_recording(rec, plot_path)
+    for damage in rec.damaged:
+        ctx.note(f"{file}: {damage}")
+    out = plot_recording(rec, plot_path, from_s=from_s, to_s=to_s)
     ctx.result({"command": "replay", "path": str(file), "plot": str(out),
                 "telemetry": len(rec.telemetry["log_time_ns"])}, f"wrote {out}")
     return ExitStatus.OK

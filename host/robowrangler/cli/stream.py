@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from robowrangler import units
 from robowrangler.cli.context import CliContext
@@ -35,13 +36,14 @@ def event_line(e: DeviceEvent) -> str:
 
 
 def stream_telemetry(ctx: CliContext, client: Client, *, duration_s: float | None,
-                     events_from: int | None = None) -> int:
+                     events_from: int | None = None,
+                     until: Callable[[TelemetrySample], bool] | None = None) -> int:
     """Print telemetry (and new events) until duration_s has passed (None: until Ctrl-C).
 
     --json: every sample as a JSON line {"type": "telemetry", ...}, events as {"type": "event", ...}.
     Human: at most 10 telemetry lines per second, events as they come. events_from: index in
-    client.events of the first event to print (default: events arriving from now on). Returns the
-    sample count.
+    client.events of the first event to print (default: events arriving from now on); until: stop early
+    after the first sample for which until(sample) is true. Returns the sample count.
     """
     start_s = time.monotonic()
     seen_events = len(client.events) if events_from is None else events_from
@@ -61,6 +63,8 @@ def stream_telemetry(ctx: CliContext, client: Client, *, duration_s: float | Non
             ctx.human_line(telemetry_line(sample))
             last_human_s = sample.received_s
         count += 1
+        if until is not None and until(sample):
+            break
         if duration_s is not None and time.monotonic() - start_s >= duration_s:
             break
     return count

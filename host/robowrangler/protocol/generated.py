@@ -17,7 +17,7 @@ import siphash24 as _siphash
 
 PROTOCOL_VERSION = 2
 MAGIC = 0xB7
-SCHEMA_HASH = 0x1C52
+SCHEMA_HASH = 0x3D79
 HEADER_LEN = 7
 CHECKSUM_LEN = 2
 MAX_PAYLOAD_LEN = 64
@@ -107,6 +107,10 @@ class NackReason(IntEnum):
     """Never sent: the device has no key provisioned and drops every frame over WiFi but HELLO (SESSION_INFO says key_set 0) until one is set over USB serial."""
     STORE_FAILED = 23
     """PROVISION_COMMIT could not write the configuration (no store, or the write failed); nothing changed."""
+    BURST_BUSY = 24
+    """BURST_START while a burst is being captured or streamed; NACK.detail = samples still to capture plus samples still to send."""
+    PARAM_CONFLICT = 25
+    """PARAM_SET: the value is in range but breaks a rule between parameters (guide_min_mm < guide_max_mm; tov_mps x tov_margin <= max_rope_speed_mps); nothing changed. NACK.detail = the id of the other parameter of the rule."""
 
 
 class EventKind(IntEnum):
@@ -209,6 +213,7 @@ class MsgKind(IntEnum):
     SIL = 5
     HELLO = 6
     PROVISION = 7
+    BURST = 8
 
 
 class MsgId(IntEnum):
@@ -220,6 +225,7 @@ class MsgId(IntEnum):
     PARAM_VALUE = 5
     SESSION_INFO = 6
     PROVISION_STATUS = 7
+    BURST_DATA = 8
     ARM = 10
     DISARM = 11
     SET_ROPE_SPEED = 12
@@ -234,6 +240,7 @@ class MsgId(IntEnum):
     RELEASE = 21
     HOME = 22
     HELLO = 23
+    BURST_START = 24
     PROVISION_SET_KEY = 30
     PROVISION_SET_WIFI_SSID = 31
     PROVISION_SET_WIFI_PASSWORD = 32
@@ -414,15 +421,19 @@ class Telemetry(Message):
         rx_auth_failed: uint16 Frames dropped for a missing or wrong signature (wraps).
         rx_replayed: uint16 Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps).
         tx_dropped: uint16 Frames the device queued but dropped from its full send queue (telemetry goes first). Queued frames are numbered when they leave, so a gap in seq is always the network's (wraps).
+        esc_pulse_third_us: uint16 [us/3] ESC pulse width at the PWM timer's resolution (TCC1 counts at 3 MHz: 1/3 us); the pulse both ESCs get is exactly this many counts (esc_pulse_us is it rounded to the microsecond).
+        spindle_moving_speed_raw: uint16 AX-12A moving speed register the spindle loop wrote last (wheel mode: 0-1023, bit 10 = direction, 1 = retracting): the spindle's commanded speed as the servo sees it.
+        encoder_counts: uint32 Encoder edges since boot at this frame (wraps), latched with encoder_edge_us: between two frames, (edge_us difference) / (counts difference) is the raw mean edge period (M/T), unfiltered, beside the filtered rope_speed_mmps.
+        encoder_edge_us: uint32 [us] Capture time of the latest encoder edge, device time since boot in microseconds (time_ms's clock; wraps after 71.6 min).
     """
 
     MSG_ID: ClassVar[int] = 3
     NAME: ClassVar[str] = "TELEMETRY"
     KIND: ClassVar[MsgKind] = MsgKind.TELEMETRY
-    CRC_EXTRA: ClassVar[int] = 0x0420
-    PAYLOAD_LEN: ClassVar[int] = 52
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IBHHHHHHHHHHHHHHiihBHHHH")
-    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (-2147483648, 2147483647), (-2147483648, 2147483647), (-32768, 32767), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535))
+    CRC_EXTRA: ClassVar[int] = 0xF5D0
+    PAYLOAD_LEN: ClassVar[int] = 64
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IBHHHHHHHHHHHHHHiihBHHHHHHII")
+    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (-2147483648, 2147483647), (-2147483648, 2147483647), (-32768, 32767), (0, 255), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 65535), (0, 4294967295), (0, 4294967295))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time_ms', 'uint32', 'ms', '', 'Device time since boot.'),
         FieldSpec('state', 'uint8', '', 'state', 'State machine state.'),
@@ -448,6 +459,10 @@ class Telemetry(Message):
         FieldSpec('rx_auth_failed', 'uint16', '', '', 'Frames dropped for a missing or wrong signature (wraps).'),
         FieldSpec('rx_replayed', 'uint16', '', '', 'Signed frames dropped as replays: another session, or a counter not above the last accepted (wraps).'),
         FieldSpec('tx_dropped', 'uint16', '', '', "Frames the device queued but dropped from its full send queue (telemetry goes first). Queued frames are numbered when they leave, so a gap in seq is always the network's (wraps)."),
+        FieldSpec('esc_pulse_third_us', 'uint16', 'us/3', '', "ESC pulse width at the PWM timer's resolution (TCC1 counts at 3 MHz: 1/3 us); the pulse both ESCs get is exactly this many counts (esc_pulse_us is it rounded to the microsecond)."),
+        FieldSpec('spindle_moving_speed_raw', 'uint16', '', '', "AX-12A moving speed register the spindle loop wrote last (wheel mode: 0-1023, bit 10 = direction, 1 = retracting): the spindle's commanded speed as the servo sees it."),
+        FieldSpec('encoder_counts', 'uint32', '', '', 'Encoder edges since boot at this frame (wraps), latched with encoder_edge_us: between two frames, (edge_us difference) / (counts difference) is the raw mean edge period (M/T), unfiltered, beside the filtered rope_speed_mmps.'),
+        FieldSpec('encoder_edge_us', 'uint32', 'us', '', "Capture time of the latest encoder edge, device time since boot in microseconds (time_ms's clock; wraps after 71.6 min)."),
     )
 
     time_ms: int
@@ -474,6 +489,10 @@ class Telemetry(Message):
     rx_auth_failed: int
     rx_replayed: int
     tx_dropped: int
+    esc_pulse_third_us: int
+    spindle_moving_speed_raw: int
+    encoder_counts: int
+    encoder_edge_us: int
 
 
 @dataclass(frozen=True)
@@ -613,6 +632,46 @@ class ProvisionStatus(Message):
 
 
 @dataclass(frozen=True)
+class BurstData(Message):
+    """BURST_DATA (id 8, burst): A slice of a burst capture (BURST_START), streamed after the capture ends, oldest first, one frame at a time when the send queue is empty (never before TELEMETRY, events or replies; over a keyed WiFi link a frame is signed over idle ticks like any other). Every frame says which samples it carries (first_sample, sample_count), so a lost frame shows as missing sample indices. samples holds burst_samples_per_frame samples of 8 bytes, little-endian: encoder_counts u16 (low 16 bits of the cumulative edge count), encoder_edge_us u16 (low 16 bits of the latest edge's capture time, us since boot), esc_pulse_third_us u16 (the pulse the tick wrote, 1/3 us), battery_mv u16 (the battery reading of the tick); unused samples of the last frame are zero. Sample i was taken by the control tick at start_time_us + i tick_us.
+
+    Fields:
+        burst_id: uint16 Counts the bursts since boot (wraps); all frames of a burst share it.
+        start_time_ms: uint32 [ms] Device time since boot of sample 0 (the clock of TELEMETRY.time_ms).
+        start_time_us: uint32 [us] Device time since boot of sample 0 in microseconds (the clock of encoder_edge_us, wraps).
+        tick_us: uint16 [us] Control tick period: the time between samples.
+        sample_count: uint16 Samples in the whole burst (as BURST_START asked).
+        first_sample: uint16 Index in the burst of the first sample of this frame.
+        samples: uint8[48] 6 samples of 8 bytes (layout above); the frame carries min(6, sample_count - first_sample) of them.
+    """
+
+    MSG_ID: ClassVar[int] = 8
+    NAME: ClassVar[str] = "BURST_DATA"
+    KIND: ClassVar[MsgKind] = MsgKind.BURST
+    CRC_EXTRA: ClassVar[int] = 0x1EC2
+    PAYLOAD_LEN: ClassVar[int] = 64
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<HIIHHH48s")
+    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 65535), (0, 4294967295), (0, 4294967295), (0, 65535), (0, 65535), (0, 65535), ('bytes', 48))
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('burst_id', 'uint16', '', '', 'Counts the bursts since boot (wraps); all frames of a burst share it.'),
+        FieldSpec('start_time_ms', 'uint32', 'ms', '', 'Device time since boot of sample 0 (the clock of TELEMETRY.time_ms).'),
+        FieldSpec('start_time_us', 'uint32', 'us', '', 'Device time since boot of sample 0 in microseconds (the clock of encoder_edge_us, wraps).'),
+        FieldSpec('tick_us', 'uint16', 'us', '', 'Control tick period: the time between samples.'),
+        FieldSpec('sample_count', 'uint16', '', '', 'Samples in the whole burst (as BURST_START asked).'),
+        FieldSpec('first_sample', 'uint16', '', '', 'Index in the burst of the first sample of this frame.'),
+        FieldSpec('samples', 'uint8[48]', '', '', '6 samples of 8 bytes (layout above); the frame carries min(6, sample_count - first_sample) of them.'),
+    )
+
+    burst_id: int
+    start_time_ms: int
+    start_time_us: int
+    tick_us: int
+    sample_count: int
+    first_sample: int
+    samples: bytes
+
+
+@dataclass(frozen=True)
 class Arm(Message):
     """ARM (id 10, command): DISARMED -> ARMED. Refused (NOT_READY) during the ESC arming hold after boot.
     """
@@ -718,7 +777,7 @@ class ParamGet(Message):
 
 @dataclass(frozen=True)
 class ParamSet(Message):
-    """PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED); answered by ACK then PARAM_VALUE.
+    """PARAM_SET (id 16, command): Set a parameter (range-checked: OUT_OF_RANGE, UNKNOWN_PARAM, PARAM_LOCKED; checked with the parameters it must hold together with: PARAM_CONFLICT); answered by ACK then PARAM_VALUE.
 
     Fields:
         param_id: uint8 Parameter id.
@@ -858,6 +917,28 @@ class Hello(Message):
     )
 
     host_nonce: int
+
+
+@dataclass(frozen=True)
+class BurstStart(Message):
+    """BURST_START (id 24, command): Capture a burst: every control tick from the one that accepts it (1 kHz) samples the encoder count and edge time, the ESC pulse and the battery into the device's burst buffer (burst_max_samples), then streams it as BURST_DATA. Accepted in every state (it only records); refused while a burst is captured or streamed (BURST_BUSY).
+
+    Fields:
+        samples: uint16 Ticks to capture, 1..burst_max_samples (else OUT_OF_RANGE, detail = burst_max_samples).
+    """
+
+    MSG_ID: ClassVar[int] = 24
+    NAME: ClassVar[str] = "BURST_START"
+    KIND: ClassVar[MsgKind] = MsgKind.COMMAND
+    CRC_EXTRA: ClassVar[int] = 0xF94B
+    PAYLOAD_LEN: ClassVar[int] = 2
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<H")
+    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 65535),)
+    FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
+        FieldSpec('samples', 'uint16', '', '', 'Ticks to capture, 1..burst_max_samples (else OUT_OF_RANGE, detail = burst_max_samples).'),
+    )
+
+    samples: int
 
 
 @dataclass(frozen=True)
@@ -1020,24 +1101,27 @@ class SilActuators(Message):
         time_us: uint32 [us] Echo of the SIL_SENSORS time this answers.
         esc_pulse_us: uint16 [us] Pulse width for both ESCs.
         spindle_moving_speed_raw: uint16 AX-12A moving speed register written this tick (wheel mode: 0-1023, bit 10 = direction).
+        esc_pulse_third_us: uint16 [us/3] The same pulse at the PWM timer's resolution (1/3 us, as TCC1 outputs it): the plant applies this one.
     """
 
     MSG_ID: ClassVar[int] = 101
     NAME: ClassVar[str] = "SIL_ACTUATORS"
     KIND: ClassVar[MsgKind] = MsgKind.SIL
-    CRC_EXTRA: ClassVar[int] = 0x01BF
-    PAYLOAD_LEN: ClassVar[int] = 8
-    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IHH")
-    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 65535), (0, 65535))
+    CRC_EXTRA: ClassVar[int] = 0xFEDE
+    PAYLOAD_LEN: ClassVar[int] = 10
+    _STRUCT: ClassVar[struct.Struct] = struct.Struct("<IHHH")
+    _RANGES: ClassVar[tuple[tuple | None, ...]] = ((0, 4294967295), (0, 65535), (0, 65535), (0, 65535))
     FIELDS: ClassVar[tuple[FieldSpec, ...]] = (
         FieldSpec('time_us', 'uint32', 'us', '', 'Echo of the SIL_SENSORS time this answers.'),
         FieldSpec('esc_pulse_us', 'uint16', 'us', '', 'Pulse width for both ESCs.'),
         FieldSpec('spindle_moving_speed_raw', 'uint16', '', '', 'AX-12A moving speed register written this tick (wheel mode: 0-1023, bit 10 = direction).'),
+        FieldSpec('esc_pulse_third_us', 'uint16', 'us/3', '', "The same pulse at the PWM timer's resolution (1/3 us, as TCC1 outputs it): the plant applies this one."),
     )
 
     time_us: int
     esc_pulse_us: int
     spindle_moving_speed_raw: int
+    esc_pulse_third_us: int
 
 
 MESSAGES: dict[int, type[Message]] = {
@@ -1049,6 +1133,7 @@ MESSAGES: dict[int, type[Message]] = {
     5: ParamValue,
     6: SessionInfo,
     7: ProvisionStatus,
+    8: BurstData,
     10: Arm,
     11: Disarm,
     12: SetRopeSpeed,
@@ -1063,6 +1148,7 @@ MESSAGES: dict[int, type[Message]] = {
     21: Release,
     22: Home,
     23: Hello,
+    24: BurstStart,
     30: ProvisionSetKey,
     31: ProvisionSetWifiSsid,
     32: ProvisionSetWifiPassword,
@@ -1205,7 +1291,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(6, 'ramp_down_mps2', 'm/s^2', 0.5, 200.0, 10.0, False, False, 'Setpoint ramp when slowing down and for SPINDOWN.'),
     ParamSpec(7, 'wheel_radius_m', 'm', 0.005, 0.05, 0.015, True, False, 'Drive wheel radius (rope speed = 2 pi r x wheel rev/s).'),
     ParamSpec(8, 'encoder_counts_per_rev', 'counts/rev', 1.0, 4096.0, 64.0, True, True, 'Encoder edges per wheel revolution.'),
-    ParamSpec(9, 'heartbeat_timeout_s', 's', 0.1, 10.0, 0.5, False, False, 'Host silence after which the device spins the rope down.'),
+    ParamSpec(9, 'heartbeat_timeout_s', 's', 0.1, 10.0, 0.5, False, False, 'Host silence after which the device spins the rope down and stops the guide where it is: the rope and the guide move only while a host is alive.'),
     ParamSpec(10, 'max_rope_speed_mps', 'm/s', 1.0, 25.0, 20.0, False, False, 'Largest accepted SET_ROPE_SPEED.'),
     ParamSpec(11, 'motor_kv_rpm_per_v', 'rpm/V', 100.0, 5000.0, 1250.0, False, False, 'Motor velocity constant, for the feed-forward throttle map.'),
     ParamSpec(12, 'esc_min_us', 'us', 1000.0, 1200.0, 1000.0, True, False, 'ESC minimum (idle) pulse; the output never goes under it (1000 us is the bottom of the ESC protocol; raise it for an ESC calibrated higher).'),
@@ -1214,7 +1300,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(15, 'arm_hold_s', 's', 0.2, 5.0, 0.5, True, False, 'After boot the ESC gets its minimum pulse this long before ARM is accepted (BLHeli arms after ~0.2 s).'),
     ParamSpec(16, 'encoder_timeout_s', 's', 0.02, 2.0, 0.25, False, False, 'No encoder edge for this long with the throttle above idle -> ENCODER_SILENT fault.'),
     ParamSpec(17, 'lead_mm_per_rev', 'mm/rev', 0.5, 20.0, 8.0, True, False, 'Lead screw lead: guide travel per spindle revolution.'),
-    ParamSpec(18, 'guide_min_mm', 'mm', 0.0, 180.0, 0.0, False, False, 'Soft limit at the home end (largest loop).'),
+    ParamSpec(18, 'guide_min_mm', 'mm', 0.0, 179.0, 0.0, False, False, 'Soft limit at the home end (largest loop).'),
     ParamSpec(19, 'guide_max_mm', 'mm', 1.0, 180.0, 180.0, False, False, 'Soft limit at the retracted end (smallest loop).'),
     ParamSpec(20, 'spindle_kp_per_s', '1/s', 0.1, 50.0, 4.0, False, False, 'Guide position loop: commanded guide speed (mm/s) per mm of position error.'),
     ParamSpec(21, 'spindle_max_speed_mmps', 'mm/s', 0.5, 15.0, 6.0, False, False, 'Fastest commanded guide speed.'),
@@ -1234,3 +1320,34 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec(35, 'drive_resistance_ohm', 'ohm', 0.01, 1.0, 0.085, False, False, "Winding plus ESC resistance per motor: turns the speed loop's extra drive voltage into rope force for the load-loss monitor (2 motors, kv, wheel radius: 12 N/V at the defaults)."),
 )
 PARAMS_BY_NAME: dict[str, ParamSpec] = {p.name: p for p in PARAMS}
+
+# BURST_DATA.samples: BURST_SAMPLES_PER_FRAME records of BURST_SAMPLE_LEN bytes (little-endian)
+BURST_SAMPLES_PER_FRAME = 6
+BURST_SAMPLE_LEN = 8
+BURST_SAMPLE_FIELDS: tuple[FieldSpec, ...] = (
+    FieldSpec('encoder_counts', 'uint16', '', '', 'Encoder edges since boot, low 16 bits.'),
+    FieldSpec('encoder_edge_us', 'uint16', 'us', '', "Capture time of the latest edge, device time since boot in us, low 16 bits (at most 65.5 ms old to be unwrapped against the sample's own time)."),
+    FieldSpec('esc_pulse_third_us', 'uint16', 'us/3', '', 'ESC pulse the tick wrote, 1/3 us (TCC1 counts).'),
+    FieldSpec('battery_mv', 'uint16', 'mV', '', 'Battery voltage the tick read (ADC, divider undone).'),
+)
+_BURST_SAMPLE_FMT = struct.Struct('<HHHH')
+
+
+def unpack_burst_samples(data: bytes, count: int = BURST_SAMPLES_PER_FRAME) -> list[dict[str, int]]:
+    """The first count samples of a BURST_DATA.samples array, each a dict of BURST_SAMPLE_FIELDS."""
+    if not 0 <= count <= BURST_SAMPLES_PER_FRAME:
+        raise ValueError(f"count: expected 0..{BURST_SAMPLES_PER_FRAME}, got {count}")
+    if len(data) != BURST_SAMPLES_PER_FRAME * BURST_SAMPLE_LEN:
+        raise ValueError(f"data: expected {BURST_SAMPLES_PER_FRAME * BURST_SAMPLE_LEN} bytes, got {len(data)}")
+    names = [f.name for f in BURST_SAMPLE_FIELDS]
+    return [dict(zip(names, _BURST_SAMPLE_FMT.unpack_from(data, i * BURST_SAMPLE_LEN))) for i in range(count)]
+
+
+def pack_burst_samples(samples: list[dict[str, int]]) -> bytes:
+    """Up to BURST_SAMPLES_PER_FRAME samples as a BURST_DATA.samples array (the rest zero)."""
+    if len(samples) > BURST_SAMPLES_PER_FRAME:
+        raise ValueError(f"samples: expected at most {BURST_SAMPLES_PER_FRAME}, got {len(samples)}")
+    out = bytearray(BURST_SAMPLES_PER_FRAME * BURST_SAMPLE_LEN)
+    for i, sample in enumerate(samples):
+        _BURST_SAMPLE_FMT.pack_into(out, i * BURST_SAMPLE_LEN, *(sample[f.name] for f in BURST_SAMPLE_FIELDS))
+    return bytes(out)

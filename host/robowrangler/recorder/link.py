@@ -9,7 +9,7 @@ Why a transport wrapper: the Client's public API gives TelemetrySamples without 
 number (needed for gap detection) and does not report the commands it sends. Wrapping the transport
 sees the exact bytes in both directions through the Client's public `transport=` argument, decodes
 them with the generated codec, and writes:
-    TELEMETRY -> /device/telemetry, EVENT -> /device/event, a jump in the device's frame seq -> /link/gap,
+    TELEMETRY -> /device/telemetry, EVENT -> /device/event, BURST_DATA -> /device/burst, a jump in the device's frame seq -> /link/gap,
     command frames (not heartbeats) -> /host/command once the ACK/NACK arrives (or NO_REPLY).
 Frames that do not decode are counted (decode_errors), never raised into the client's threads.
 
@@ -28,6 +28,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 from robowrangler.protocol import generated as gen
+from robowrangler.recorder.burst import burst_record
 from robowrangler.recorder.gaps import REORDER_WINDOW, SEQ_MODULUS, SeqGap, SeqGapDetector
 from robowrangler.recorder.records import command_record, event_record, telemetry_record
 from robowrangler.recorder.writer import RecordingWriter
@@ -56,7 +57,7 @@ class _HeldGap:
 class LinkRecorder:
     """Turns frames seen on a link into recording records (thread-safe).
 
-    Attributes: telemetry_count, event_count, command_count, decode_errors, gap_detector (SeqGapDetector),
+    Attributes: telemetry_count, event_count, burst_frame_count, command_count, decode_errors, gap_detector (SeqGapDetector),
     last_telemetry_host_s (time.monotonic() of the latest TELEMETRY, None before), latest_state (name),
     gaps_written / frames_missing (the /link/gap records written and the frames they count: holes that late
     frames filled are not among them), reordered_filled (frames that arrived late into a held hole).
@@ -70,6 +71,7 @@ class LinkRecorder:
         self.gap_detector = SeqGapDetector()
         self.telemetry_count = 0
         self.event_count = 0
+        self.burst_frame_count = 0
         self.command_count = 0
         self.heartbeats_sent = 0
         self.decode_errors = 0
@@ -116,6 +118,9 @@ class LinkRecorder:
             elif isinstance(msg, gen.Event):
                 self.writer.write("/device/event", event_record(msg, seq=header.seq), log_time_ns=log_ns)
                 self.event_count += 1
+            elif isinstance(msg, gen.BurstData):
+                self.writer.write("/device/burst", burst_record(msg, seq=header.seq), log_time_ns=log_ns)
+                self.burst_frame_count += 1
             elif isinstance(msg, (gen.Ack, gen.Nack)):
                 pending = self._pending.pop((msg.cmd_msg_id, msg.cmd_seq), None)
                 if pending is not None:  # else: a reply to a retransmission already answered, or not ours

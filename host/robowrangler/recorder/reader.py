@@ -11,8 +11,10 @@ Rules (protocol/recording/schema.md):
   Every message of a known channel is checked against this package's schema for that channel.
   Channels with other topics are counted and listed, not decoded.
 - A truncated file (a killed recorder) is read up to its last complete record - for a chunked file the
-  last complete chunk - and reported: truncated=True with the reason. Damage before the end (CRC
-  mismatch, impossible record) raises CorruptRecording; a foreign file raises NotARecording; a message
+  last complete chunk - and reported: truncated=True with the reason. A chunk whose bytes are damaged
+  (CRC mismatch, unreadable) is skipped and reported in `damaged` (where, why, how many messages its
+  index says it held), the rest is read, as the mcap library's own tools do. Damage outside the chunks
+  (an impossible record, a data-section CRC mismatch with every chunk intact) raises CorruptRecording; a foreign file raises NotARecording; a message
   that violates its schema raises RecordingSchemaError. All are RecordingError naming the file.
 """
 
@@ -57,7 +59,8 @@ class Recording:
     channels present, each sorted by log_time (stable); topic_counts: message count of every channel in
     the file, foreign ones included; foreign_topics: topic -> schema name of channels this reader does
     not decode; truncated / truncation_reason: whether the file ended early and why; chunks: complete
-    chunks read; metadata: the other Metadata records by name (e.g. "/device/params").
+    chunks read; metadata: the other Metadata records by name (e.g. "/device/params"); damaged: one line per
+    damaged chunk that was skipped (empty for an intact file).
     """
 
     path: Path
@@ -69,6 +72,7 @@ class Recording:
     truncation_reason: str | None = None
     chunks: int = 0
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
+    damaged: list[str] = field(default_factory=list)
 
     def table(self, topic: str) -> dict[str, np.ndarray]:
         """Columns of a channel: log_time_ns, publish_time_ns (int64) and one array per field.
@@ -180,38 +184,41 @@ class _Loader:
         self.counts: dict[str, int] = {}
         self.foreign: dict[str, str] = {}
         self.chunks = 0
+        self.damaged: list[str] = []
         self.checked_channels: set[int] = set()
 
     def load(self) -> Recording:
         reader = StreamReader(self.f, emit_chunks=True, validate_crcs=True, record_size_limit=None)
         truncated, reason, footer = False, None, False
         records = reader.records
-        position = 0
+        position = len(MCAP_MAGIC)  # the first record (the Header) follows the magic
         while True:
             try:
                 record = next(records)
             except StopIteration:
                 break
             except CRCValidationError as err:
+                if self.damaged:  # the data-section CRC covers the damaged chunks already reported: stop here
+                    break
                 raise CorruptRecording(self.path, f"CRC mismatch in the data section ({err})") from err
             except (McapError, struct.error, ValueError, UnicodeDecodeError, OverflowError, MemoryError) as err:
                 # a record that cannot be read whole: truncation if it runs past the end, else damage
                 truncated, reason = self._classify_cut(position, err)
                 break
-            position = self.f.tell()
+            start, position = position, self.f.tell()
             if isinstance(record, Chunk):
+                number = self.chunks + len(self.damaged) + 1
                 try:
                     inner = breakup_chunk(record, validate_crc=True)
-                except CRCValidationError as err:
-                    raise CorruptRecording(self.path, f"chunk {self.chunks + 1}: CRC mismatch, the chunk's bytes "
-                                           "are damaged") from err
                 except UnsupportedCompressionError as err:
-                    raise RecordingError(self.path, f"chunk {self.chunks + 1} is compressed with "
+                    raise RecordingError(self.path, f"chunk {number} is compressed with "
                                          f"{record.compression!r}, which needs a package this host lacks ({err}); "
-                                         "write recordings uncompressed (see schema.md)") from err
-                except Exception as err:  # noqa: BLE001 - any parse failure inside a chunk is damage
-                    raise CorruptRecording(self.path, f"chunk {self.chunks + 1}: unreadable "
-                                           f"({type(err).__name__}: {err})") from err
+                                         "install zstandard/lz4 (the robowrangler package depends on zstandard)") from err
+                except Exception as err:  # noqa: BLE001 - a CRC mismatch or any parse failure inside a chunk is damage
+                    why = "CRC mismatch" if isinstance(err, CRCValidationError) else f"unreadable ({type(err).__name__})"
+                    self.damaged.append(f"chunk {number} at byte {start} ({why}, log time {record.message_start_time}"
+                                        f"..{record.message_end_time} ns): skipped")
+                    continue
                 self.chunks += 1
                 for r in inner:
                     self._take(r)
@@ -219,7 +226,7 @@ class _Loader:
                 footer = True
             else:
                 self._take(record)
-        if not footer and not truncated:
+        if not footer and not truncated and not self.damaged:
             truncated, reason = True, "no footer: the file ends after its last complete record"
         if self.meta is None:
             if truncated:
@@ -229,7 +236,7 @@ class _Loader:
         for rs in self.raw.values():
             rs.sort(key=lambda r: r.log_time_ns)
         return Recording(self.path, self.meta, self.raw, self.counts, self.foreign, truncated, reason, self.chunks,
-                         self.metadata)
+                         self.metadata, self.damaged)
 
     def _classify_cut(self, position: int, err: Exception) -> tuple[bool, str]:
         """A record could not be read whole at `position`: truncation if it runs past the end of the file."""

@@ -10,7 +10,8 @@ from robowrangler.recorder.reader import Recording
 def summarize(rec: Recording) -> dict[str, Any]:
     """A JSON-ready summary.
 
-    Keys: path, source, schema_hash, created_utc, truncated, truncation_reason, chunks, duration_s
+    Keys: path, source, schema_hash, created_utc, truncated, truncation_reason, chunks, damaged (skipped
+    damaged chunks, one line each), duration_s
     (log_time span), channels {topic: message count} (foreign channels included), foreign_channels
     {topic: schema name}, telemetry {count, rate_hz, device_time_s [first, last], states (visited, in
     order, consecutive repeats removed)}, gaps {count, missing (frames), open (gaps of unknown extent)},
@@ -41,6 +42,7 @@ def summarize(rec: Recording) -> dict[str, Any]:
         "truncated": rec.truncated,
         "truncation_reason": rec.truncation_reason,
         "chunks": rec.chunks,
+        "damaged": list(rec.damaged),
         "duration_s": round(rec.duration_s, 3),
         "channels": dict(sorted(rec.topic_counts.items())),
         "foreign_channels": rec.foreign_topics,
@@ -58,6 +60,8 @@ def format_summary(s: dict[str, Any]) -> str:
              f"{s['duration_s']:.2f} s, {s['chunks']} chunks"]
     if s["truncated"]:
         lines.append(f"TRUNCATED: {s['truncation_reason']}")
+    for damage in s.get("damaged", []):
+        lines.append(f"DAMAGED: {damage}")
     lines.append("channels:")
     width = max((len(t) for t in s["channels"]), default=0)
     for topic, count in s["channels"].items():

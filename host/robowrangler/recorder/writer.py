@@ -7,8 +7,9 @@ Messages are JSON (message encoding "json") with a JSON Schema per channel (sche
 "jsonschema"), so any MCAP tool reads them. The file is chunked and a chunk is finished (written and
 flushed to the OS) every `flush_period_s` or every `flush_messages` messages, whichever comes first,
 also while no message arrives (a background thread): a killed recorder loses at most that much, and
-the reader reads everything up to the last complete chunk. Chunks are not compressed (no zstd/lz4
-dependency); close() writes the summary section (statistics, indexes) and the footer.
+the reader reads everything up to the last complete chunk. Chunks are zstd-compressed (the host
+depends on `zstandard`, which the mcap library, Foxglove and the `mcap` CLI read; compression="none"
+writes them plain); close() writes the summary section (statistics, indexes) and the footer.
 
 Thread-safe: one lock guards the MCAP writer (the client's receive and send threads both write).
 
@@ -39,6 +40,7 @@ from robowrangler.recorder.json_schema_check import first_error
 DEFAULT_FLUSH_PERIOD_S = 0.5
 DEFAULT_FLUSH_MESSAGES = 200
 DEFAULT_CHUNK_SIZE_BYTES = 256 * 1024  # a hard cap; the period/count flush normally comes first
+_COMPRESSION = {"zstd": CompressionType.ZSTD, "none": CompressionType.NONE}
 _SCHEMAS = {topic: json.loads(text) for topic, (_, _, text) in sg.CHANNELS.items()}
 
 
@@ -56,7 +58,7 @@ class RecordingWriter:
     """Writes one recording.
 
     Args:
-        path: output file (.mcap); an existing file is replaced.
+        path: output file (.mcap); an existing file is replaced (the CLI refuses one without --force).
         source: "board", "sil", "simulator" or "other" (meta `source`).
         seed: random seed of a SIL/simulator run, None if none.
         time_base: "unix" (log_time = ns since the epoch, host clock) or "simulation" (ns of simulated time).
@@ -67,12 +69,14 @@ class RecordingWriter:
         validate: check every record against its channel schema before writing (RecordingSchemaError).
         clock_ns: the recording's clock in integer ns (e.g. simulated time for time_base "simulation"): it
             stamps log times (now_ns()) and times the chunk flushes; None: the host clock (unix ns).
+        compression: "zstd" (default) or "none": how chunks are stored.
     """
 
     def __init__(self, path: str | Path, *, source: str, seed: int | None = None, time_base: str = "unix",
                  device_url: str = "", description: str = "",
                  flush_period_s: float = DEFAULT_FLUSH_PERIOD_S, flush_messages: int = DEFAULT_FLUSH_MESSAGES,
-                 validate: bool = True, clock_ns: Callable[[], int] | None = None) -> None:
+                 validate: bool = True, clock_ns: Callable[[], int] | None = None,
+                 compression: str = "zstd") -> None:
         self.path = Path(path)
         if source not in sg.SOURCES:
             raise RecordingError(self.path, f"source: expected one of {list(sg.SOURCES)}, got {source!r}")
@@ -84,6 +88,8 @@ class RecordingWriter:
             raise RecordingError(self.path, f"flush_period_s: expected a number > 0, got {flush_period_s!r}")
         if isinstance(flush_messages, bool) or not isinstance(flush_messages, int) or flush_messages < 1:
             raise RecordingError(self.path, f"flush_messages: expected an integer >= 1, got {flush_messages!r}")
+        if compression not in _COMPRESSION:
+            raise RecordingError(self.path, f"compression: expected one of {list(_COMPRESSION)}, got {compression!r}")
         if clock_ns is not None and not callable(clock_ns):
             raise RecordingError(self.path, f"clock_ns: expected a callable returning ns or None, got {clock_ns!r}")
         self._clock_ns = clock_ns
@@ -107,7 +113,7 @@ class RecordingWriter:
             self._file = open(self.path, "wb")
         except OSError as err:
             raise RecordingError(self.path, f"cannot create the file: {err.strerror or err}") from err
-        self._mcap = Writer(self._file, chunk_size=DEFAULT_CHUNK_SIZE_BYTES, compression=CompressionType.NONE)
+        self._mcap = Writer(self._file, chunk_size=DEFAULT_CHUNK_SIZE_BYTES, compression=_COMPRESSION[compression])
         self._mcap.start(profile="", library=self.meta["writer"])
         self._mcap.add_metadata(sg.META_RECORD_NAME, self.meta)
         self._file.flush()

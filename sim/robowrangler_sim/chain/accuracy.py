@@ -126,7 +126,7 @@ def plot_accuracy(report: AccuracyReport, path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print the per-phi accuracy of the default (or synthetic) table and write the plot."""
+    """Print the per-phi accuracy of the default (or synthetic, or --table) table and write the plot."""
     import argparse
 
     from robowrangler_sim.chain.default_table import default_or_synthetic_table
@@ -135,9 +135,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n-links", type=int, default=20)
     ap.add_argument("--settle-s", type=float, default=4.0)
     ap.add_argument("--out", default="chain_accuracy.png")
+    ap.add_argument("--table", default=None, metavar="FILE",
+                    help="a shape table (e.g. from `wrangler identify`) instead of the shipped default")
     args = ap.parse_args(argv)
-    report = steady_state_accuracy(default_or_synthetic_table(), params=ChainParams(n_links=args.n_links),
-                                   settle_s=args.settle_s)
+    table = default_or_synthetic_table() if args.table is None else ShapeTable.load(args.table)
+    report = steady_state_accuracy(table, params=ChainParams(n_links=args.n_links), settle_s=args.settle_s)
     print("phi_deg  max_cm  mean_cm  max_%")
     for row in report.rows():
         print(f"{row['phi_deg']:7.1f} {100 * row['max_m']:7.2f} {100 * row['mean_m']:8.2f} {row['max_pct']:6.2f}")

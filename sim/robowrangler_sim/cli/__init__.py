@@ -12,6 +12,6 @@ import click
 
 def commands() -> list[click.Command]:
     """The click commands this distribution adds to `wrangler` (the entry point's target)."""
-    from robowrangler_sim.cli import sil
+    from robowrangler_sim.cli import diagnose, identify, sil
 
-    return [sil.sil_command, sil.demo_command]
+    return [sil.sil_command, sil.demo_command, diagnose.diagnose_command, identify.identify_command]

@@ -76,6 +76,8 @@ def _sil_modules():
               metavar="SECONDS", help="Stop after this much simulated time (default: until Ctrl-C).")
 @click.option("--state-file", default=None, metavar="PATH",
               help="The SIL device's flash (key, parameters, boot counter); default: a temporary one.")
+@click.option("--model", "model_file", default=None, metavar="FILE", type=click.Path(exists=True, dir_okay=False),
+              help="Drive model written by `wrangler diagnose` (model.json): refitted parameters and effect terms.")
 @click.option("--scenario", "scenario", type=ScenarioName(), default=None,
               help="Run a wrangling scenario with the firmware in the loop instead of serving a device: the "
                    "rope chain (MuJoCo) is the plant; the simulation judges the grasp. Unpaced.")
@@ -87,10 +89,13 @@ def _sil_modules():
 @click.option("--viewer", is_flag=True,
               help="With --scenario: watch the run in MuJoCo's interactive viewer, paced by --speedup (--unpaced: as "
                    "fast as it goes). Needs a display (DISPLAY or WAYLAND_DISPLAY) and MUJOCO_GL unset or glfw.")
+@click.option("--shape-table", "shape_table", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="With --scenario: the rope chain's shape table (JSON, e.g. from `wrangler identify`) instead of "
+                   "the shipped default.")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
                 duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
-                render_dir: str | None, viewer: bool) -> None:
+                render_dir: str | None, viewer: bool, shape_table: str | None, model_file: str | None = None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
@@ -108,16 +113,22 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     if viewer and render_dir is not None:
         raise click.UsageError("--viewer and --render cannot be combined: MuJoCo uses one OpenGL backend per process "
                                "(GLFW windows for --viewer, headless OSMesa for --render)")
+    table = None
+    if shape_table is not None:
+        if scenario is None:
+            raise click.UsageError("--shape-table needs --scenario (the shape table drives the rope chain, which only "
+                                   "a scenario simulates)")
+        table = _load_shape_table(shape_table)
     if scenario is not None:
         _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir, viewer=viewer,
-                      viewer_speedup=None if unpaced else speedup)
+                      viewer_speedup=None if unpaced else speedup, table=table)
         return
     if render_dir is not None:
         raise click.UsageError("--render needs --scenario")
     sil_pkg, _ = _sil_modules()
     try:
         session = sil_pkg.SilSession(speedup=None if unpaced else speedup, seed=seed, cmd_port=cmd_port,
-                                     trace_every=0, key=ctx.key, state_file=state_file)
+                                     trace_every=0, key=ctx.key, state_file=state_file, model=model_file)
         session.start()
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
@@ -149,8 +160,19 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
                f"SIL stopped after {session.time_s:.3f} simulated seconds")
 
 
+def _load_shape_table(path: str):
+    """The shape table at ``path``; a missing or malformed file is a usage error naming it."""
+    from robowrangler_sim.shape_table import ShapeTable, ShapeTableError
+
+    try:
+        return ShapeTable.load(path)
+    except (OSError, ShapeTableError) as exc:
+        detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise click.BadParameter(f"{path}: {detail}", param_hint="--shape-table") from exc
+
+
 def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None,
-                  viewer: bool = False, viewer_speedup: float | None = 1.0) -> None:
+                  viewer: bool = False, viewer_speedup: float | None = 1.0, table=None) -> None:
     watch = None
     if viewer:  # before anything runs (or imports MuJoCo's viewer): say what is missing
         from robowrangler_sim.scenarios.viewer import HEADLESS_HINT, ScenarioViewer, display_problem, glfw_problem
@@ -166,9 +188,14 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
     from robowrangler_sim.scenarios import run_scenario
     from robowrangler_sim.scenarios.viewer import ViewerUnavailable
 
+    from robowrangler_sim.scenarios.runner import ScenarioInterrupted
+
     try:
         outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
-                               watch=watch)
+                               watch=watch, table=table)
+    except ScenarioInterrupted as stop:
+        ctx.note(_what_was_left(name, stop, render_dir))
+        raise KeyboardInterrupt from None
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
     except ViewerUnavailable as exc:
@@ -189,7 +216,8 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
             "firmware_path": ["->".join(step[:2]) + f" ({step[2]})" for step in outcome.firmware_path],
             "diverged": outcome.diverged, "simulated_s": round(outcome.simulated_s, 3),
             "wall_s": round(outcome.wall_s, 2), "seed": seed, "links": n_links, "files": outcome.frames_written,
-            "viewer_updates": None if watch is None else watch.synced}
+            "viewer_updates": None if watch is None else watch.synced,
+            "shape_table": outcome.shape_table_source}
     files = f"; {len(outcome.frames_written)} files in {render_dir}" if outcome.frames_written else ""
     path = outcome.firmware_path
     states = " -> ".join([path[0][0]] + [f"{to} ({cause})" for _, to, cause in path]) if path else "-"
@@ -201,8 +229,43 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
                      + ("" if data["door_opening_deg"] is None else f", door opened {outcome.door_opening_deg:.1f} deg")
                      + f"; {outcome.simulated_s:.1f} simulated s in "
                      f"{outcome.wall_s:.1f} s){files}")
+    if outcome.secured is not None:
+        ctx.note(_explain_verdict(name, outcome))
     if outcome.secured is None:
         raise ScenarioFailed(f"scenario {name}: {outcome.verdict}")
+
+
+def _what_was_left(name: str, stop, render_dir: str | None) -> str:
+    """One line for an interrupted scenario: where it stopped, the firmware's states so far, the files left."""
+    o = stop.outcome
+    path = (" -> ".join([o.firmware_path[0][0]] + [to for _, to, _ in o.firmware_path]) if o.firmware_path
+            else "unchanged since boot")
+    pngs = [f for f in o.frames_written if f.endswith(".png")]
+    mp4s = [f for f in o.frames_written if f.endswith(".mp4")]
+    files = (f"; left in {render_dir}: {len(pngs)} PNG frames" + (f" and {Path(mp4s[0]).name} (the run so far)"
+                                                                 if mp4s else "")) if render_dir else ""
+    return (f"scenario {name} interrupted in phase {stop.phase} at {o.simulated_s:.1f} simulated s, no verdict; "
+            f"firmware states {path}; the SIL firmware is stopped{files}")
+
+
+def explain_criteria(spec) -> str:
+    """What the verdict of a scenario means, with its thresholds (the judged half of the pull)."""
+    script = spec.script
+    if spec.kind == "door":
+        return (f"held = the rope kept touching the lever in at least {100 * script.contact_fraction:.0f} % of the "
+                "judged samples while the robot pulled (a fixture does not follow)")
+    return (f"secured = over the judged part of the pull the object followed the module (follow = its displacement "
+            f"/ the module's, at least {script.follow_fraction:g}) and the rope touched it in at least "
+            f"{100 * script.contact_fraction:.0f} % of the samples; follow above 1 means it went further than the "
+            "module (pushed or rolled ahead)")
+
+
+def _explain_verdict(name: str, outcome) -> str:
+    from robowrangler_sim.scenarios.catalogue import get_scenario
+    from robowrangler_sim.scenarios.table_i_sil import why_outcome
+
+    spec = get_scenario(name)
+    return f"{explain_criteria(spec)}. Here: {why_outcome(outcome, spec)}"
 
 
 @click.command("demo")

@@ -61,6 +61,7 @@ from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory
 from robowrangler_sim.scenarios.catalogue import ScenarioError, ScenarioSpec, get_scenario
 from robowrangler_sim.scenarios.chain_bridge import ChainBridge
 from robowrangler_sim.sil.scripted_host import ScriptedHost
+from robowrangler_sim.shape_table import ShapeTable
 from robowrangler_sim.sil.session import SilSession
 
 P = gen.PARAMS_BY_NAME
@@ -96,6 +97,7 @@ class ScenarioOutcome:
             spindle_load_permille (the firmware's last reported AX-12A load), base_pos_m, object_com_m,
             chain_force_n, loop_tip_pos_m, door_opening_deg (nan but for a hinged door)).
         frames_written: PNG/MP4 paths written with render_dir.
+        shape_table_source: the ``source`` of the shape table the chain ran on.
     """
 
     name: str
@@ -120,6 +122,18 @@ class ScenarioOutcome:
     wall_s: float = 0.0
     trace: list = field(default_factory=list)
     frames_written: list = field(default_factory=list)
+    shape_table_source: str = ""
+
+
+class ScenarioInterrupted(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM turned into it) during a scenario: the firmware was stopped, what was drawn so far
+    written. `outcome` holds the partial run (verdict "interrupted", firmware_path, simulated_s,
+    frames_written); `phase` is the script phase that was running."""
+
+    def __init__(self, outcome: ScenarioOutcome, phase: str) -> None:
+        super().__init__(f"interrupted in phase {phase} at {outcome.simulated_s:.1f} simulated s")
+        self.outcome = outcome
+        self.phase = phase
 
 
 class _FirmwareStopped(Exception):
@@ -131,7 +145,7 @@ class _Run:
 
     def __init__(self, spec: ScenarioSpec, *, seed: int, n_links: int, sample_s: float,
                  progress: Callable[[str], None] | None, render_dir: Path | None, render_every: int,
-                 render_fps: float, chain_noise_rad: float) -> None:
+                 render_fps: float, chain_noise_rad: float, table: ShapeTable | None = None) -> None:
         self.spec = spec
         self.chain_noise_rad = chain_noise_rad
         self.script = spec.script
@@ -142,10 +156,11 @@ class _Run:
         self.firmware_params = dict(spec.firmware_params)
         self.frame_stride = max(1, round(1.0 / (sample_s * render_fps)))
         self.params = ChainParams(**{**dict(spec.chain_params), "n_links": n_links})
-        self.table = default_or_synthetic_table()
+        self.table = default_or_synthetic_table() if table is None else table
         self.phase = "boot"
         self.outcome = ScenarioOutcome(name=spec.name, object_name=spec.object_name, kind=spec.kind, seed=seed,
-                                       n_links=n_links, chain_noise_rad=float(chain_noise_rad))
+                                       n_links=n_links, chain_noise_rad=float(chain_noise_rad),
+                                       shape_table_source=self.table.source)
         self.seed = seed
         self.monitor: SecuredMonitor | None = None
         self._next_sample_us = 0
@@ -382,7 +397,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
                  render_png_every: int = 10, render_fps: float = 10.0,
                  firmware_params: dict[str, float] | None = None,
                  chain_noise_rad: float = 0.0,
-                 watch: Callable[[ChainPlant], None] | None = None) -> ScenarioOutcome:
+                 watch: Callable[[ChainPlant], None] | None = None,
+                 table: ShapeTable | None = None) -> ScenarioOutcome:
     """Run scenario ``name`` with the firmware in the loop and judge it (see module doc).
 
     Args:
@@ -401,6 +417,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         watch: called with the ChainPlant after every control tick (1 ms of simulated time), e.g. a
             viewer.ScenarioViewer that draws the chain in MuJoCo's interactive viewer and paces the run; it must
             only read the plant (the outcome is then the same as without it).
+        table: the chain's shape table (e.g. one made by `wrangler identify` from photos); default: the shipped
+            default (chain/default_table.py).
     Returns:
         ScenarioOutcome. The firmware process is stopped before returning, also on errors.
     """
@@ -415,6 +433,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         raise ScenarioError(f"render_fps: expected 0 < fps <= 1 / sample_s = {1.0 / sample_s:g}, got {render_fps!r}")
     if not (isinstance(chain_noise_rad, (int, float)) and 0.0 <= chain_noise_rad <= 0.5):
         raise ScenarioError(f"chain_noise_rad: expected 0..0.5 rad, got {chain_noise_rad!r}")
+    if table is not None and not isinstance(table, ShapeTable):
+        raise ScenarioError(f"table: expected a ShapeTable (ShapeTable.load(path)), got {type(table).__name__}")
     if watch is not None and not callable(watch):
         raise ScenarioError(f"watch: expected a callable(chain_plant) or None, got {type(watch).__name__}")
     overrides = dict(firmware_params or {})
@@ -428,15 +448,19 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         out_dir = Path(render_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
     run = _Run(spec, seed=seed, n_links=n_links, sample_s=sample_s, progress=progress, render_dir=out_dir,
-               render_every=render_png_every, render_fps=render_fps, chain_noise_rad=chain_noise_rad)
+               render_every=render_png_every, render_fps=render_fps, chain_noise_rad=chain_noise_rad, table=table)
     run.firmware_params.update(overrides)
     run.watch = watch
     wall0 = time.perf_counter()
     run.build()
+    interrupted = False
     try:
         run.sil.start()
         try:
             run.script_run()
+        except KeyboardInterrupt:
+            interrupted = True  # finish below as for any end: firmware path, frames so far, SIL stopped
+            run.outcome.verdict = "interrupted"
         except ChainDivergenceError as exc:
             run.outcome.diverged = str(exc)
             run.outcome.verdict = "diverged"
@@ -456,5 +480,7 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
     finally:
         run.sil.stop()
     run.outcome.wall_s = time.perf_counter() - wall0
+    if interrupted:
+        raise ScenarioInterrupted(run.outcome, run.phase)
     run.note(f"outcome: {run.outcome.verdict}")
     return run.outcome

@@ -40,7 +40,7 @@ def _paper(spec) -> str:
     return {"slips": "slipped"}.get(spec.expected_outcome, spec.expected_outcome or "-")
 
 
-def _why(o: ScenarioOutcome, spec) -> str:
+def why_outcome(o: ScenarioOutcome, spec) -> str:
     """What the figures say happened (a reading of the judged numbers, not a rule on the shape)."""
     if o.touching_fraction < 0.8 and (math.isnan(o.follow_ratio) or abs(o.follow_ratio) < 0.1):
         lost = (f"it stayed where it was and the rope touched it in {100 * o.touching_fraction:.0f} % of the judged "
@@ -118,7 +118,7 @@ def markdown(sil: list[ScenarioOutcome], plant: list[dict], door: list[ScenarioO
         spec = OBJECTS[o.object_name]
         p = by_name.get(o.object_name, {})
         lines.append(f"* {o.object_name} ({spec.shape_class}): paper {_paper(spec)}, plant level "
-                     f"{p.get('outcome', '-')}, SIL {o.verdict}: {_why(o, spec)}.")
+                     f"{p.get('outcome', '-')}, SIL {o.verdict}: {why_outcome(o, spec)}.")
     lines += [
         "",
         "Common to the free-object grasps: RETRACT never ended on LOAD_SECURED, and for light objects that is physics,",

@@ -37,7 +37,8 @@ class FirmwareProcess:
     """``rw_sil`` as a child process. Ports 0 pick free ones; the bound ports are read from its ready line."""
 
     def __init__(self, *, cmd_port: int = 0, plant_port: int = 0, plant_timeout_s: int = 10, tick_us: int = 1000,
-                 state_file: Path | None = None, binary: Path | None = None, start_timeout_s: float = 5.0) -> None:
+                 state_file: Path | None = None, binary: Path | None = None, start_timeout_s: float = 5.0,
+                 spindle_bus_us: int | None = None) -> None:
         for name, port in (("cmd_port", cmd_port), ("plant_port", plant_port)):
             if not isinstance(port, int) or not 0 <= port <= 65535:
                 raise ValueError(f"{name}: expected a UDP port 0..65535, got {port!r}")
@@ -46,6 +47,12 @@ class FirmwareProcess:
                       "--plant-timeout-s", str(int(plant_timeout_s)), "--tick-us", str(int(tick_us))]
         if state_file is not None:
             self._args += ["--state-file", str(state_file)]
+        if spindle_bus_us is not None:
+            if isinstance(spindle_bus_us, bool) or not isinstance(spindle_bus_us, int) or not 1 <= spindle_bus_us <= 1_000_000:
+                raise ValueError(f"spindle_bus_us: expected the bus time of one spindle transaction, 1..1000000 us, "
+                                 f"got {spindle_bus_us!r}")
+            self._args += ["--spindle-bus-us", str(spindle_bus_us)]
+        self.exit_stderr = ""  # what the process wrote on stderr, read when it is stopped
         self._start_timeout_s = start_timeout_s
         self._proc: subprocess.Popen[str] | None = None
         self.cmd_port = 0
@@ -58,8 +65,7 @@ class FirmwareProcess:
         line = self._proc.stdout.readline() if ready else ""
         match = _READY.search(line)
         if not match:
-            self.stop()
-            err = self._proc.stderr.read() if self._proc.stderr else ""
+            err = self._stop_and_read_stderr()  # read before the pipes close: it names the real cause
             raise SilFirmwareError(f"{self.binary} did not start: {(line + err).strip() or 'no output'}")
         self.cmd_port, self.plant_port = int(match.group(1)), int(match.group(2))
         self.serial_path = match.group(3)
@@ -79,6 +85,18 @@ class FirmwareProcess:
             return ""
         return self._proc.stderr.read()
 
+    def _stop_and_read_stderr(self) -> str:
+        """End the process (if still running) and return what it wrote on stderr, then close its pipes."""
+        assert self._proc is not None
+        if self._proc.poll() is None:
+            self._proc.terminate()
+        try:
+            _, err = self._proc.communicate(timeout=3)
+        except subprocess.TimeoutExpired:
+            self._proc.kill()
+            _, err = self._proc.communicate()
+        return err or ""
+
     def stop(self) -> None:
         if self._proc is None:
             return
@@ -89,6 +107,8 @@ class FirmwareProcess:
             except subprocess.TimeoutExpired:
                 self._proc.kill()
                 self._proc.wait()
+        if self._proc.stderr is not None and not self._proc.stderr.closed:
+            self.exit_stderr = self._proc.stderr.read()
         for stream in (self._proc.stdout, self._proc.stderr):
             if stream is not None:
                 stream.close()

@@ -16,6 +16,9 @@ crosses the boundary or on the plants' settable inputs, never on plant internals
   load (``battery_aux_current_a``), so the motors see the sag as well as the ADC.
 * SpindleStall: the lead screw jams for the window (the spindle plant's ``stalled`` input): the guide stops
   while the servo keeps pushing, so its load register rises.
+* SpindleReplyLoss: the servo's status packets are lost on the bus for the window (an interrupt burst that
+  overruns the UART's receiver, a noisy line): the firmware's reads get no reply, while the servo itself keeps
+  executing the writes (the plant still receives the moving speed).
 * StalledControlLoop: the firmware misses its ticks for duration_s (no SIL_SENSORS; the ESC keeps its last
   pulse and the plant runs on); the next tick the firmware sees one long dt.
 """
@@ -79,7 +82,7 @@ class EscNotResponding(_WindowedFault):
         super().__init__(start_s=start_s, duration_s=duration_s)
         self._sil: SilSession | None = None
 
-    def __call__(self, pulse_us: int) -> int:
+    def __call__(self, pulse_us: float) -> float:
         sil = self._sil
         if sil is None or not self.active_at(sil.drive_out.time_us):
             return pulse_us
@@ -201,6 +204,28 @@ class SpindleStall(_WindowedFault):
         sil.spindle.stalled = False
 
 
+class SpindleReplyLoss(_WindowedFault):
+    """No status packet from the servo reaches the firmware from start_s for duration_s; the servo still
+    executes the writes. Counts the ticks it blanked (``ticks_lost``)."""
+
+    def __init__(self, *, start_s: float, duration_s: float | None = None) -> None:
+        super().__init__(start_s=start_s, duration_s=duration_s)
+        self.ticks_lost = 0
+
+    def __call__(self, sensors: SensorValues | None) -> SensorValues | None:
+        if sensors is None or not self.active_at(sensors.time_us) or not sensors.spindle_answered:
+            return sensors
+        self.ticks_lost += 1
+        return replace(sensors, spindle_answered=False)
+
+    def install(self, sil: SilSession) -> SpindleReplyLoss:
+        sil.sensor_filters.append(self)
+        return self
+
+    def remove(self, sil: SilSession) -> None:
+        sil.sensor_filters.remove(self)
+
+
 class StalledControlLoop(_WindowedFault):
     """The firmware's control loop stalls for duration_s: it gets no SIL_SENSORS, so it runs no tick."""
 
@@ -224,4 +249,5 @@ class StalledControlLoop(_WindowedFault):
         sil.sensor_filters.remove(self)
 
 
-__all__ = ["BatterySag", "EncoderDropout", "EscNotResponding", "RopeBreak", "SpindleStall", "StalledControlLoop"]
+__all__ = ["BatterySag", "EncoderDropout", "EscNotResponding", "RopeBreak", "SpindleReplyLoss", "SpindleStall",
+           "StalledControlLoop"]

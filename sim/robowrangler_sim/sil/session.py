@@ -134,9 +134,15 @@ class SilSession:
             a temporary folder removed at stop().
         spindle: the spindle plant the firmware's servo bus drives, as ``drive`` (SpindleInputs -> SpindleOutputs;
             None builds a SpindlePlant(spindle_params, seed=seed), so the register noise follows the seed).
+        model: a drive model file written by `wrangler diagnose` (model.json) or a DiagnosedModel: its refitted
+            DriveParams drive the plant and its effect terms act through the actuator filters, ``loads`` and a
+            tick hook (robowrangler_sim.diagnose.sil_effects).
         tick_timeout_s: how often the lockstep checks that a slow firmware is still alive while it waits for a
             tick's answer; a busy machine only makes the wait longer, only a firmware that exited (or stays
             silent for minutes) ends the session (lockstep.LockstepLink).
+        spindle_bus_us: bus time of one spindle transaction in the firmware's bus model (rw_sil
+            --spindle-bus-us, firmware/hal/sil/sil_spindle_bus.h; None: its default, 350 us). The firmware
+            steps the spindle with the reading its bus side completed since the previous step, as on the board.
 
     Each tick the session composes the plants through the contract only: the drive gets DriveInputs (the
     firmware's ESC pulse after the actuator filters, the scene's ``loads``, the rope exposed = the spindle's
@@ -163,7 +169,16 @@ class SilSession:
                  state_file: str | Path | None = None,
                  drive: Plant | Callable[..., Plant] | None = None,
                  spindle: Plant | Callable[..., Plant] | None = None,
-                 tick_timeout_s: float = 2.0) -> None:
+                 spindle_bus_us: int | None = None,
+                 tick_timeout_s: float = 2.0, model=None) -> None:
+        diagnosed = None
+        if model is not None:  # a drive model file written by `wrangler diagnose` (or a DiagnosedModel)
+            from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
+
+            if drive_params is not None or drive is not None:
+                raise ValueError("model: expected either model or drive_params/drive, got both")
+            diagnosed = model if isinstance(model, DiagnosedModel) else load_model(model)
+            drive_params = diagnosed.sil_drive_params()
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
@@ -184,6 +199,7 @@ class SilSession:
         self.trace: list[PlantSample] = []
         self.ticks = 0
         self.last_esc_pulse_us = 0
+        self.last_esc_pulse_fine_us = 0.0
         self.sensor_filters: list[SensorFilter] = []
         self.actuator_filters: list[ActuatorFilter] = []
         self.tick_hooks: list[TickHook] = []
@@ -192,7 +208,7 @@ class SilSession:
         self._tmpdir = None if state_file is not None else tempfile.TemporaryDirectory(prefix="rw_sil_")
         self.state_file = Path(state_file) if state_file is not None else Path(self._tmpdir.name) / "flash.bin"
         self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s, tick_us=tick_us,
-                                         state_file=self.state_file)
+                                         state_file=self.state_file, spindle_bus_us=spindle_bus_us)
         self._link: LockstepLink | None = None
         self._actions: list[tuple[int, int, Callable[[], None]]] = []
         self._action_counter = itertools.count()
@@ -201,6 +217,9 @@ class SilSession:
         self._stop = threading.Event()
         self._error: BaseException | None = None
         self._pace_origin: tuple[float, int] | None = None
+        self.model = diagnosed
+        if diagnosed is not None:
+            diagnosed.install(self)
 
     # ---------------------------------------------------------------------------------------------
     @property
@@ -274,6 +293,11 @@ class SilSession:
             spindle_answered=sensors.spindle_answered, limit_switch=sensors.limit_switch,
         )
 
+    @property
+    def firmware_stderr(self) -> str:
+        """What the SIL firmware wrote on stderr, after stop() (its spindle bus counters among it)."""
+        return self._firmware.exit_stderr
+
     def stop(self) -> None:
         self._stop.set()
         if self._thread is not None:
@@ -337,8 +361,10 @@ class SilSession:
                     raise SilFirmwareError(f"SIL firmware exited with code {code}: {self._firmware.stderr_text()}") from None
                 raise
             self.last_esc_pulse_us = out.esc_pulse_us
+            # the pulse at the PWM timer's resolution (1/3 us), as the board's TCC1 outputs it
+            self.last_esc_pulse_fine_us = out.esc_pulse_third_us / 3.0
             self.last_spindle_speed_raw = out.spindle_moving_speed_raw
-        plant_pulse_us = self.last_esc_pulse_us
+        plant_pulse_us = self.last_esc_pulse_fine_us
         for actuator_filter in self.actuator_filters:
             plant_pulse_us = actuator_filter(plant_pulse_us)
         loads, dt_s = self.loads, self.tick_us * 1e-6

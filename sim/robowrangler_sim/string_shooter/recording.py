@@ -4,7 +4,8 @@ The stand-in for a board recording with a camera on the loop: the SIL firmware (
 sil HAL, its own process) and the drive and spindle plants run in lockstep (SilSession); a scripted host
 (ScriptedHost, real signed UDP) sends the script's commands at their simulated times; every frame the host
 sends and receives goes through the recorder's LinkRecorder, so /device/telemetry, /device/event,
-/host/command and /link/gap are exactly what `wrangler record` writes for the same frames, and
+/host/command and /link/gap are exactly what `wrangler record` writes for the same frames (the one public
+recording API: robowrangler.recorder.RecordingSession, fed here by robowrangler_sim.sil.recording_host), and
 /device/params holds the parameters read at the start (PARAM_GET, as `wrangler record` does). The
 first-principles rope runs beside it: its nip speed follows the drive plant's wheel surface speed tick by
 tick (np.interp over the 1 ms samples), its guide travel follows the spindle plant's guide, its inclination
@@ -31,7 +32,6 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-import json
 import math
 import sys
 import time
@@ -41,14 +41,12 @@ from typing import TextIO
 
 import numpy as np
 
-from robowrangler import units
-from robowrangler.protocol import generated as gen
-from robowrangler.protocol.generated import KEY_LEN, PARAMS
-from robowrangler.recorder import LinkRecorder, RecordingWriter
+from robowrangler.protocol.generated import KEY_LEN
+from robowrangler.recorder import RecordingSession
 from robowrangler_sim.plants import DriveParams
 from robowrangler_sim.plants.spindle import SpindleParams
 from robowrangler_sim.sil import SilError, SilSession
-from robowrangler_sim.sil.scripted_host import ScriptedHost
+from robowrangler_sim.sil.recording_host import RecordingHost, RecordingRunError, read_params
 
 from .model import Frame, StringShooter
 from .motion import ModuleMotion
@@ -57,13 +55,7 @@ from .params import ShooterParams, StringShooterParamError
 from .recording_script import RecordingScript
 
 CAMERA_ID = "side0"
-PARAM_REPLY_TIMEOUT_S = 0.1  # simulated time a PARAM_GET may take before the run gives up
-PARAM_BURST = 6  # PARAM_GETs (2 ticks each) after each telemetry frame
 _OBSERVATION_SEED_SALT = 0x0B5E
-
-
-class RecordingRunError(RuntimeError):
-    """The SIL did not answer as a recording run needs (a parameter not read, a script command unsent)."""
 
 
 @dataclass(frozen=True)
@@ -138,29 +130,6 @@ class _DriveWindow:
         return np.interp(t_s, cols[0], cols[2])
 
 
-class _RecordingHost(ScriptedHost):
-    """A ScriptedHost whose every sent and received frame goes to a LinkRecorder (stamped with simulated
-    time), and which calls after_tick() after each lockstep tick."""
-
-    def __init__(self, sil: SilSession, recorder: LinkRecorder, *, after_tick) -> None:
-        self._recorder = recorder
-        self._after_tick = after_tick
-        self._fed = 0
-        super().__init__(sil)
-
-    def send_raw(self, data: bytes) -> None:
-        self._recorder.on_sent(data, host_s=self.sil.time_s)
-        super().send_raw(data)
-
-    def tick(self) -> None:
-        super().tick()
-        raw = self.received.raw
-        while self._fed < len(raw):
-            self._recorder.on_received(raw[self._fed], host_s=self.sil.time_s)
-            self._fed += 1
-        self._after_tick()
-
-
 class _Run:
     """One recording run: owns the SIL session, the rope, the writer and the output schedule."""
 
@@ -207,18 +176,17 @@ class _Run:
                                   guide_travel_m=self.window.guide_travel_m)
             self.shooter = StringShooter(self.shooter_params, loop_length_m=sil.spindle_out.loop_length_m,
                                          motion=motion, initial_shape="hanging", initial_rope_speed_mps=0.0)
-            writer = RecordingWriter(self.path, source="sil", seed=self.seed, time_base="simulation",
-                                     clock_ns=lambda: sil.drive_out.time_us * 1000,
-                                     description="string shooter (first-principles rope) driven by the SIL "
-                                                 f"firmware; camera {CAMERA_ID} at {1 / self.camera_period_s:g} Hz")
-            self.writer = writer
-            recorder = LinkRecorder(writer)
-            self.recorder = recorder
+            recording = RecordingSession(self.path, source="sil", seed=self.seed, time_base="simulation",
+                                         clock_ns=lambda: sil.drive_out.time_us * 1000,
+                                         description="string shooter (first-principles rope) driven by the SIL "
+                                                     f"firmware; camera {CAMERA_ID} at {1 / self.camera_period_s:g} Hz")
+            self.writer = writer = recording.writer
+            self.recorder = recorder = recording.recorder
             try:
                 self._emit_due(0.0)
-                host = _RecordingHost(sil, recorder, after_tick=self._after_tick)
+                host = RecordingHost(sil, recording, after_tick=self._after_tick)
                 if self.read_params:
-                    self._read_params(host)
+                    self.tov_mps = read_params(host).get("tov_mps")
                 for cmd in script.commands:
                     at_us = round(cmd.at_s * 1e6)
                     while sil.drive_out.time_us < at_us:
@@ -227,10 +195,10 @@ class _Run:
                 end_us = round(script.duration_s * 1e6)
                 while sil.drive_out.time_us < end_us:
                     host.tick()
-                recorder.finish(host_s=sil.time_s)
+                recording.close(host_s=sil.time_s)
                 host.close()
             finally:
-                writer.close()
+                recording.close()
         if self.progress is not None:
             self._show_progress(final=True)
         return RecordingSummary(
@@ -238,33 +206,6 @@ class _Run:
             telemetry=recorder.telemetry_count, events=recorder.event_count, commands=recorder.command_count,
             gaps=recorder.gaps_written, observations=self.observations, plant_truth=self.k_truth,
             tov_mps=self.tov_mps, first_airborne_s=self.first_airborne_s)
-
-    def _read_params(self, host: _RecordingHost) -> None:
-        """PARAM_GET every parameter into the /device/params metadata, as `wrangler record` does.
-
-        The device sends one datagram per tick, an ACK at once and everything else (PARAM_VALUE, events,
-        telemetry) from its outbox, numbered when queued: a telemetry frame queued while replies stream out
-        would leave its turn after a higher seq (a reordering the recorder writes as a gap). So the reads go
-        in short bursts right after each telemetry frame, well inside the 20 ms telemetry period."""
-        values: dict[str, float] = {}
-        specs = list(PARAMS)
-        while specs:
-            n_tel = len(host.received.telemetry)
-            if not host.run_until(lambda h: len(h.received.telemetry) > n_tel, timeout_s=PARAM_REPLY_TIMEOUT_S):
-                raise RecordingRunError(f"no TELEMETRY from the SIL firmware within {PARAM_REPLY_TIMEOUT_S} s")
-            for spec in specs[:PARAM_BURST]:
-                n0 = len(host.received.param_values)
-                host.send(gen.ParamGet(spec.id))
-                got = host.run_until(lambda h: any(v.param_id == spec.id for v in h.received.param_values[n0:]),
-                                     timeout_s=PARAM_REPLY_TIMEOUT_S)
-                if not got:
-                    raise RecordingRunError(f"parameter {spec.name}: no PARAM_VALUE from the SIL firmware within "
-                                            f"{PARAM_REPLY_TIMEOUT_S} s of simulated time")
-                value = next(v.value for v in host.received.param_values[n0:] if v.param_id == spec.id)
-                values[spec.name] = units.float32_to_si(value)
-            del specs[:PARAM_BURST]
-        self.tov_mps = values.get("tov_mps")
-        self.writer.add_metadata("/device/params", {name: json.dumps(v) for name, v in values.items()})
 
     # ---------------------------------------------------------------------------------------------
     def _after_tick(self) -> None:

@@ -150,7 +150,7 @@ static bool config_save(void *ctx, const void *buf, size_t len)
 }
 
 static const rw_hal_config_store hal_config = { NULL, config_load, config_save };
-static const rw_hal_esc_output hal_esc = { NULL, esc_write_pulse_us };
+static const rw_hal_esc_output hal_esc = { NULL, esc_write_pulse_us, NULL };
 static const rw_hal_encoder hal_encoder = { NULL, encoder_read };
 static const rw_hal_battery hal_battery = { NULL, battery_read_mv };
 static const rw_hal_link hal_link = { NULL, link_recv, link_reply, link_accept_peer, link_send };

@@ -1,7 +1,7 @@
 /*
  * Unity tests of rw_params: defaults from the generated table, range checks without clamping (NaN,
  * infinity, out of [min, max], fractions for integer parameters), locked parameters only while
- * DISARMED, unknown ids. Every check runs over the whole table. Run with `pio test -e native`.
+ * DISARMED, unknown ids, the rules between parameters (PARAM_CONFLICT). Every check runs over the whole table. Run with `pio test -e native`.
  */
 #include <math.h>
 #include <stdint.h>
@@ -30,11 +30,21 @@ static void test_defaults_come_from_the_table_and_lie_in_range(void)
     }
 }
 
+/* Defaults, with the partners of the rules between parameters moved out of the way (the ToV guard at its
+ * lowest, 0.5 m/s x 1.0), so that every parameter's own limits can be reached from here. */
+static void permissive_baseline(void)
+{
+    rw_params_init_defaults(&params);
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_params_set(&params, RW_PARAM_TOV_MPS, 0.5f, true));
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_params_set(&params, RW_PARAM_TOV_MARGIN, 1.0f, true));
+}
+
 static void test_limits_are_accepted_just_outside_refused_never_clamped(void)
 {
     for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
         const rw_param_info *info = &rw_param_table[i];
         const uint8_t id = (uint8_t)i;
+        permissive_baseline();
         TEST_ASSERT_EQUAL_INT_MESSAGE(RW_DECODE_OK, rw_params_set(&params, id, info->min_value, true), info->name);
         TEST_ASSERT_EQUAL_FLOAT(info->min_value, params.value[i]);
         TEST_ASSERT_EQUAL_INT_MESSAGE(RW_DECODE_OK, rw_params_set(&params, id, info->max_value, true), info->name);
@@ -100,6 +110,28 @@ static void test_locked_parameters_only_while_disarmed(void)
     TEST_ASSERT_EQUAL_INT(RW_NACK_REASON_PARAM_LOCKED, rw_params_check(&params, RW_PARAM_ESC_MIN_US, 1100.0f, false));
 }
 
+static void test_parameters_that_must_hold_together_are_checked_together(void)
+{
+    /* guide_min_mm < guide_max_mm: the second of "min 150, max 50" is refused, nothing changes */
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_params_set(&params, RW_PARAM_GUIDE_MIN_MM, 150.0f, true));
+    TEST_ASSERT_EQUAL_INT(RW_NACK_REASON_PARAM_CONFLICT, rw_params_set(&params, RW_PARAM_GUIDE_MAX_MM, 50.0f, true));
+    TEST_ASSERT_EQUAL_UINT8(RW_PARAM_GUIDE_MIN_MM, rw_params_conflict(&params, RW_PARAM_GUIDE_MAX_MM, 50.0f));
+    TEST_ASSERT_EQUAL_INT(RW_NACK_REASON_PARAM_CONFLICT, rw_params_check(&params, RW_PARAM_GUIDE_MAX_MM, 150.0f, true));
+    TEST_ASSERT_EQUAL_FLOAT(180.0f, rw_params_get(&params, RW_PARAM_GUIDE_MAX_MM));
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_params_set(&params, RW_PARAM_GUIDE_MAX_MM, 150.5f, true));
+    TEST_ASSERT_EQUAL_UINT8(RW_PARAM_GUIDE_MAX_MM, rw_params_conflict(&params, RW_PARAM_GUIDE_MIN_MM, 151.0f));
+    /* tov_mps x tov_margin <= max_rope_speed_mps, from either side, the limit itself accepted */
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_params_set(&params, RW_PARAM_MAX_ROPE_SPEED_MPS, 5.0f, true));
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_params_set(&params, RW_PARAM_TOV_MARGIN, 1.25f, true));
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_params_set(&params, RW_PARAM_TOV_MPS, 4.0f, true)); /* 5.0: the limit */
+    TEST_ASSERT_EQUAL_INT(RW_NACK_REASON_PARAM_CONFLICT, rw_params_set(&params, RW_PARAM_TOV_MPS, 4.5f, true));
+    TEST_ASSERT_EQUAL_UINT8(RW_PARAM_MAX_ROPE_SPEED_MPS, rw_params_conflict(&params, RW_PARAM_TOV_MARGIN, 1.5f));
+    TEST_ASSERT_EQUAL_UINT8(RW_PARAM_TOV_MPS, rw_params_conflict(&params, RW_PARAM_MAX_ROPE_SPEED_MPS, 4.9f));
+    TEST_ASSERT_EQUAL_FLOAT(4.0f, rw_params_get(&params, RW_PARAM_TOV_MPS));
+    /* parameters outside every rule never conflict */
+    TEST_ASSERT_EQUAL_UINT8(RW_PARAM_COUNT, rw_params_conflict(&params, RW_PARAM_SPEED_KP, 1.0f));
+}
+
 static void test_range_is_checked_before_the_lock(void)
 {
     /* An out-of-range value for a locked parameter while armed is OUT_OF_RANGE: the value is wrong
@@ -132,6 +164,7 @@ int main(void)
     RUN_TEST(test_non_finite_values_are_refused);
     RUN_TEST(test_integer_parameters_refuse_fractions);
     RUN_TEST(test_locked_parameters_only_while_disarmed);
+    RUN_TEST(test_parameters_that_must_hold_together_are_checked_together);
     RUN_TEST(test_range_is_checked_before_the_lock);
     RUN_TEST(test_unknown_ids_are_refused);
     RUN_TEST(test_named_ranges_of_the_speed_loop);

@@ -256,6 +256,27 @@ static void test_homing_stall_needs_load_and_stillness_for_the_stall_time(void)
     TEST_ASSERT_TRUE(rw_spindle_is_homed(&sp));
 }
 
+/* A step without a reading (a lost reply on the split bus) keeps the stall time held so far: homing ends after
+ * stall_time_s of stalled readings, the missing steps neither restarting nor counting. */
+static void test_homing_stall_keeps_its_time_through_missing_readings(void)
+{
+    rw_spindle_home(&sp);
+    rw_spindle_reading stalled = reading(0.0f, -400.0f, false);
+    for (int k = 0; k < STALL_STEPS / 2; ++k) {
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, &stalled, DT_MS));
+    }
+    for (int k = 0; k < 3; ++k) {
+        TEST_ASSERT_EQUAL_INT(RW_SPINDLE_NOTHING, rw_spindle_step(&sp, NULL, DT_MS)); /* replies lost */
+    }
+    int steps = 1;
+    while (rw_spindle_step(&sp, &stalled, DT_MS) == RW_SPINDLE_NOTHING) {
+        ++steps;
+        TEST_ASSERT_TRUE(steps < 100);
+    }
+    TEST_ASSERT_INT_WITHIN(1, STALL_STEPS - STALL_STEPS / 2, steps);
+    TEST_ASSERT_TRUE(rw_spindle_is_homed(&sp));
+}
+
 static void test_homing_again_ends_at_the_stop(void)
 {
     /* the soft limits do not apply while homing: re-homing drives to the stop and stalls there */
@@ -478,6 +499,7 @@ int main(void)
     RUN_TEST(test_homing_by_stall_finds_the_end_stop);
     RUN_TEST(test_homing_by_switch);
     RUN_TEST(test_homing_stall_needs_load_and_stillness_for_the_stall_time);
+    RUN_TEST(test_homing_stall_keeps_its_time_through_missing_readings);
     RUN_TEST(test_homing_again_ends_at_the_stop);
     RUN_TEST(test_position_loop_is_p_law_saturated_and_zero_in_tolerance);
     RUN_TEST(test_target_reached_once_per_target);

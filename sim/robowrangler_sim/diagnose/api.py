@@ -1,0 +1,320 @@
+"""diagnose(recording) -> DiagnosisResult: the stages in order, as the issue lists them."""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robowrangler_sim.diagnose.candidates import LIBRARY, Candidate
+from robowrangler_sim.diagnose.errors import UnknownEffectError
+from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
+from robowrangler_sim.diagnose.locate import Locator, spans_mask
+from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
+from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
+from robowrangler_sim.diagnose.recording_data import DriveData, load_drive_data
+from robowrangler_sim.diagnose.regimes import coverage, dominant_regime, regime_labels
+from robowrangler_sim.diagnose.replay import DriveReplay
+from robowrangler_sim.diagnose.residuals import CHANNELS, Residuals, robust_scale, sample_sigma
+from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, heldout_p, score_model
+from robowrangler_sim.plants import DriveParams
+from robowrangler_sim.plants import drive_batch as db
+
+BLOCK_S = 0.5
+HELDOUT_EVERY = 3  # every third 1 s block is held out of every fit
+ALPHA = 0.01
+
+
+@dataclass
+class EffectFinding:
+    """A fitted candidate as the report states it."""
+
+    effect_id: str
+    params: dict[str, dict]
+    channels: list[str]
+    spans_s: list[list[float]]
+    regime: dict
+    heldout_rms_before: dict[str, float]
+    heldout_rms_after: dict[str, float]
+    evidence: dict
+    law: str
+
+
+@dataclass
+class DiagnosisResult:
+    """What diagnose found. ``report`` is the report.json document (see protocol/recording/diagnosis_report.md)."""
+
+    recording: Path
+    verdict: str
+    effects: list[EffectFinding]
+    not_identifiable: list[dict]
+    nominal_refit: dict[str, dict]
+    unexplained_fraction: float
+    coverage: dict
+    located: list[dict]
+    candidates: list[dict]
+    model: DiagnosedModel
+    timings_s: dict[str, float]
+    series: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+
+    @property
+    def first_line(self) -> str:
+        from robowrangler_sim.diagnose.report import first_line
+        return first_line(self)
+
+    @property
+    def report(self) -> dict:
+        from robowrangler_sim.diagnose.report import report_json
+        return report_json(self)
+
+
+def _progress(stream, msg: str) -> None:
+    if stream is not None:
+        print(f"diagnose: {msg}", file=stream, flush=True)
+
+
+def _residuals(data: DriveData, pred: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    return Residuals().fit(data, pred).residuals_
+
+
+def _resolve_effects(effects) -> list[Candidate]:
+    if effects is None:
+        return [cls() for cls in LIBRARY.values()]
+    out = []
+    for e in effects:
+        if e not in LIBRARY:
+            raise UnknownEffectError(f"effects: unknown effect id {e!r}; known: {', '.join(LIBRARY)}")
+        out.append(LIBRARY[e]())
+    return out
+
+
+def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel | None = None,
+             effects: list[str] | None = None, progress=None, pairs: bool = True) -> DiagnosisResult:
+    """Diagnose the drive channels of one recording against the model (None: the nominal DriveParams).
+
+    effects: candidate ids to try (None: the whole library). progress: a text stream for progress lines.
+    Raises DiagnoseError subclasses for recordings or models it cannot work on.
+    """
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    candidates = _resolve_effects(effects)
+    data = load_drive_data(recording_path)
+    if model is None:
+        base = DiagnosedModel.nominal()
+    elif isinstance(model, DiagnosedModel):
+        base = model
+    else:
+        base = load_model(model)
+    base.check_fits(data)
+    replay = DriveReplay(data, base.drive_params)
+    theta_base = base.theta()
+    n = data.time_s.size
+    t = data.t_rel_s
+    block_id = (t // BLOCK_S).astype(int)
+    n_blocks = int(block_id.max()) + 1
+    heldout_blocks = np.arange(HELDOUT_EVERY - 1, n_blocks, HELDOUT_EVERY)
+    if heldout_blocks.size < 3:
+        heldout_blocks = np.arange(1, n_blocks, 2)
+    fit_mask = ~np.isin(block_id, heldout_blocks)
+    labels = regime_labels(data.time_s, data.speed_mps)
+    timings["load_s"] = time.perf_counter() - t0
+    _progress(progress, f"{data.path.name}: {n} samples, {data.duration_s:.1f} s; replaying the nominal model")
+
+    # --- replay + residuals of the model as given
+    t1 = time.perf_counter()
+    pred0 = replay.predict(theta_base[None, :])
+    res0 = Residuals().fit(data, pred0)
+    noise = res0.noise_
+    measured = {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v}
+    weights = {c: 1.0 / sample_sigma(data.time_s, measured[c], max(noise[c], 1e-9)) for c in CHANNELS}
+    timings["replay_s"] = time.perf_counter() - t1
+
+    # --- nominal refit (first with noise weights, then each channel weighted by its refit residual)
+    t1 = time.perf_counter()
+    _progress(progress, "refitting the nominal parameters")
+    nominal = ModelFitter(list(NOMINAL_REFIT), weights=weights).fit(replay, theta_base, fit_mask=fit_mask)
+    r_nom = _residuals(data, nominal.prediction_)
+    weights = {c: 1.0 / sample_sigma(data.time_s, measured[c], max(robust_scale(r_nom[c][fit_mask]), noise[c]))
+               for c in CHANNELS}
+    nominal = ModelFitter(list(NOMINAL_REFIT), weights=weights).fit(replay, nominal.theta_, fit_mask=fit_mask,
+                                                                    bounds_ref=theta_base)
+    r_nom = _residuals(data, nominal.prediction_)
+    n_eff = effective_counts(r_nom, fit_mask)
+    score_nom = score_model("nominal_refit", len(NOMINAL_REFIT), r_nom, weights, fit_mask, block_id, heldout_blocks,
+                            n_eff)
+    timings["nominal_refit_s"] = time.perf_counter() - t1
+
+    # --- locate
+    t1 = time.perf_counter()
+    loc = Locator().fit(data.time_s, r_nom)
+    # the spans an effect may use are located on the fit samples only (the held-out ones judge it later)
+    loc_signed = Locator(signed=True, bridge_s=BLOCK_S).fit(data.time_s[fit_mask],
+                                                            {"rope_speed_mps": r_nom["rope_speed_mps"][fit_mask]})
+    below = [(s.t0_s, s.t1_s) for s in loc_signed.spans_ if s.sign < 0]
+    located = [{"channel": s.channel, "span_s": [round(s.t0_s, 3), round(s.t1_s, 3)],
+                "significance": round(s.significance, 2),
+                "regime": dominant_regime(labels, spans_mask(data.time_s, [(s.t0_s, s.t1_s)]))}
+               for s in loc.spans_]
+    timings["locate_s"] = time.perf_counter() - t1
+
+    # --- candidates
+    t1 = time.perf_counter()
+    fits: dict[str, tuple[Candidate, ModelFitter, ModelScore, np.ndarray | None]] = {}
+    not_ident: list[dict] = []
+    untested: list[dict] = []
+    cov = coverage(labels)
+    cand_rows: list[dict] = [{"id": "nominal_refit", "status": "base", "heldout_rms": score_nom.heldout_rms,
+                              "fit_rms": score_nom.fit_rms}]
+    for cand in candidates:
+        ident = cand.identifiable(data)
+        if not ident.identifiable:
+            not_ident.append({"id": cand.effect_id, "reason": ident.reason,
+                              "separating_measurement": ident.separating_measurement})
+            cand_rows.append({"id": cand.effect_id, "status": "not_identifiable", "reason": ident.reason})
+            continue
+        visited = set(cov["visited"])
+        if cand.needs_regimes and not visited.intersection(cand.needs_regimes):
+            untested.append({"id": cand.effect_id, "needs_one_of": list(cand.needs_regimes)})
+            cand_rows.append({"id": cand.effect_id, "status": "not_tested",
+                              "reason": f"the recording never visits {' or '.join(cand.needs_regimes)}"})
+            continue
+        load_mask = None
+        if cand.uses_located_spans:
+            if not below:
+                cand_rows.append({"id": cand.effect_id, "status": "no_span",
+                                  "reason": "no span where the rope runs significantly slower than the model"})
+                continue
+            load_mask = _tick_mask(data, below)
+        _progress(progress, f"fitting {cand.effect_id}")
+        theta_c = cand.apply_neutral(nominal.theta_)
+        fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
+            replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, starts=cand.start_grid(theta_c)[1],
+            start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
+        r_c = _residuals(data, fitter.prediction_)
+        sc = score_model(cand.effect_id, len(NOMINAL_REFIT) + len(cand.params), r_c, weights, fit_mask,
+                         block_id, heldout_blocks, n_eff)
+        ok, ev = accepted(sc, score_nom, alpha=ALPHA)
+        fits[cand.effect_id] = (cand, fitter, sc, load_mask)
+        cand_rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
+                          "heldout_rms": sc.heldout_rms,
+                          "params": {p.name: round(p.value, 6) for p in fitter.params_
+                                     if p.name in {s.name for s in cand.params}}})
+    timings["candidates_s"] = time.perf_counter() - t1
+
+    # --- select
+    t1 = time.perf_counter()
+    ok_ids = [row["id"] for row in cand_rows if row["status"] == "accepted"]
+    ok_ids.sort(key=lambda i: fits[i][2].block_sse.sum())
+    verdict = "none"
+    chosen: list[str] = []
+    chosen_fit: ModelFitter = nominal
+    chosen_score = score_nom
+    chosen_mask = None
+    if ok_ids:
+        best = ok_ids[0]
+        rivals = []
+        for other in ok_ids[1:]:
+            p_rival = heldout_p(fits[best][2], fits[other][2])
+            if p_rival >= ALPHA and abs(fits[other][2].bic - fits[best][2].bic) < 10.0:
+                rivals.append(other)
+        chosen = [best]
+        chosen_fit, chosen_score, chosen_mask = fits[best][1], fits[best][2], fits[best][3]
+        if rivals:
+            verdict = "not_identifiable"
+            names = [best] + rivals
+            not_ident.insert(0, {"id": " / ".join(names), "reason": "these candidates explain the recording equally "
+                                 "well on held-out spans", "separating_measurement":
+                                 "; ".join(f"{i}: {fits[i][0].separating_measurement}" for i in names),
+                                 "candidates": names})
+        else:
+            verdict = "missing_physics"
+            if pairs and len(ok_ids) > 1:
+                second = ok_ids[1]
+                cand2 = fits[second][0]
+                if not (cand2.uses_located_spans and fits[best][0].uses_located_spans):
+                    mask2 = fits[second][3] if fits[second][3] is not None else chosen_mask
+                    theta_p = cand2.apply_neutral(chosen_fit.theta_)
+                    _progress(progress, f"fitting {best} + {second}")
+                    pair = ModelFitter(list(NOMINAL_REFIT) + list(fits[best][0].params) + list(cand2.params),
+                                       weights=weights).fit(replay, theta_p, fit_mask=fit_mask, load_mask=mask2,
+                                                            starts=cand2.start_grid(theta_p)[1],
+                                                            start_columns=cand2.start_grid(theta_p)[0],
+                                                            bounds_ref=theta_base)
+                    r_p = _residuals(data, pair.prediction_)
+                    sp = score_model(f"{best}+{second}", len(pair.specs), r_p, weights, fit_mask, block_id,
+                                     heldout_blocks, n_eff)
+                    ok2, ev2 = accepted(sp, chosen_score, alpha=ALPHA)
+                    cand_rows.append({"id": f"{best}+{second}", "status": "accepted" if ok2 else "rejected", **ev2,
+                                      "heldout_rms": sp.heldout_rms})
+                    if ok2:
+                        chosen = [best, second]
+                        chosen_fit, chosen_score, chosen_mask = pair, sp, mask2
+    timings["select_s"] = time.perf_counter() - t1
+
+    # --- findings (intervals of the chosen effects' parameters widened by a jackknife over the fit samples)
+    if verdict == "missing_physics":
+        _progress(progress, "intervals (jackknife)")
+        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params})
+    r_after = _residuals(data, chosen_fit.prediction_)
+    effects_out: list[EffectFinding] = []
+    if verdict == "missing_physics":
+        for eid in chosen:
+            cand = fits[eid][0]
+            own = {s.name for s in cand.params}
+            params = {p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
+                      for p in chosen_fit.params_ if p.name in own}
+            spans = _improvement_spans(data, r_nom, r_after, weights)
+            if cand.uses_located_spans:
+                spans = [[round(a, 3), round(b, 3)] for a, b in below]
+            ev = next(r for r in cand_rows if r["id"] == eid)
+            effects_out.append(EffectFinding(
+                effect_id=eid, params=params, channels=list(cand.channels), spans_s=spans,
+                regime=dominant_regime(labels, spans_mask(data.time_s, [tuple(s) for s in spans])),
+                heldout_rms_before=score_nom.heldout_rms, heldout_rms_after=chosen_score.heldout_rms,
+                evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"]}, law=cand.law))
+    nominal_refit = {}
+    for p in nominal.params_:
+        spec = next(s for s in NOMINAL_REFIT if s.name == p.name)
+        nominal_refit[p.name] = {"nominal": float(theta_base[spec.column]), "fitted": p.value, "unit": p.unit,
+                                 "ci95": list(p.ci95)}
+    sse_before = score_nom.block_sse.sum()
+    unexplained = float(chosen_score.block_sse.sum() / sse_before) if sse_before > 0 else 0.0
+    final_theta = chosen_fit.theta_
+    model_out = base.extended(final_theta, effects=chosen if verdict == "missing_physics" else [],
+                              load_spans_s=[(a + data.time_s[0] * 0, b) for a, b in below]
+                              if "external_rope_load" in chosen else [], recording=str(data.path))
+    timings["total_s"] = time.perf_counter() - t0
+    return DiagnosisResult(
+        recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
+        nominal_refit=nominal_refit, unexplained_fraction=unexplained,
+        coverage={**cov, "effects_not_testable": [d["id"] for d in not_ident if "candidates" not in d],
+                  "effects_not_tested": untested},
+        located=located, candidates=cand_rows, model=model_out, timings_s=timings,
+        series={"time_s": data.time_s, "speed_mps": data.speed_mps, "battery_v": data.battery_v,
+                "pulse_us": data.pulse_us[data.sample_ticks.clip(max=data.pulse_us.size - 1)],
+                "nominal_speed_mps": pred0["rope_speed_mps"][0], "refit_speed_mps": nominal.prediction_["rope_speed_mps"],
+                "after_speed_mps": chosen_fit.prediction_["rope_speed_mps"],
+                "nominal_battery_v": pred0["battery_v"][0], "refit_battery_v": nominal.prediction_["battery_v"],
+                "after_battery_v": chosen_fit.prediction_["battery_v"],
+                "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"]})
+
+
+def _tick_mask(data: DriveData, spans: list[tuple[float, float]]) -> np.ndarray:
+    m = np.zeros(data.pulse_us.size)
+    t_tick = data.time_s[0] + (np.arange(data.pulse_us.size) - data.preroll_ticks) * 1e-3
+    for a, b in spans:
+        m[(t_tick >= a) & (t_tick <= b)] = 1.0
+    return m
+
+
+def _improvement_spans(data: DriveData, r_before, r_after, weights) -> list[list[float]]:
+    """Spans where the chosen model's improvement concentrates (windows with a significant drop in the
+    weighted squared residual, as Locator flags them)."""
+    gain = sum(((r_before[c] * weights[c]) ** 2).clip(max=9.0) - ((r_after[c] * weights[c]) ** 2).clip(max=9.0)
+               for c in r_before)
+    loc = Locator(signed=True, alpha=ALPHA).fit(data.time_s, {"gain": gain})
+    return [[round(s.t0_s, 3), round(s.t1_s, 3)] for s in loc.spans_ if s.sign > 0]

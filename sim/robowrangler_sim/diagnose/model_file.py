@@ -1,0 +1,164 @@
+"""The extended drive model diagnose writes (nominal parameters refitted + the chosen effect terms), as JSON.
+
+    {"format": "robowrangler.drive_model", "format_version": 1,
+     "drive_params": {DriveParams field: value, ...},           # refitted class estimates folded in
+     "effects": {"esc_latency": {"delay_s": 0.0061}, ...},     # library laws, their parameters in SI
+     "external_load_spans_s": [[t0, t1], ...],                 # where external_rope_load acts (recording time)
+     "source_recording": "run.mcap"}
+
+``load_model(path)`` reads it back (ModelMismatchError naming the field when it is malformed);
+``DiagnosedModel.sil_drive_params()`` and ``install(session)`` put it into a SilSession
+(``SilSession(model=path)`` does both).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robowrangler_sim.diagnose.errors import ModelMismatchError
+from robowrangler_sim.plants import DriveParams, DriveParamsError
+from robowrangler_sim.plants import drive_batch as db
+from robowrangler_sim.rope import RopeParams
+
+FORMAT = "robowrangler.drive_model"
+FORMAT_VERSION = 1
+EFFECT_COLUMNS = {
+    "rope_drag_law": {"drag_exponent": db.TH_DRAG_EXP},
+    "esc_latency": {"delay_s": db.TH_LATENCY},
+    "esc_deadband": {"hysteresis_us": db.TH_HYST},
+    "battery_sag": {"polarisation_resistance_ohm": db.TH_POL_R, "polarisation_time_constant_s": db.TH_POL_TAU},
+    "low_speed_friction": {"stribeck_force_n": db.TH_STRIBECK_N, "stribeck_speed_mps": db.TH_STRIBECK_V},
+    "external_rope_load": {"external_load_n": db.TH_EXT_LOAD},
+}
+
+
+def params_from_theta(base: DriveParams, theta: np.ndarray) -> DriveParams:
+    """DriveParams whose theta_from_params equals theta's nominal columns (class estimates scaled together)."""
+    p = base
+    th0 = db.theta_from_params(p)
+    kt = theta[db.TH_KT]
+    f_coul = theta[db.TH_COULOMB_N] / th0[db.TH_COULOMB_N]
+    f_visc = theta[db.TH_VISCOUS_N_S_PER_M] / th0[db.TH_VISCOUS_N_S_PER_M]
+    rope_j = p.rope_mass_kg * p.wheel_radius_m ** 2
+    f_j = (theta[db.TH_INERTIA] - rope_j) / (th0[db.TH_INERTIA] - rope_j)
+    return dataclasses.replace(
+        p, motor_kv_rpm_per_v=60.0 / (2.0 * math.pi * kt),
+        motor_resistance_ohm=max(1e-4, theta[db.TH_R_CIRCUIT] - p.esc_resistance_ohm),
+        motor_coulomb_friction_nm=p.motor_coulomb_friction_nm * f_coul, guide_friction_n=p.guide_friction_n * f_coul,
+        nip_friction_n=p.nip_friction_n * f_coul,
+        motor_viscous_friction_nm_s_per_rad=p.motor_viscous_friction_nm_s_per_rad * f_visc,
+        nip_viscous_n_s_per_m=p.nip_viscous_n_s_per_m * f_visc,
+        rotor_inertia_kg_m2=p.rotor_inertia_kg_m2 * f_j, wheel_inertia_kg_m2=p.wheel_inertia_kg_m2 * f_j,
+        rope=dataclasses.replace(p.rope, skin_friction_coeff=p.rope.skin_friction_coeff * theta[db.TH_DRAG_K]
+                                 / th0[db.TH_DRAG_K]),
+        battery_internal_resistance_ohm=float(theta[db.TH_BATT_R]),
+        battery_open_circuit_v=float(theta[db.TH_BATT_OCV]), esc_lag_s=float(theta[db.TH_ESC_LAG]),
+        esc_deadband_us=float(theta[db.TH_DEADBAND]))
+
+
+@dataclass
+class DiagnosedModel:
+    """A drive model: DriveParams plus effect terms (effect id -> {param: value}) and external-load spans."""
+
+    drive_params: DriveParams
+    effects: dict[str, dict[str, float]] = field(default_factory=dict)
+    external_load_spans_s: list[tuple[float, float]] = field(default_factory=list)
+    source_recording: str = ""
+
+    @classmethod
+    def nominal(cls) -> DiagnosedModel:
+        return cls(DriveParams())
+
+    def theta(self) -> np.ndarray:
+        th = db.theta_from_params(self.drive_params)
+        for eid, values in self.effects.items():
+            for name, col in EFFECT_COLUMNS.get(eid, {}).items():
+                if name in values:
+                    th[col] = values[name]
+        return th
+
+    def check_fits(self, data) -> None:
+        """ModelMismatchError when the recording's device parameters contradict the model's geometry."""
+        dp = data.device_params
+        checks = (("wheel_radius_m", self.drive_params.wheel_radius_m, 1e-3),
+                  ("encoder_counts_per_rev", float(self.drive_params.encoder_counts_per_rev), 0.0),
+                  ("esc_min_us", self.drive_params.esc_min_pulse_us, 0.0))
+        for name, model_value, rel in checks:
+            if name in dp and abs(dp[name] - model_value) > rel * abs(model_value) + 1e-9:
+                raise ModelMismatchError(f"model does not fit {data.path.name}: the recording's device has "
+                                         f"{name} = {dp[name]:g}, the model {model_value:g}")
+
+    def extended(self, theta: np.ndarray, *, effects: list[str], load_spans_s, recording: str) -> DiagnosedModel:
+        """This model with theta's refitted parameters and the given effects' terms."""
+        eff = {}
+        for eid in effects:
+            eff[eid] = {name: float(theta[col]) for name, col in EFFECT_COLUMNS.get(eid, {}).items()}
+        return DiagnosedModel(params_from_theta(self.drive_params, theta), eff,
+                              [(float(a), float(b)) for a, b in load_spans_s], recording)
+
+    def to_json(self) -> dict:
+        return {"format": FORMAT, "format_version": FORMAT_VERSION,
+                "drive_params": dataclasses.asdict(self.drive_params), "effects": self.effects,
+                "external_load_spans_s": [list(s) for s in self.external_load_spans_s],
+                "source_recording": self.source_recording}
+
+    def save(self, path: str | Path) -> Path:
+        path = Path(path)
+        path.write_text(json.dumps(self.to_json(), indent=1) + "\n")
+        return path
+
+    def sil_drive_params(self) -> DriveParams:
+        return self.drive_params
+
+    def install(self, session) -> None:
+        """Put the effect terms into a SilSession through its seams (actuator filter: latency and dead-band
+        hysteresis; tick hook: drag law, Stribeck friction, external load, polarisation sag)."""
+        from robowrangler_sim.diagnose.sil_effects import install_effects
+        install_effects(session, self)
+
+
+def load_model(path: str | Path) -> DiagnosedModel:
+    """Read a model file; ModelMismatchError naming what is wrong."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except OSError as err:
+        raise ModelMismatchError(f"model file {path}: cannot read: {err}") from err
+    except json.JSONDecodeError as err:
+        raise ModelMismatchError(f"model file {path}: not JSON: {err}") from err
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise ModelMismatchError(f"model file {path}: expected format {FORMAT!r}, got "
+                                 f"{doc.get('format') if isinstance(doc, dict) else type(doc).__name__!r}")
+    if doc.get("format_version") != FORMAT_VERSION:
+        raise ModelMismatchError(f"model file {path}: expected format_version {FORMAT_VERSION}, "
+                                 f"got {doc.get('format_version')!r}")
+    known = {f.name for f in dataclasses.fields(DriveParams)}
+    dp = doc.get("drive_params", {})
+    unknown = sorted(set(dp) - known)
+    if unknown:
+        raise ModelMismatchError(f"model file {path}: unknown drive_params {', '.join(unknown)}")
+    try:
+        rope = dp.get("rope", {})
+        if isinstance(rope, dict):
+            dp = {**dp, "rope": RopeParams(**rope)} if rope else {k: v for k, v in dp.items() if k != "rope"}
+        params = DriveParams(**dp)
+    except (DriveParamsError, TypeError, ValueError) as err:
+        raise ModelMismatchError(f"model file {path}: drive_params: {err}") from err
+    effects = doc.get("effects", {})
+    for eid, values in effects.items():
+        if eid not in EFFECT_COLUMNS:
+            raise ModelMismatchError(f"model file {path}: unknown effect {eid!r}; known: {', '.join(EFFECT_COLUMNS)}")
+        bad = sorted(set(values) - set(EFFECT_COLUMNS[eid]))
+        if bad:
+            raise ModelMismatchError(f"model file {path}: effect {eid}: unknown parameters {', '.join(bad)}")
+        for k, v in values.items():
+            if not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ModelMismatchError(f"model file {path}: effect {eid}.{k}: expected a finite number, got {v!r}")
+    spans = [tuple(map(float, s)) for s in doc.get("external_load_spans_s", [])]
+    return DiagnosedModel(params, {k: dict(v) for k, v in effects.items()}, spans, str(doc.get("source_recording", "")))

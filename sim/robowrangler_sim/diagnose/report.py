@@ -1,0 +1,138 @@
+"""Report: the plain first line, report.json (protocol/recording/diagnosis_report.md), PNGs and one
+self-contained HTML page (figures inlined as base64)."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+REPORT_FORMAT = "robowrangler.diagnosis"
+REPORT_VERSION = 1
+
+
+def _fmt(value: float, unit: str) -> tuple[str, str]:
+    if unit == "s" and abs(value) < 1.0:
+        return f"{value * 1e3:.1f}", "ms"
+    return f"{value:.3g}", unit
+
+
+def first_line(result) -> str:
+    """One line in plain words: what is left out (with its interval), where, and the held-out error."""
+    if result.verdict == "none":
+        return ("none beyond noise: the refitted nominal model explains the recording "
+                f"(held-out speed error {_mmps(result.candidates[0]['heldout_rms'])} mm/s)")
+    if result.verdict == "not_identifiable":
+        d = result.not_identifiable[0]
+        return f"not identifiable from these channels: {d['id']}; would separate them: {d['separating_measurement']}"
+    parts = []
+    for e in result.effects:
+        ps = []
+        for name, p in e.params.items():
+            v, u = _fmt(p["value"], p["unit"])
+            lo, _ = _fmt(p["ci95"][0], p["unit"])
+            hi, _ = _fmt(p["ci95"][1], p["unit"])
+            ps.append(f"{name} {v} {u} ({lo}-{hi})")
+        parts.append(f"{e.effect_id.replace('_', ' ')} " + ", ".join(ps))
+    e0 = result.effects[0]
+    where = f"located in {len(e0.spans_s)} span(s)" if e0.spans_s else "spread over the recording"
+    return (f"left out: {'; '.join(parts)}, {where}, held-out error {_mmps(e0.heldout_rms_before)} -> "
+            f"{_mmps(e0.heldout_rms_after)} mm/s")
+
+
+def _mmps(rms: dict) -> str:
+    return f"{rms['rope_speed_mps'] * 1e3:.0f}"
+
+
+def _clean(x):
+    if isinstance(x, dict):
+        return {str(k): _clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x) if math.isfinite(float(x)) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+def report_json(result) -> dict:
+    """The report.json document."""
+    return _clean({
+        "format": REPORT_FORMAT, "format_version": REPORT_VERSION, "recording": str(result.recording),
+        "summary": first_line(result), "verdict": result.verdict,
+        "effects": [{"id": e.effect_id, "law": e.law, "params": e.params, "channels": e.channels,
+                     "spans_s": e.spans_s, "regime": e.regime, "heldout_rms_before": e.heldout_rms_before,
+                     "heldout_rms_after": e.heldout_rms_after, "evidence": e.evidence} for e in result.effects],
+        "not_identifiable": result.not_identifiable, "nominal_refit": result.nominal_refit,
+        "unexplained_fraction": result.unexplained_fraction, "coverage": result.coverage,
+        "located": result.located, "candidates": result.candidates, "timings_s": result.timings_s,
+    })
+
+
+def write_report(result, out_dir: str | Path) -> dict[str, Path]:
+    """report.json, model.json, residual_map.png, overlay.png and report.html in out_dir; returns the paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"report": out / "report.json", "model": out / "model.json", "overlay": out / "overlay.png",
+             "residual_map": out / "residual_map.png", "html": out / "report.html"}
+    doc = report_json(result)
+    paths["report"].write_text(json.dumps(doc, indent=1) + "\n")
+    result.model.save(paths["model"])
+    s = result.series
+    t = s["time_s"]
+    fig, ax = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    ax[0].plot(t, s["speed_mps"], "k.", ms=2, label="recording")
+    ax[0].plot(t, s["refit_speed_mps"], label="nominal refit")
+    ax[0].plot(t, s["after_speed_mps"], label="with the chosen effects")
+    ax[0].set_ylabel("rope speed [m/s]")
+    ax[0].legend(loc="upper right")
+    ax[1].plot(t, s["battery_v"], "k.", ms=2)
+    ax[1].plot(t, s["refit_battery_v"])
+    ax[1].plot(t, s["after_battery_v"])
+    ax[1].set_ylabel("battery [V]")
+    ax[1].set_xlabel("time [s]")
+    fig.tight_layout()
+    fig.savefig(paths["overlay"], dpi=90)
+    plt.close(fig)
+    fig, ax = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
+    r_before = s["speed_mps"] - s["refit_speed_mps"]
+    r_after = s["speed_mps"] - s["after_speed_mps"]
+    ax[0].plot(t, r_before * 1e3, label="nominal refit")
+    ax[0].plot(t, r_after * 1e3, label="chosen model")
+    for e in result.effects:
+        for a, b in e.spans_s:
+            ax[0].axvspan(a, b, color="tab:red", alpha=0.15)
+    held = s["heldout"]
+    ax[0].fill_between(t, ax[0].get_ylim()[0], ax[0].get_ylim()[1], where=held, color="0.85", alpha=0.5,
+                       label="held out", step="mid")
+    ax[0].set_ylabel("speed residual [mm/s]")
+    ax[0].legend(loc="upper right")
+    bands = sorted(set(s["speed_band"].astype(str)))
+    codes = np.array([bands.index(b) for b in s["speed_band"].astype(str)])
+    ax[1].scatter(t, codes, c=np.abs(r_before) * 1e3, s=6, cmap="viridis")
+    ax[1].set_yticks(range(len(bands)), bands)
+    ax[1].set_ylabel("speed band (colour: |residual|)")
+    ax[1].set_xlabel("time [s]")
+    fig.tight_layout()
+    fig.savefig(paths["residual_map"], dpi=90)
+    plt.close(fig)
+    imgs = "".join(f'<p><img alt="{k}" src="data:image/png;base64,'
+                   f'{base64.b64encode(paths[k].read_bytes()).decode()}"></p>' for k in ("overlay", "residual_map"))
+    rows = "".join(f"<tr><td>{html.escape(str(c['id']))}</td><td>{html.escape(str(c.get('status')))}</td>"
+                   f"<td>{html.escape(json.dumps(_clean(c.get('heldout_rms', ''))))}</td></tr>" for c in result.candidates)
+    paths["html"].write_text(
+        "<!doctype html><html><head><meta charset='utf-8'><title>wrangler diagnose</title></head><body>"
+        f"<h1>{html.escape(first_line(result))}</h1>{imgs}<h2>Candidates</h2><table border=1>"
+        f"<tr><th>id</th><th>status</th><th>held-out RMS</th></tr>{rows}</table>"
+        f"<h2>report.json</h2><pre>{html.escape(json.dumps(doc, indent=1))}</pre></body></html>\n")
+    return paths

@@ -1,0 +1,72 @@
+"""The library's effect laws put into a SilSession through its seams (the model file's effects, in the SIL).
+
+Actuator filter: esc_latency (the pulse of d seconds ago) and esc_deadband's hysteresis (stays at zero throttle
+until min + w + h once stopped). Tick hook, through the session's ``loads`` (the plant contract's inputs):
+rope_drag_law (the plant's own k v |v| drag switched off by rope_exposed_length_m = 0 and the power law applied
+as external_rope_load_n), low_speed_friction (Stribeck), external_rope_load (over its spans, plant time) and
+battery_sag (a polarisation voltage as extra aux current).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+from robowrangler_sim.plants.drive_batch import V_REF_MPS
+
+
+def install_effects(session, model) -> None:
+    p = model.drive_params
+    eff = model.effects
+    tick_s = session.tick_us * 1e-6
+    if "esc_latency" in eff and eff["esc_latency"].get("delay_s", 0.0) > 0.0:
+        n = max(1, round(eff["esc_latency"]["delay_s"] / tick_s))
+        line: deque[int] = deque([0] * n, maxlen=n)
+
+        def delay(pulse_us: int) -> int:
+            out = line[0]
+            line.append(pulse_us)
+            return out
+        session.actuator_filters.append(delay)
+    if "esc_deadband" in eff and eff["esc_deadband"].get("hysteresis_us", 0.0) > 0.0:
+        top = p.esc_min_pulse_us + p.esc_deadband_us
+        hyst = eff["esc_deadband"]["hysteresis_us"]
+        state = {"off": True}
+
+        def deadband(pulse_us: int) -> int:
+            if pulse_us < p.esc_min_pulse_us:
+                return pulse_us
+            if state["off"] and pulse_us > top + hyst:
+                state["off"] = False
+            elif not state["off"] and pulse_us <= top:
+                state["off"] = True
+            return int(p.esc_min_pulse_us) if state["off"] else pulse_us
+        session.actuator_filters.append(deadband)
+    drag_n = eff.get("rope_drag_law", {}).get("drag_exponent")
+    strib = eff.get("low_speed_friction", {})
+    ext = eff.get("external_rope_load", {}).get("external_load_n", 0.0)
+    sag = eff.get("battery_sag", {})
+    if drag_n is None and not strib and not ext and not sag:
+        return
+    k = p.rope_drag_coeff_n_s2_per_m2
+    base_aux = p.battery_aux_current_a
+    pol = {"v": 0.0}
+
+    def hook(s) -> None:
+        out = s.drive_out
+        v = abs(out.rope_speed_mps)
+        f = 0.0
+        if drag_n is not None:
+            s.loads.rope_exposed_length_m = 0.0
+            f += k * V_REF_MPS ** 2 * (v / V_REF_MPS) ** drag_n
+        if strib:
+            f += strib["stribeck_force_n"] * math.exp(-(v / strib["stribeck_speed_mps"]) ** 2)
+        if ext and any(a <= s.time_s <= b for a, b in model.external_load_spans_s):
+            f += ext
+        s.loads.external_rope_load_n = max(0.0, f)
+        if sag:
+            i = out.battery_current_a - out.battery_aux_current_a + base_aux
+            r, tau = sag["polarisation_resistance_ohm"], sag["polarisation_time_constant_s"]
+            pol["v"] = r * i + (pol["v"] - r * i) * math.exp(-tick_s / tau)
+            s.loads.battery_aux_current_a = base_aux + max(0.0, pol["v"]) / p.battery_internal_resistance_ohm
+    session.tick_hooks.append(hook)

@@ -1,0 +1,163 @@
+"""wrangler diagnose on short generated recordings: recovery, none, bad inputs, the model file in the SIL."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from robowrangler_sim.diagnose import (DiagnoseError, MissingChannelsError, ModelMismatchError, NoUsableSpanError,
+                                       diagnose)
+from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
+from robowrangler_sim.diagnose.proof.generator import generate_recording
+from robowrangler_sim.diagnose.proof.truth_effects import LatencyTruth
+from robowrangler_sim.diagnose.recording_data import load_drive_data
+from robowrangler_sim.diagnose.replay import DriveReplay
+from robowrangler_sim.diagnose.report import write_report
+from robowrangler_sim.plants import DriveParams, DrivePlant
+from robowrangler_sim.plants import drive_batch as db
+
+
+def test_batched_plant_matches_the_per_tick_plant():
+    p = DriveParams()
+    pulse = np.full(3000, 1000.0)
+    pulse[400:1400], pulse[1400:2200], pulse[2200:] = 1300.0, 1150.0, 1005.0
+    plant = DrivePlant(p, seed=0)
+    speed, volts = [plant.rope_speed_mps], [plant.battery_v]
+    for u in pulse:
+        plant.step_us(esc_pulse_us=float(u), dt_us=1000)
+        speed.append(plant.rope_speed_mps)
+        volts.append(plant.battery_v)
+    rows = np.tile(db.theta_from_params(p), (3, 1))
+    out = db.simulate_drive_batch(rows, db.consts_from_params(p), pulse, np.arange(pulse.size + 1), latch="exact")
+    assert max(np.ptp(out["rope_speed_mps"], axis=0)) == 0.0  # the batch rows are independent and equal
+    np.testing.assert_allclose(out["rope_speed_mps"][0], speed, atol=1e-4)
+    np.testing.assert_allclose(out["battery_v"][0], volts, atol=1e-4)
+    assert max(speed) > 5.0
+
+
+@pytest.fixture(scope="module")
+def recordings(tmp_path_factory):
+    d = tmp_path_factory.mktemp("diag")
+    clean = generate_recording(d / "clean.mcap", effect=None, seed=11, duration_s=10.0)
+    lat = generate_recording(d / "latency.mcap", seed=1, duration_s=12.0,
+                             effect=LatencyTruth("esc_latency", {"delay_s": 0.010}, delay_s=0.010, jitter_s=0.001))
+    return {"clean": clean, "latency": lat, "dir": d}
+
+
+def test_effect_free_recording_gives_none(recordings):
+    res = diagnose(recordings["clean"].path, effects=["esc_latency", "rope_drag_law"])
+    assert res.verdict == "none"
+    assert res.effects == []
+    assert res.first_line.startswith("none beyond noise")
+    ids = {d["id"] for d in res.not_identifiable}
+    assert ids == set()  # only the requested effects are considered
+
+
+def test_latency_is_named_with_an_interval_and_the_model_improves(recordings, tmp_path):
+    res = diagnose(recordings["latency"].path, effects=["esc_latency", "rope_drag_law", "wheel_slip"])
+    assert res.verdict == "missing_physics"
+    assert [e.effect_id for e in res.effects] == ["esc_latency"]
+    delay = res.effects[0].params["delay_s"]
+    assert 0.005 < delay["value"] < 0.013
+    assert delay["ci95"][0] <= delay["value"] <= delay["ci95"][1]
+    e = res.effects[0]
+    assert e.heldout_rms_after["rope_speed_mps"] < 0.6 * e.heldout_rms_before["rope_speed_mps"]
+    assert any(d["id"] == "wheel_slip" and "rope" in d["separating_measurement"] for d in res.not_identifiable)
+    paths = write_report(res, tmp_path / "out")
+    doc = json.loads(paths["report"].read_text())
+    assert doc["verdict"] == "missing_physics" and doc["effects"][0]["id"] == "esc_latency"
+    for key in ("params", "channels", "spans_s", "regime", "heldout_rms_before", "heldout_rms_after", "evidence"):
+        assert key in doc["effects"][0]
+    assert set(doc["nominal_refit"]["esc_lag_s"]) >= {"nominal", "fitted"}
+    assert 0.0 <= doc["unexplained_fraction"] < 1.0
+    assert b"data:image/png;base64," in paths["html"].read_bytes()
+    # the written model replays the recording better than the nominal model
+    model = load_model(paths["model"])
+    assert model.effects["esc_latency"]["delay_s"] == pytest.approx(delay["value"])
+    data = load_drive_data(recordings["latency"].path)
+    err = {}
+    for name, m in (("nominal", DiagnosedModel.nominal()), ("fitted", model)):
+        pred = DriveReplay(data, m.drive_params).predict(m.theta()[None, :])
+        err[name] = float(np.sqrt(np.mean((data.speed_mps - pred["rope_speed_mps"][0]) ** 2)))
+    assert err["fitted"] < 0.6 * err["nominal"]
+
+
+def test_sil_session_loads_the_model_file(recordings, tmp_path):
+    from robowrangler_sim.sil import SilSession
+
+    model = DiagnosedModel(DriveParams(esc_lag_s=0.004), {"esc_latency": {"delay_s": 0.006}})
+    path = model.save(tmp_path / "model.json")
+    sil = SilSession(model=path, speedup=None)
+    assert sil.plant.params.esc_lag_s == 0.004
+    delayed = [sil.actuator_filters[0](u) for u in [1000] * 3 + [1200] * 10]
+    assert delayed.index(1200) == 3 + 6  # six 1 ms ticks late
+    with pytest.raises(ValueError, match="model"):
+        SilSession(model=path, drive_params=DriveParams())
+
+
+def test_bad_inputs_are_refused(recordings, tmp_path):
+    src = recordings["clean"].path.read_bytes()
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(b"not an mcap file at all" * 10)
+    with pytest.raises(DiagnoseError, match="not a readable recording"):
+        diagnose(corrupt)
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(src[:3000])
+    with pytest.raises((MissingChannelsError, NoUsableSpanError)):
+        diagnose(cut)
+    still = tmp_path / "still.mcap"
+    generate_recording(still, effect=None, seed=3, duration_s=3.0, pulse_us=np.full(3000, 1000.0))
+    with pytest.raises(NoUsableSpanError, match="moves"):
+        diagnose(still)
+    from robowrangler.recorder import RecordingWriter
+    empty = tmp_path / "no_telemetry.mcap"
+    with RecordingWriter(empty, source="simulator", time_base="simulation", clock_ns=lambda: 0) as w:
+        w.write("/sim/plant_truth", {"time_s": 0.0, "rope_speed_mps": 1.0})
+    with pytest.raises(MissingChannelsError, match="telemetry"):
+        diagnose(empty)
+    other = DiagnosedModel(DriveParams(wheel_radius_m=0.02))
+    with pytest.raises(ModelMismatchError, match="wheel_radius_m"):
+        diagnose(recordings["clean"].path, model=other)
+    bad = tmp_path / "bad_model.json"
+    bad.write_text(json.dumps({"format": "robowrangler.drive_model", "format_version": 1,
+                               "drive_params": {"wheel_radius_mm": 15}}))
+    with pytest.raises(ModelMismatchError, match="wheel_radius_mm"):
+        load_model(bad)
+
+
+def test_cli_verb_exit_statuses_and_json(recordings, tmp_path):
+    import io
+
+    from robowrangler.cli.environment import Environment
+    from robowrangler.cli.main import main
+
+    def run(*argv):
+        env = Environment(stdout=io.StringIO(), stderr=io.StringIO(), environ={})
+        return int(main(list(argv), env)), env.stdout.getvalue(), env.stderr.getvalue()
+
+    code, out, err = run("diagnose", str(recordings["clean"].path), "--effects", "esc_latency,wheel_slip",
+                         "--out", str(tmp_path / "rep"), "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["verdict"] == "none" and doc["effects"] == []
+    assert (tmp_path / "rep" / "report.html").exists() and (tmp_path / "rep" / "model.json").exists()
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(b"garbage")
+    code, out, err = run("diagnose", str(bad))
+    assert code == 1 and "not a readable recording" in err and out == ""
+    code, _, err = run("diagnose", str(recordings["clean"].path), "--effects", "no_such_effect")
+    assert code == 2 and "no_such_effect" in err
+
+
+def test_coverage_names_the_regimes_and_effects_a_slow_run_cannot_test(tmp_path):
+    pulse = np.full(5000, 1000.0)
+    pulse[400:1600], pulse[1600:2800], pulse[2800:4000] = 1060.0, 1120.0, 1090.0  # never above ~4 m/s
+    rec = tmp_path / "slow.mcap"
+    generate_recording(rec, effect=None, seed=5, duration_s=5.0, pulse_us=pulse)
+    res = diagnose(rec, effects=["rope_drag_law"])
+    assert res.verdict == "none"
+    assert "speed_band:> 8 m/s" in res.coverage["not_visited"]
+    assert [d["id"] for d in res.coverage["effects_not_tested"]] == ["rope_drag_law"]
+    assert next(c for c in res.candidates if c["id"] == "rope_drag_law")["status"] == "not_tested"
