@@ -11,7 +11,6 @@ The device-side truth comes from the proxy's log (link_ledger): what the firmwar
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import pytest
@@ -54,7 +53,8 @@ def test_every_command_completes_exactly_once_through_30_percent_loss(native_bui
                 rw.spindown()
                 rw.wait_for_state(State.ARMED, timeout_s=3.0)
                 assert rw.disarm() == State.DISARMED
-                time.sleep(0.2)  # a few more telemetry frames carry the final counters
+                done_s = rw.latest_telemetry.time_s  # 0.2 s more of device time (not wall time: a loaded machine
+                rw.wait_for(lambda s: s.time_s >= done_s + 0.2, timeout_s=30.0)  # slows the SIL): the final counters
                 stats = rw.stats
             proxy.check()
             ledger = LinkLedger(key=sil.key)
@@ -226,9 +226,10 @@ def test_client_rides_out_a_blackout_and_flies_again(native_build_dir: Path) -> 
                 rw.spin(5.0)
                 rw.wait_for_state(State.AIRBORNE, timeout_s=3.0)
                 proxy.config = ImpairmentConfig.symmetric(LinkImpairment.blackout())
+                blackout_s = sil.time_s
                 with pytest.raises(LinkTimeout):
                     rw.spin(6.0)
-                time.sleep(0.8)  # > heartbeat_timeout_s of silence
+                sil.wait_until(blackout_s + 0.8)  # > heartbeat_timeout_s of silence, on the device's clock
                 proxy.config = CLEAN
                 landed = rw.wait_for_state(State.ARMED, timeout_s=3.0)
                 assert landed.rope_speed_mps < 0.2
