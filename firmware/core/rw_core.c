@@ -29,7 +29,8 @@ static float capped_dt_s(uint32_t dt_us, uint32_t nominal_us, float nominal_s)
     return dt_s > RW_CORE_MAX_CONTROL_DT_S ? RW_CORE_MAX_CONTROL_DT_S : dt_s;
 }
 
-void rw_core_apply_params(rw_core *core)
+/* The speed loop's configuration from the parameters (and the guard's floor), prepared for the speed step. */
+static void apply_speed_loop(rw_core *core)
 {
     const rw_params *p = &core->params;
     rw_speed_loop *loop = &core->state.loop;
@@ -50,13 +51,23 @@ void rw_core_apply_params(rw_core *core)
     loop->throttle.cfg.wheel_radius_m = rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M);
     loop->throttle.cfg.pulse_min_us = (uint16_t)rw_params_get(p, RW_PARAM_ESC_MIN_US);
     loop->throttle.cfg.pulse_max_us = (uint16_t)RW_ESC_PULSE_MAX_US;
+    loop->cfg.guard_mps = rw_tov_guard_min_airborne_mps(&core->state.guard);
+    rw_speed_loop_prepare(loop, RW_CORE_SPEED_DT_S);
+}
+
+static void apply_guard(rw_core *core)
+{
+    const rw_params *p = &core->params;
     rw_tov_guard *guard = &core->state.guard;
     guard->cfg.tov_mps = rw_params_get(p, RW_PARAM_TOV_MPS);
     guard->cfg.margin = rw_params_get(p, RW_PARAM_TOV_MARGIN);
     guard->cfg.collapse_time_s = rw_params_get(p, RW_PARAM_COLLAPSE_TIME_S);
     rw_tov_guard_prepare(guard);
-    loop->cfg.guard_mps = rw_tov_guard_min_airborne_mps(guard);
-    rw_speed_loop_prepare(loop, RW_CORE_SPEED_DT_S);
+}
+
+static void apply_spindle(rw_core *core)
+{
+    const rw_params *p = &core->params;
     rw_spindle_config *sp = &core->state.spindle.cfg;
     sp->lead_mm_per_rev = rw_params_get(p, RW_PARAM_LEAD_MM_PER_REV);
     sp->guide_min_mm = rw_params_get(p, RW_PARAM_GUIDE_MIN_MM);
@@ -71,8 +82,73 @@ void rw_core_apply_params(rw_core *core)
     sp->secure_load_pct = rw_params_get(p, RW_PARAM_GRASP_SECURE_LOAD_PCT);
     sp->retract_speed_mmps = rw_params_get(p, RW_PARAM_RETRACT_SPEED_MMPS);
     sp->timeout_s = rw_params_get(p, RW_PARAM_SPINDLE_TIMEOUT_S);
+}
+
+void rw_core_apply_params(rw_core *core)
+{
+    apply_guard(core); /* before the speed loop: its floor is the guard's */
+    apply_speed_loop(core);
+    apply_spindle(core);
     rw_core_load_loss_apply_params(core);
     core->state.telemetry_period_ms = rw_core_telemetry_period_ms(core);
+}
+
+/* After one parameter changed: only what it feeds is converted again (the float work of a full
+ * rw_core_apply_params, ~6,000 M0+ instructions, would land in the PARAM_SET tick). */
+static void apply_param(rw_core *core, uint8_t param_id)
+{
+    switch (param_id) {
+    case RW_PARAM_TOV_MPS:
+    case RW_PARAM_TOV_MARGIN:
+    case RW_PARAM_COLLAPSE_TIME_S:
+        apply_guard(core);
+        apply_speed_loop(core);
+        break;
+    case RW_PARAM_SPEED_KP: /* the PI alone (the bench's PARAM_SET) */
+    case RW_PARAM_SPEED_KI:
+        core->state.loop.pi.cfg.kp = rw_params_get(&core->params, RW_PARAM_SPEED_KP);
+        core->state.loop.pi.cfg.ki_per_s = rw_params_get(&core->params, RW_PARAM_SPEED_KI);
+        rw_pi_controller_prepare(&core->state.loop.pi, RW_CORE_SPEED_DT_S);
+        break;
+    case RW_PARAM_RAMP_UP_MPS2:
+    case RW_PARAM_RAMP_DOWN_MPS2:
+    case RW_PARAM_ENCODER_COUNTS_PER_REV:
+    case RW_PARAM_ESC_MIN_US:
+    case RW_PARAM_SPEED_FILTER_TAU_S:
+    case RW_PARAM_ENCODER_TIMEOUT_S:
+        apply_speed_loop(core);
+        break;
+    case RW_PARAM_WHEEL_RADIUS_M:
+    case RW_PARAM_MOTOR_KV_RPM_PER_V:
+        apply_speed_loop(core);
+        rw_core_load_loss_apply_params(core);
+        break;
+    case RW_PARAM_LOAD_LOSS_DROP_N:
+    case RW_PARAM_LOAD_LOSS_TIME_S:
+    case RW_PARAM_DRIVE_RESISTANCE_OHM:
+        rw_core_load_loss_apply_params(core);
+        break;
+    case RW_PARAM_TELEMETRY_RATE_HZ:
+        core->state.telemetry_period_ms = rw_core_telemetry_period_ms(core);
+        break;
+    case RW_PARAM_LEAD_MM_PER_REV:
+    case RW_PARAM_GUIDE_MIN_MM:
+    case RW_PARAM_GUIDE_MAX_MM:
+    case RW_PARAM_SPINDLE_KP_PER_S:
+    case RW_PARAM_SPINDLE_MAX_SPEED_MMPS:
+    case RW_PARAM_SPINDLE_TOLERANCE_MM:
+    case RW_PARAM_HOMING_SPEED_MMPS:
+    case RW_PARAM_HOMING_LOAD_PCT:
+    case RW_PARAM_SPINDLE_STALL_LOAD_PCT:
+    case RW_PARAM_SPINDLE_STALL_TIME_S:
+    case RW_PARAM_GRASP_SECURE_LOAD_PCT:
+    case RW_PARAM_RETRACT_SPEED_MMPS:
+    case RW_PARAM_SPINDLE_TIMEOUT_S:
+        apply_spindle(core);
+        break;
+    default: /* read where used (rw_params_get): heartbeat, arming hold, battery cutoff, release, max speed */
+        break;
+    }
 }
 
 void rw_core_init(rw_core *core)
@@ -114,7 +190,7 @@ int rw_core_set_param(rw_core *core, uint8_t param_id, float value)
 {
     int result = rw_params_set(&core->params, param_id, value, core->state.state == RW_STATE_DISARMED);
     if (result == RW_DECODE_OK) {
-        rw_core_apply_params(core);
+        apply_param(core, param_id);
         if (param_id == RW_PARAM_TELEMETRY_RATE_HZ) {
             core->state.telemetry_due_ms = core->state.uptime_ms; /* the new period starts now */
         }
@@ -263,9 +339,11 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         late_ms = late_ms <= RW_CORE_SCHEDULE_MAX_HOLD_MS ? late_ms : 0u;
         core->state.telemetry_due_ms = core->state.uptime_ms + core->state.telemetry_period_ms - late_ms;
     }
-    const uint32_t mac_budget = speed_tick ? 0u
-                                : job == RW_CORE_JOB_NONE    ? RW_CORE_MAC_TICK_BUDGET
-                                : job == RW_CORE_JOB_BATTERY ? RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BATTERY_COST
-                                                             : 0u;
+    uint32_t mac_budget = 0u; /* speed, spindle and telemetry ticks sign nothing */
+    if (!speed_tick && job == RW_CORE_JOB_NONE) {
+        mac_budget = RW_CORE_MAC_TICK_BUDGET;
+    } else if (!speed_tick && job == RW_CORE_JOB_BATTERY) {
+        mac_budget = RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BATTERY_COST;
+    }
     rw_core_send_queued(core, hal, sent, mac_budget);
 }

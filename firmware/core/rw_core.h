@@ -75,7 +75,9 @@
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
 /* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
  * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
- * and what finishing it costs (the last two blocks, four finalization rounds, the send). */
+ * and what finishing it costs (the last two blocks, four finalization rounds, the send). With these a
+ * telemetry frame leaves over two idle ticks (100 Hz telemetry keeps up beside the spindle slot); the price
+ * is that these ticks are the heaviest periodic ones (bench/bench_tick_instructions.py). */
 #define RW_CORE_MAC_TICK_BUDGET 8u
 #define RW_CORE_MAC_BEGIN_COST 4u
 #define RW_CORE_MAC_FINISH_COST 4u
