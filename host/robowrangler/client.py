@@ -10,7 +10,11 @@ Threads: a receiver thread decodes every frame and hands ACK/NACK to the waiting
 (msg_id, seq), PARAM_VALUE by parameter id, TELEMETRY to `latest_telemetry` and to every open
 `telemetry()` iterator, EVENT to `events`. Frames it cannot decode are counted in `stats`, never
 raised. A heartbeat thread sends HEARTBEAT at heartbeat_hz while connected (the device spins the
-rope down after heartbeat_timeout_s of silence).
+rope down after heartbeat_timeout_s of silence). Heartbeats are also kept on the device's clock: when a
+TELEMETRY sample says the device has heard nothing from the host for 1 / heartbeat_hz of its own time, the receiver
+sends one at once (at most one per such period of device time). So a device whose clock runs faster than
+the host's (a SIL paced above real time) or a heartbeat thread starved on a busy machine does not make the
+device spin the rope down while the host is otherwise keeping up.
 
 Retries: a command is retransmitted with the SAME seq and payload after each ack_timeout_s without an
 answer (the device answers a retransmission again but never executes it twice), at most `retries`
@@ -37,6 +41,7 @@ from dataclasses import dataclass, field, replace
 from robowrangler import units
 from robowrangler.errors import (AuthenticationError, CommandRefused, InvalidArgument, LinkTimeout, NotConnected,
                                  StateTimeout, UnknownParameter)
+from robowrangler.link_session import LinkSession, Verdict
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import FrameError, MsgId, NackReason, PARAMS, PARAMS_BY_NAME, ParamSpec, State
 from robowrangler.telemetry import DeviceEvent, ProvisionStatus, TelemetrySample
@@ -64,6 +69,7 @@ class ClientStats:
 
     frames_sent: int = 0
     heartbeats_sent: int = 0
+    device_clock_heartbeats: int = 0  # of those, sent because telemetry said the device heard none for a period
     commands_sent: int = 0
     retransmissions: int = 0
     send_errors: int = 0
@@ -157,10 +163,8 @@ class Client:
             raise InvalidArgument("key", f"{gen.KEY_LEN} bytes (a 128-bit link key)",
                                   f"{type(key).__name__} of length {len(key) if hasattr(key, '__len__') else '?'}")
         self._key = None if key is None else bytes(key)
-        self._session_id: int | None = None
-        self._counter = 0
-        self._device_session = -1  # (session, counter) of the newest device frame accepted
-        self._device_counter = -1
+        # the signed session (HELLO, counters, freshness): one set of rules for every host (link_session.py)
+        self._link: LinkSession | None = None  # made by connect() when there is a key
         self._hello_nonce: int | None = None
         self._session_info: gen.Message | None = None
         self._session_event = threading.Event()
@@ -175,6 +179,7 @@ class Client:
         self._last_event_seq: int | None = None
         self._latest: TelemetrySample | None = None
         self._first_telemetry = threading.Event()
+        self._device_heartbeat_s: float | None = None  # device time of the last heartbeat sent on its clock
         self._stats = ClientStats()
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
@@ -196,6 +201,9 @@ class Client:
         self._first_telemetry.clear()
         self._session_event.clear()
         self._session_info = None
+        self._device_heartbeat_s = None
+        if self._key is not None:  # a new connection learns the session afresh (the counter keeps growing)
+            self._link = LinkSession(self._key, clock_us=lambda: time.time_ns() // 1000)
         self._connected = True
         receiver = threading.Thread(target=self._receive_loop, name="robowrangler-rx", daemon=True)
         heartbeat = threading.Thread(target=self._heartbeat_loop, name="robowrangler-hb", daemon=True)
@@ -221,8 +229,9 @@ class Client:
         return self
 
     def _hello(self) -> None:
-        self._hello_nonce = secrets.randbelow(2**32)
-        self._send_new(gen.Hello(self._hello_nonce), sign=False)
+        hello = gen.Hello(secrets.randbelow(2**32)) if self._link is None else self._link.hello()
+        self._hello_nonce = hello.host_nonce
+        self._send_new(hello, sign=False)
 
     def _establish_session(self) -> None:
         """Wait for the SESSION_INFO answering our HELLO (resending HELLO each ack_timeout_s).
@@ -234,9 +243,9 @@ class Client:
         start = time.monotonic()
         deadline = start + self.connect_timeout_s
         unverified_until: float | None = None
-        while self._session_id is None:
+        while self.session_id is None:
             self._session_event.wait(min(self.ack_timeout_s, max(0.0, deadline - time.monotonic())))
-            if self._session_id is not None:
+            if self.session_id is not None:
                 break
             now = time.monotonic()
             if self._session_info is not None:
@@ -255,17 +264,17 @@ class Client:
         if info.schema_hash != gen.SCHEMA_HASH:
             raise AuthenticationError(f"{self.url} speaks protocol schema 0x{info.schema_hash:04X}, this host "
                                       f"0x{gen.SCHEMA_HASH:04X}: update the firmware or the host", url=self.url)
-        if self._session_id is None and not info.key_set:
+        if self.session_id is None and not info.key_set:
             raise AuthenticationError(f"{self.url} has no link key provisioned, so it takes no command over WiFi: "
                                       "provision one over USB serial", url=self.url)
-        if self._session_id is None:
+        if self.session_id is None:
             raise AuthenticationError(f"the SESSION_INFO from {self.url} is not signed with the given key: the "
                                       "host's and the device's link keys differ", url=self.url)
 
     @property
     def session_id(self) -> int | None:
-        """The device session this client signs for (None: unsigned link)."""
-        return self._session_id
+        """The device session this client signs for (None: unsigned link, or no session yet)."""
+        return None if self._link is None else self._link.session_id
 
     def close(self) -> None:
         """Stop the threads and release the link; open telemetry() iterators end. Idempotent.
@@ -559,10 +568,9 @@ class Client:
         growing across host processes within one device session (the device drops a counter that is not
         above the last it accepted). Call with _send_lock held.
         """
-        if not sign or self._key is None or self._session_id is None:
+        if not sign or self._link is None or self._link.session_id is None:
             return gen.encode_frame(message, seq)
-        self._counter = max(self._counter + 1, time.time_ns() // 1000)
-        return gen.encode_frame(message, seq, key=self._key, session_id=self._session_id, counter=self._counter)
+        return self._link.sign(message, seq)
 
     def _send_new(self, message: gen.Message, waiter_key_msg_id: int | None = None,
                   param_waiter: _Waiter | None = None, *, sign: bool = True) -> tuple[int, bytes, _Waiter | None]:
@@ -685,6 +693,22 @@ class Client:
                 next_s = now
             self._stop.wait(next_s - now)
 
+    def _heartbeat_on_device_clock(self, sample: TelemetrySample) -> None:
+        """A heartbeat now if the device, by its own clock, has heard none for a heartbeat period."""
+        period_s = 1.0 / self.heartbeat_hz
+        last_s = self._device_heartbeat_s
+        if (not self._connected or sample.heartbeat_age_s < period_s
+                or (last_s is not None and 0.0 <= sample.time_s - last_s < period_s)):
+            return
+        self._device_heartbeat_s = sample.time_s
+        try:
+            self._send_new(gen.Heartbeat(units.s_to_ms_u32(time.monotonic())))
+        except NotConnected:
+            return
+        with self._lock:
+            self._stats.heartbeats_sent += 1
+            self._stats.device_clock_heartbeats += 1
+
     # ----------------------------------------------------------------- internals: receiving
 
     def _receive_loop(self) -> None:
@@ -750,27 +774,25 @@ class Client:
                 self._stats.unexpected_messages += 1
 
     def _accept_signed(self, frame: gen.Frame, msg: gen.Message) -> bool:
-        """A signed frame from the device counts only if its tag verifies with our key; a verified frame
-        from a newer session (the device rebooted) moves the client to that session."""
-        if self._key is None:
+        """A signed frame from the device counts only if the link session takes it (LinkSession.check: the tag
+        verifies with our key, and it is fresh); a frame of a newer session (the device rebooted) moves the
+        client to that session."""
+        if self._link is None:
             return True  # nothing to check it with; an unsigned link trusts the transport
-        if not gen.tag_valid(frame, self._key):
+        verdict = self._link.check(frame, msg)
+        if verdict == Verdict.BAD_TAG:
             with self._lock:
                 self._stats.auth_failures += 1
-            if frame.msg_id == MsgId.SESSION_INFO and msg.host_nonce == self._hello_nonce and self._session_id is None:
+            if (frame.msg_id == MsgId.SESSION_INFO and msg.host_nonce == self._hello_nonce
+                    and self._link.session_id is None):
                 self._session_info = msg  # an answer to our HELLO signed with another key (or forged)
                 self._session_event.set()
             return False
-        with self._lock:  # freshness: never an older session, never a device counter already seen
-            stale = ((self._session_id is not None and frame.session_id < self._session_id)
-                     or (frame.session_id == self._device_session and frame.counter <= self._device_counter))
-            if stale:
+        if verdict == Verdict.STALE:
+            with self._lock:
                 self._stats.replayed += 1
-                return False
-            self._device_session, self._device_counter = frame.session_id, frame.counter
-        if self._session_id is not None and frame.session_id > self._session_id and frame.msg_id != MsgId.SESSION_INFO:
-            with self._send_lock:  # the device rebooted: sign for its new session
-                self._session_id = frame.session_id
+            return False
+        if verdict == Verdict.FOLLOWED:
             with self._lock:
                 self._stats.session_changes += 1
         return True
@@ -780,12 +802,9 @@ class Client:
             with self._lock:
                 self._stats.unexpected_messages += 1  # someone else's HELLO, or a replayed answer
             return
-        verified = self._key is not None and frame.signed  # the tag was checked by _accept_signed
-        if verified or self._session_id is None:  # an unverified answer never replaces a verified one
+        verified = self._link is not None and frame.signed  # the link session checked the tag and took the session
+        if verified or self.session_id is None:  # an unverified answer never replaces a verified one
             self._session_info = msg
-        if verified:
-            with self._send_lock:
-                self._session_id = msg.session_id
         self._session_event.set()
 
     def _count_decode_error(self, reason: str) -> None:
@@ -810,6 +829,7 @@ class Client:
             waiter.event.set()
 
     def _on_telemetry(self, sample: TelemetrySample) -> None:
+        self._heartbeat_on_device_clock(sample)
         self._latest = sample
         with self._lock:
             self._stats.telemetry_received += 1

@@ -45,7 +45,7 @@ def run_demo(out_png: str | Path, *, speedup: float = 1.0, seed: int = 0, hold_s
              progress: Callable[[str], None] = lambda _msg: None) -> DemoResult:
     """Run the demo and write the plot. progress(msg) is called at each step (for a live display)."""
     if not 0.1 <= speedup <= 3.0:
-        raise ValueError(f"speedup: expected 0.1..3.0 (the client's heartbeats run on the wall clock), got {speedup}")
+        raise ValueError(f"speedup: expected 0.1..3.0 (a demo to watch), got {speedup}")
     out_png = Path(out_png)
     wall0 = time.monotonic()
     samples: list[TelemetrySample] = []

@@ -21,6 +21,7 @@ from collections import deque
 from ctypes import CFUNCTYPE, POINTER, c_bool, c_size_t, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
 from dataclasses import dataclass, field
 
+from robowrangler.link_session import LinkSession
 from robowrangler.protocol import generated as proto
 
 U32 = 1 << 32
@@ -128,13 +129,15 @@ def declare_core(lib: ctypes.CDLL) -> ctypes.CDLL:
 
 @dataclass(frozen=True)
 class Out:
-    """One datagram the core emitted: channel 'reply' (to the sender) or 'send' (to the peer)."""
+    """One datagram the core emitted: channel 'reply' (to the sender) or 'send' (to the peer), on link 'wifi' or
+    'serial' (the USB serial link, when the harness has one)."""
 
     tick_ms: int          # harness time of the tick that emitted it, ms since the first tick
     channel: str
     raw: bytes
     frame: proto.Frame
     msg: proto.Message
+    link: str = "wifi"
 
 
 @dataclass
@@ -146,6 +149,7 @@ class FakeHal:
     battery_mv: int = 14800
     tick_overruns: int = 0
     inbox: deque = field(default_factory=deque)   # datagrams (bytes) waiting for recv
+    serial_inbox: deque = field(default_factory=deque)  # frames (bytes) waiting on the USB serial link
     pulses_us: list = field(default_factory=list)  # one per tick
     out: list = field(default_factory=list)        # list[Out]
     accept_peer_calls: int = 0
@@ -268,12 +272,14 @@ class CoreHarness:
     Keyword options: clock_offset_us puts the tick clock anywhere (to cross the 2^32 wrap);
     encoder_count_offset starts the encoder's cumulative count anywhere (to cross its wrap);
     battery_mv the battery reading; params {name: value} set through rw_core_set_param before the first
-    tick (the checks are those of PARAM_SET, a refusal raises ValueError).
+    tick (the checks are those of PARAM_SET, a refusal raises ValueError); serial=True fits a USB serial link
+    (hal.serial_inbox in, Out.link == 'serial' out; trusted: unsigned frames and PROVISION_*); provisioned=False
+    boots from a flash record without a link key (the core then takes nothing over WiFi).
     """
 
     def __init__(self, lib: ctypes.CDLL, *, clock_offset_us: int = 0, battery_mv: int = 14800,
                  params: dict[str, float] | None = None, spindle: FakeSpindle | None = None,
-                 encoder_count_offset: int = 0) -> None:
+                 encoder_count_offset: int = 0, serial: bool = False, provisioned: bool = True) -> None:
         self.lib = declare_core(lib)
         self.clock_offset_us = int(clock_offset_us)
         self.size = int(lib.rw_core_sizeof())
@@ -289,9 +295,13 @@ class CoreHarness:
         self._events: list[proto.Event] = []          # sent EVENT frames, in order (cache of hal.out)
         self._transitions: list[tuple[int, int, int, int]] = []
         self._telemetry: list[proto.Telemetry] = []
-        self._last_signed: tuple[int, int] = (-1, -1)  # (session, counter) of the newest signed frame sent
-        self._max_seq: int | None = None  # highest seq sent so far (unwrapped)
-        self._seq_holes: set[int] = set()
+        # a host's view of the core's signed frames: every one must be taken (tag, session, a growing counter)
+        self._host_view = LinkSession(TEST_KEY, session_id=SESSION_ID)
+        self._commit_key: bytes | None = None  # expect_commit(): the key signed frames may carry from this tick on
+        self._max_seq: dict[str, int] = {}  # per link: highest seq sent so far
+        self._seq_holes: dict[str, set[int]] = {"wifi": set(), "serial": set()}
+        self._serial = bool(serial)
+        self._provisioned = bool(provisioned)
         self._callback_errors: list[Exception] = []  # raised in a HAL callback, re-raised by tick()  # seqs skipped by a reply that overtook a frame being signed
         self.t_us = 0
         self.started = False
@@ -313,16 +323,17 @@ class CoreHarness:
         def esc_write(_ctx, pulse_us):
             hal.pulses_us.append(int(pulse_us))
 
-        def link_recv(_ctx, buf, cap):
+        def link_recv(_ctx, buf, cap, inbox=None):
             hal.recv_calls += 1
-            if not hal.inbox:
+            inbox = hal.inbox if inbox is None else inbox
+            if not inbox:
                 return 0
-            data = hal.inbox.popleft()
+            data = inbox.popleft()
             n = min(len(data), cap)
             ctypes.memmove(buf, data, n)
             return len(data) if len(data) <= cap else cap + 1
 
-        def record(channel):
+        def record(channel, link="wifi"):
             def out(_ctx, frame, length):
                 # an exception cannot cross the C frames of a ctypes callback: it is kept and raised by tick()
                 try:
@@ -332,15 +343,17 @@ class CoreHarness:
 
             def checked(raw):
                 fr, msg = proto.decode_message(raw)  # the core must only emit well-formed frames
-                if fr.signed:  # as a host checks it: the tag, and a counter above every one before
-                    if not proto.tag_valid(fr, TEST_KEY):
-                        raise AssertionError(f"the core sent a frame with a bad tag: {msg}")
-                    if (fr.session_id, fr.counter) <= self._last_signed:
-                        raise AssertionError(f"the core's counter went back: {(fr.session_id, fr.counter)} after "
-                                             f"{self._last_signed} ({msg})")
-                    self._last_signed = (fr.session_id, fr.counter)
-                self._check_numbering(fr.seq, msg)
-                hal.out.append(Out(self.t_us // 1000, channel, raw, fr, msg))
+                if fr.signed:  # as a host checks it (LinkSession): the tag, and a counter above every one before
+                    verdict = self._host_view.check(fr, msg)
+                    if not verdict.taken and self._commit_key is not None:  # a PROVISION_COMMIT in this tick
+                        self._host_view = LinkSession(self._commit_key, session_id=0)  # its new key and epoch
+                        self._commit_key = None
+                        verdict = self._host_view.check(fr, msg)
+                    if not verdict.taken:
+                        raise AssertionError(f"a host would drop this frame of the core ({verdict.name}): session "
+                                             f"{fr.session_id}, counter {fr.counter} ({msg})")
+                self._check_numbering(fr.seq, msg, link)
+                hal.out.append(Out(self.t_us // 1000, channel, raw, fr, msg, link))
                 if channel == "send" and isinstance(msg, proto.Event):
                     self._events.append(msg)
                     if msg.event == proto.EventKind.STATE_CHANGED:
@@ -388,7 +401,8 @@ class CoreHarness:
                 return len(self.flash) == length
             self.lib.rw_config_defaults(buf)
             self.lib.rw_config_set_params(buf, self.core)  # the parameters set before the first tick
-            self.lib.rw_config_set_key(buf, TEST_KEY)
+            if self._provisioned:
+                self.lib.rw_config_set_key(buf, TEST_KEY)
             return True
 
         def config_save(_ctx, buf, length):
@@ -398,28 +412,40 @@ class CoreHarness:
         self._config_cbs = [_ConfigLoad(config_load), _ConfigSave(config_save)]
         self._config = _HalConfigStore(None, *self._config_cbs)
         self._hal.config = ctypes.pointer(self._config)
+        if self._serial:
+            self._serial_cbs = [_LinkRecv(lambda ctx, buf, cap: link_recv(ctx, buf, cap, hal.serial_inbox)),
+                                _LinkOut(record("reply", "serial")), _LinkAccept(lambda _ctx: None),
+                                _LinkOut(record("send", "serial"))]
+            self._serial_link = _HalLink(None, *self._serial_cbs)
+            self._hal.serial = ctypes.cast(ctypes.pointer(self._serial_link), c_void_p)
         self.counter = 0
         if self.spindle is not None:
             self._callbacks += [_SpindleRead(spindle_read), _SpindleWrite(spindle_write)]
             self._spin = _HalSpindle(None, self._callbacks[-2], self._callbacks[-1])
             self._hal.spindle = ctypes.pointer(self._spin)
 
-    def _check_numbering(self, seq: int, msg: proto.Message) -> None:
+    def expect_commit(self, key: bytes | None) -> None:
+        """A PROVISION_COMMIT reaches the core on the next tick: from then on its signed frames may carry a new
+        session (a new epoch) and, if one was staged, a new key (None: the key stays)."""
+        self._commit_key = self._host_view.key if key is None else bytes(key)
+
+    def _check_numbering(self, seq: int, msg: proto.Message, link: str = "wifi") -> None:
         """Frames are numbered as they leave (a queued one when its signing begins): the next seq, or one more
         when replies overtake the frame being signed, whose seq comes later. Never a repeat, never a second hole:
         at most one frame is being signed."""
-        if self._max_seq is None:
-            self._max_seq = seq
+        holes = self._seq_holes[link]
+        if link not in self._max_seq:
+            self._max_seq[link] = seq
             return
-        ahead = (seq - self._max_seq) % 65536
-        if ahead == 1 or (ahead == 2 and not self._seq_holes):
+        ahead = (seq - self._max_seq[link]) % 65536
+        if ahead == 1 or (ahead == 2 and not holes):
             if ahead == 2:
-                self._seq_holes.add((self._max_seq + 1) % 65536)
-            self._max_seq = seq
-        elif seq in self._seq_holes:
-            self._seq_holes.discard(seq)
+                holes.add((self._max_seq[link] + 1) % 65536)
+            self._max_seq[link] = seq
+        elif seq in holes:
+            holes.discard(seq)
         else:
-            raise AssertionError(f"the core's seq {seq} after {self._max_seq} (holes {self._seq_holes}): {msg}")
+            raise AssertionError(f"the core's seq {seq} after {self._max_seq[link]} on {link} (holes {holes}): {msg}")
 
     def _check_canary(self) -> None:
         if ctypes.string_at(self.core + self.size, len(_CANARY)) != _CANARY:

@@ -1,4 +1,4 @@
-"""Fixtures for the host suite: a scripted UDP device on 127.0.0.1 and fast client settings."""
+"""Fixtures for the host suite: the real firmware core as the device (core_device.py) and fast client settings."""
 
 from __future__ import annotations
 
@@ -7,19 +7,26 @@ from pathlib import Path
 
 import pytest
 
-# scripted_device is imported by plain name from the tests of this folder (also under importlib mode).
-_HERE = str(Path(__file__).resolve().parent)
-if _HERE not in sys.path:
-    sys.path.insert(0, _HERE)
+# The helpers of this folder (core_device, host_settings, wire) and of the core suite (core_harness,
+# rw_core_ctypes) are imported by plain name from the tests (also under importlib mode); their names are unique.
+_HERE = Path(__file__).resolve().parent
+for _folder in (str(_HERE), str(_HERE.parent / "firmware_core")):
+    if _folder not in sys.path:
+        sys.path.insert(0, _folder)
 
-from scripted_device import ScriptedDevice  # noqa: E402
+import rw_core_ctypes  # noqa: E402
+from core_device import CoreDevice  # noqa: E402
+from host_settings import QUICK_ARM  # noqa: E402
 
-# Short timeouts keep the suite fast; the logic under test is the same at any value.
-FAST = dict(ack_timeout_s=0.05, retries=3, connect_timeout_s=1.0, heartbeat_hz=20.0)
+
+@pytest.fixture(scope="session")
+def core_lib(native_build_dir: Path):
+    """librw_core.so of the native build."""
+    return rw_core_ctypes.load(native_build_dir)
 
 
 @pytest.fixture
-def device():
-    """A running ScriptedDevice (DISARMED, telemetry at 50 Hz, no arming hold)."""
-    with ScriptedDevice() as dev:
+def device(core_lib):
+    """The core on its WiFi link (key TEST_KEY), real-time paced, arming hold 0.2 s."""
+    with CoreDevice(core_lib, params=QUICK_ARM) as dev:
         yield dev

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import FAST
-from pty_device import PtyDevice
+from host_settings import FAST
+from core_device import CoreDevice
 from robowrangler.client import Client
 from robowrangler.protocol import generated as gen
 from robowrangler.session_epoch import EPOCH_LIMIT, new_session_epoch
@@ -24,11 +24,13 @@ def test_a_bad_random_source_is_named() -> None:
         new_session_epoch(random_bytes=lambda n: b"ab")
 
 
-def test_every_commit_carries_a_fresh_epoch() -> None:
-    with PtyDevice() as dev, Client(f"serial://{dev.port}?baud=115200", **{**FAST, "ack_timeout_s": 0.1}) as rw:
+def test_every_commit_carries_a_fresh_epoch(core_lib) -> None:
+    with CoreDevice(core_lib, link="serial") as dev, Client(f"serial://{dev.open_pty()}?baud=115200", **FAST) as rw:
         rw.provision(key=bytes(range(16)))
         rw.provision(wifi_ssid="lab")
     # by seq: a retransmission (same seq) repeats its commit's epoch, it does not draw a new one
-    by_seq = {f.seq: m.session_epoch for f, m in dev.received if isinstance(m, gen.ProvisionCommit)}
+    commits = [gen.decode_message(raw)[1] for raw in dev.host_frames if raw[3] == gen.MsgId.PROVISION_COMMIT]
+    by_seq = {gen.decode_frame(raw).seq: m.session_epoch for raw, m in zip(
+        [raw for raw in dev.host_frames if raw[3] == gen.MsgId.PROVISION_COMMIT], commits)}
     epochs = list(by_seq.values())
     assert len(epochs) == 2 and epochs[0] != epochs[1] and all(0 <= e < EPOCH_LIMIT for e in epochs)

@@ -12,8 +12,9 @@ from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import MsgId, State
 from robowrangler.transport import open_transport
 from robowrangler.transport_serial import SerialTransport, encode_serial_frame
-from pty_device import PtyDevice
-from scripted_device import make
+from core_device import CoreDevice
+from host_settings import QUICK_ARM
+from wire import make
 
 
 @pytest.fixture
@@ -69,12 +70,13 @@ def test_serial_url_opens_the_serial_transport() -> None:
         t.close()
 
 
-def test_client_commands_a_device_over_a_real_serial_port() -> None:
-    with PtyDevice() as dev, Client(f"serial://{dev.port}?baud=115200", ack_timeout_s=0.1,
-                                    connect_timeout_s=1.0) as rw:
-        assert rw.latest_telemetry.battery_v == 12.0
+def test_client_commands_the_core_over_a_real_serial_port(core_lib) -> None:
+    """The real core's serial link behind a pseudo-terminal (COBS-framed, as the board's USB serial)."""
+    with CoreDevice(core_lib, link="serial", params=QUICK_ARM, boot_s=0.25) as dev, \
+            Client(f"serial://{dev.open_pty()}?baud=115200", ack_timeout_s=0.1, connect_timeout_s=3.0) as rw:
+        assert rw.latest_telemetry.battery_v == 14.8
         assert rw.arm() == State.ARMED
-        assert rw.wait_for_state(State.ARMED, timeout_s=0.5).state == State.ARMED
+        assert rw.wait_for_state(State.ARMED, timeout_s=1.0).state == State.ARMED
         stats = rw.stats
-    assert [m for m, _ in dev.commands] == [MsgId.ARM]
+    assert [f.msg_id for f in dev.host_sent() if f.msg_id not in (MsgId.HELLO, MsgId.HEARTBEAT)] == [MsgId.ARM]
     assert stats.decode_errors == 0 and stats.framing_errors == 0

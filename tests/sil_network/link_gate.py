@@ -14,6 +14,7 @@ import hashlib
 from dataclasses import dataclass
 from enum import Enum
 
+from robowrangler.link_session import device_takes
 from robowrangler.protocol import generated as gen
 
 
@@ -39,7 +40,7 @@ class Delivery:
 
 
 class DeviceGate:
-    """The device's WiFi acceptance rule. key: the provisioned 16-byte link key.
+    """The device's WiFi acceptance rule (robowrangler.link_session.device_takes). key: the provisioned 16-byte link key.
 
     The device's session is learnt from its own verified frames (learn_session); a new session starts a
     new counter (the device's last accepted counter is 0 after boot).
@@ -70,7 +71,7 @@ class DeviceGate:
             return Delivery(Fate.HELLO, frame, message)
         if not gen.tag_valid(frame, self.key):
             return Delivery(Fate.AUTH_FAILED, frame, message)
-        if frame.session_id != self.session_id or frame.counter <= self.last_counter:
+        if not device_takes(frame, session_id=self.session_id, last_counter=self.last_counter):
             return Delivery(Fate.REPLAYED, frame, message)
         self.last_counter = frame.counter
         return Delivery(Fate.ACCEPTED, frame, message)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from robowrangler.errors import CommandRefused
+from robowrangler.errors import CommandRefused, LinkTimeout
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import State
 from robowrangler_sim.sil import SilSession
@@ -107,4 +107,22 @@ def test_the_stored_epoch_again_is_refused_and_a_captured_frame_stays_a_replay(n
         host.send_raw(captured)
         assert host.run_until(lambda h: h.last_telemetry.time_ms > sent_ms + 30, timeout_s=0.2)
         assert host.last_telemetry.rx_replayed == 1 and host.last_telemetry.state == State.DISARMED
+        host.close()
+
+
+def test_a_connected_host_follows_a_re_provisioning_to_a_lower_session_by_saying_hello(native_build_dir: Path) -> None:
+    """A new epoch may put the session below the one a host signs for. The host's HELLO is answered for the new
+    session, and that answer (its nonce echoed) is what the host follows (robowrangler.link_session); the
+    former tuple rule of the scripted host dropped it as a replay and lost the device for good."""
+    with SilSession(speedup=None, key=KEY, provision=False) as sil:
+        sil.provision(key=KEY, session_epoch=0x50000)
+        host = ScriptedHost(sil)
+        host.run_for(0.6)
+        assert isinstance(host.command(gen.Arm()), gen.Ack) and isinstance(host.command(gen.Disarm()), gen.Ack)
+        sil.provision(session_epoch=0x1000)  # the device runs session 0x1000 at once
+        with pytest.raises(LinkTimeout):  # signed for session 0x50000: dropped unanswered
+            host.command(gen.Arm())
+        assert host.hello().session_id == 0x1000 and host.session_id == 0x1000
+        assert isinstance(host.command(gen.Arm()), gen.Ack)
+        assert host.run_until(lambda h: h.last_telemetry.state == State.ARMED, timeout_s=0.1)
         host.close()

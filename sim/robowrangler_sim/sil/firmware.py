@@ -65,6 +65,11 @@ class FirmwareProcess:
         self.serial_path = match.group(3)
         return self
 
+    @property
+    def pid(self) -> int | None:
+        """The firmware's process id (None before start)."""
+        return None if self._proc is None else self._proc.pid
+
     def poll(self) -> int | None:
         """Exit code if the process has ended, else None."""
         return None if self._proc is None else self._proc.poll()

@@ -4,10 +4,14 @@ The host sends its frames to the SIL firmware's command port and announces how m
 each SIL_SENSORS (host_frames_sent), so the firmware processes each frame at a known tick whatever
 the machine's speed. Everything the firmware sends back is decoded and kept, in order.
 
-It signs as a real host does: HELLO for the session, then every frame signed with the session's key
-(sil.key unless another is given) and a growing counter; device frames whose signature or freshness fails
-are dropped and counted in received.auth_failed / received.replayed. The counter is a plain count from 1
-(not the wall clock), so runs stay reproducible.
+It signs as a real host does, through the same LinkSession as the client (robowrangler.link_session): HELLO
+for the session, then every frame signed with the session's key (sil.key unless another is given) and a
+growing counter; device frames whose signature or freshness fails are dropped and counted in
+received.auth_failed / received.replayed. The counter is a plain count from 1 (not the wall clock), so runs
+stay reproducible.
+
+Scenarios run on it (production paths): a missing answer raises LinkTimeout, a refused command
+CommandRefused (robowrangler.errors), never an AssertionError.
 """
 
 from __future__ import annotations
@@ -15,6 +19,8 @@ from __future__ import annotations
 import socket
 from dataclasses import dataclass, field
 
+from robowrangler.errors import CommandRefused, LinkTimeout
+from robowrangler.link_session import LinkSession, Verdict
 from robowrangler.protocol import generated as gen
 from robowrangler_sim.sil.session import SilSession
 
@@ -41,11 +47,7 @@ class ScriptedHost:
     def __init__(self, sil: SilSession, *, heartbeat_period_s: float = 0.1, key: bytes | None = None,
                  handshake: bool = True) -> None:
         self.sil = sil
-        self.key = sil.key if key is None else key
-        self.session_id = 0
-        self.counter = 0
-        self._device_session = -1
-        self._device_counter = -1
+        self.link = LinkSession(sil.key if key is None else key)
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind(("127.0.0.1", 0))
         self._sock.setblocking(False)
@@ -60,18 +62,39 @@ class ScriptedHost:
         if handshake:
             self.hello()
 
+    @property
+    def key(self) -> bytes:
+        return self.link.key
+
+    @property
+    def session_id(self) -> int:
+        """The session this host signs for (0 before a SESSION_INFO answered a HELLO: the device drops such frames)."""
+        session = self.link.session_id
+        return 0 if session is None else session
+
+    @property
+    def counter(self) -> int:
+        """The counter of the last frame this host signed."""
+        return self.link.counter
+
+    @property
+    def url(self) -> str:
+        return self.sil.cmd_url
+
     def hello(self, *, timeout_s: float = 0.05) -> gen.SessionInfo:
-        """HELLO -> SESSION_INFO: learn the device's session (AssertionError if no answer)."""
+        """HELLO -> SESSION_INFO: learn the device's session (LinkTimeout if no answer within timeout_s simulated)."""
         nonce = 0x5EED0000 + len(self.received.session_infos)
-        self.send(gen.Hello(nonce))
+        self.send(self.link.hello(nonce))
         heartbeats, self.heartbeats_enabled = self.heartbeats_enabled, False  # nothing signed before the session
         try:
             self.run_until(lambda h: any(i.host_nonce == nonce for i in h.received.session_infos), timeout_s=timeout_s)
         finally:
             self.heartbeats_enabled = heartbeats
         info = next((i for i in self.received.session_infos if i.host_nonce == nonce), None)
-        assert info is not None, "no SESSION_INFO answered the HELLO"
-        self.session_id = info.session_id
+        if info is None:
+            raise LinkTimeout(f"no SESSION_INFO from {self.url} answered the HELLO (nonce 0x{nonce:08X}) within "
+                              f"{timeout_s:g} s of simulated time: is the SIL firmware running?",
+                              url=self.url, waited_s=timeout_s)
         return info
 
     # ---------------------------------------------------------------------------------------------
@@ -85,8 +108,9 @@ class ScriptedHost:
         """The bytes of message with seq: signed for the session with the next counter (HELLO unsigned)."""
         if not signed or message.KIND == gen.MsgKind.HELLO:
             return gen.encode_frame(message, seq)
-        self.counter += 1
-        return gen.encode_frame(message, seq, key=self.key, session_id=self.session_id, counter=self.counter)
+        if self.link.session_id is None:  # no session learnt (handshake=False): session 0, which the device drops
+            return gen.encode_frame(message, seq, key=self.key, session_id=0, counter=self.link.next_counter())
+        return self.link.sign(message, seq)
 
     def send(self, message: gen.Message, *, seq: int | None = None, signed: bool = True) -> int:
         """Frame (signed) and send a message; returns the seq used."""
@@ -131,16 +155,15 @@ class ScriptedHost:
             except gen.FrameError:
                 r.decode_errors += 1
                 continue
-            if not frame.signed or not gen.tag_valid(frame, self.key):
+            verdict = self.link.check(frame, msg)
+            if verdict == Verdict.BAD_TAG:
                 r.auth_failed += 1
                 # the one unsigned frame worth reading: an unprovisioned device's SESSION_INFO saying so
                 if not (not frame.signed and isinstance(msg, gen.SessionInfo) and msg.key_set == 0):
                     continue
-            elif (frame.session_id, frame.counter) <= (self._device_session, self._device_counter):
+            elif verdict == Verdict.STALE:
                 r.replayed += 1
                 continue
-            else:
-                self._device_session, self._device_counter = frame.session_id, frame.counter
             if isinstance(msg, gen.SessionInfo):
                 r.session_infos.append(msg)
                 continue
@@ -167,18 +190,27 @@ class ScriptedHost:
         return None
 
     def command(self, message: gen.Message, *, timeout_s: float = 0.05) -> gen.Ack | gen.Nack:
-        """Send a command and tick until its verdict arrives (AssertionError if none within timeout_s)."""
+        """Send a command and tick until its verdict arrives (LinkTimeout if none within timeout_s simulated)."""
         seq = self.send(message)
         self.run_until(lambda h: h.verdict_for(seq) is not None, timeout_s=timeout_s)
         verdict = self.verdict_for(seq)
-        assert verdict is not None, f"no ACK/NACK for {message.NAME} seq {seq} within {timeout_s} s"
+        if verdict is None:
+            raise LinkTimeout(f"{message.NAME} (seq {seq}): no ACK/NACK from {self.url} within {timeout_s:g} s of "
+                              "simulated time", url=self.url, waited_s=timeout_s)
+        return verdict
+
+    def command_accepted(self, message: gen.Message, *, timeout_s: float = 0.05) -> gen.Ack:
+        """command(), and CommandRefused (reason, state, detail) if the device NACKs it."""
+        verdict = self.command(message, timeout_s=timeout_s)
+        if isinstance(verdict, gen.Nack):
+            raise CommandRefused(command_msg_id=message.MSG_ID, reason=verdict.reason, state=verdict.state,
+                                 detail=verdict.detail)
         return verdict
 
     def arm_and_spin(self, rope_speed_mmps: int, *, settle_s: float = 1.5) -> None:
-        """ARM, SET_ROPE_SPEED, then run settle_s; AssertionError if either command is refused."""
+        """ARM, SET_ROPE_SPEED, then run settle_s; CommandRefused if either command is refused."""
         for message in (gen.Arm(), gen.SetRopeSpeed(rope_speed_mmps)):
-            verdict = self.command(message)
-            assert isinstance(verdict, gen.Ack), f"{message.NAME} refused: {verdict}"
+            self.command_accepted(message)
         self.run_for(settle_s)
 
     def telemetry_series(self, field_name: str, *, since_ms: int = 0) -> tuple[list[float], list[int]]:

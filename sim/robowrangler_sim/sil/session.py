@@ -5,7 +5,7 @@ runs one control tick and answers with its ESC pulse and spindle command, and th
 [t, t + tick) through the plant contract (plants/contract.py: ``update(inputs, dt_s) -> outputs``). Nothing
 depends on the wall clock, so the same seed and the same host frames at the same ticks give the same
 telemetry at any pacing. Pacing (``speedup``): 1.0 is real time, 10.0 ten times faster, None as fast
-as the machine goes.
+as the machine goes; a busy machine makes a paced session slower, never bursty (PACE_SLACK_S).
 """
 
 from __future__ import annotations
@@ -63,6 +63,10 @@ class SensorValues:
     spindle_answered: bool = False
     limit_switch: bool = False
 
+
+PACE_SLACK_S = 0.02
+"""A paced session further behind the wall clock than this re-anchors its pacing: speedup is an upper bound,
+never a rate to catch up to (at most PACE_SLACK_S x speedup of simulated time runs unpaced)."""
 
 SensorFilter = Callable[[SensorValues], "SensorValues | None"]
 """Per tick, before the exchange: returns the values the firmware sees, or None = the firmware misses this tick."""
@@ -130,6 +134,9 @@ class SilSession:
             a temporary folder removed at stop().
         spindle: the spindle plant the firmware's servo bus drives, as ``drive`` (SpindleInputs -> SpindleOutputs;
             None builds a SpindlePlant(spindle_params, seed=seed), so the register noise follows the seed).
+        tick_timeout_s: how often the lockstep checks that a slow firmware is still alive while it waits for a
+            tick's answer; a busy machine only makes the wait longer, only a firmware that exited (or stays
+            silent for minutes) ends the session (lockstep.LockstepLink).
 
     Each tick the session composes the plants through the contract only: the drive gets DriveInputs (the
     firmware's ESC pulse after the actuator filters, the scene's ``loads``, the rope exposed = the spindle's
@@ -155,7 +162,8 @@ class SilSession:
                  plant_timeout_s: int = 10, key: bytes | None = None, provision: bool = True,
                  state_file: str | Path | None = None,
                  drive: Plant | Callable[..., Plant] | None = None,
-                 spindle: Plant | Callable[..., Plant] | None = None) -> None:
+                 spindle: Plant | Callable[..., Plant] | None = None,
+                 tick_timeout_s: float = 2.0) -> None:
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):
@@ -169,6 +177,9 @@ class SilSession:
         self.last_spindle_speed_raw = 0
         self.tick_us = tick_us
         self.speedup = speedup
+        if not (isinstance(tick_timeout_s, (int, float)) and tick_timeout_s > 0):
+            raise ValueError(f"tick_timeout_s: expected a positive number of seconds, got {tick_timeout_s!r}")
+        self.tick_timeout_s = float(tick_timeout_s)
         self.trace_every = trace_every
         self.trace: list[PlantSample] = []
         self.ticks = 0
@@ -211,13 +222,24 @@ class SilSession:
         return self.drive_out.time_us * 1e-6
 
     @property
+    def firmware_pid(self) -> int | None:
+        """The SIL firmware's process id (None before start)."""
+        return self._firmware.pid
+
+    @property
+    def lockstep(self) -> LockstepLink | None:
+        """The plant's end of the lockstep socket (None before start)."""
+        return self._link
+
+    @property
     def serial_path(self) -> str:
         """The SIL device's USB serial (a pseudo-terminal): pyserial opens it like /dev/ttyACM0."""
         return self._firmware.serial_path
 
     def start(self) -> SilSession:
         self._firmware.start()
-        self._link = LockstepLink(self._firmware.plant_port)
+        self._link = LockstepLink(self._firmware.plant_port, tick_timeout_s=self.tick_timeout_s,
+                                  alive=lambda: self._firmware.poll() is None)
         if self._provision_on_start:
             self.provision(key=self.key)
         return self
@@ -349,8 +371,10 @@ class SilSession:
         ahead_s = (now_us - sim0_us) * 1e-6 / self.speedup - (now - wall0)
         if ahead_s > 0.002:
             time.sleep(ahead_s)
-        elif ahead_s < -0.5:
-            self._pace_origin = (now, now_us)  # fell behind (machine busy): do not race to catch up
+        elif ahead_s < -PACE_SLACK_S:
+            # Behind: the machine is busy. The simulated clock waits for it instead of racing to catch up: a
+            # burst of simulated time would pass while the hosts beside it (their heartbeats) are just as slow.
+            self._pace_origin = (now, now_us)
 
     def run_for(self, duration_s: float, *, host_frames_sent: Callable[[], int] | None = None) -> None:
         """Step for duration_s simulated seconds at the session's pacing."""
