@@ -65,7 +65,7 @@ uint16_t rw_core_take_seq(rw_core *core, rw_link_id link);
 void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len);
 /* Step 5's send: the next outbox frame to the peer, at most one datagram a tick (none when `sent`: this tick
  * already answered a command); over a keyed WiFi link signed in steps with up to mac_budget units of MAC work
- * (RW_CORE_MAC_TICK_BUDGET on an idle tick, less on a busier one, 0 when the tick has a periodic job). */
+ * (RW_CORE_MAC_TICK_BUDGET on an idle tick, less on a battery tick, 0 on a tick with another job). */
 void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t mac_budget);
 
 /* ---- rw_core_boot.c ---- */

@@ -36,20 +36,20 @@ void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool r
 }
 
 /* Step 5's send: the next outbox frame goes to the peer, at most one datagram a tick (none when this tick
- * already answered a command). Over a keyed WiFi link it is signed first, on idle ticks only and in steps
- * (rw_signer.h), each tick doing at most mac_budget blocks' worth of work: begin (copy, checksum:
- * RW_CORE_MAC_BEGIN_COST), absorb (one per block), finish and send (RW_CORE_MAC_FINISH_COST). So no tick
- * carries a whole MAC, and a telemetry frame leaves within a few idle ticks. Its counter is taken when it
+ * already answered a command). Over a keyed WiFi link it is signed first, in steps (rw_signer.h), each tick
+ * doing at most mac_budget blocks' worth of work (rw_core.h): begin (copy, checksum: RW_CORE_MAC_BEGIN_COST),
+ * absorb (one per block), finish and send (RW_CORE_MAC_FINISH_COST). So no tick carries a whole MAC, and a
+ * telemetry frame leaves within two idle ticks. Its counter is taken when it
  * leaves. A frame the signer refuses (not a well-formed frame) is dropped and counted (tx_dropped). */
 void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t mac_budget)
 {
     rw_signer *signer = &core->state.signer;
     const bool signed_link = core->state.peer_link == RW_LINK_WIFI && core->state.config.key_set != 0u;
-    const bool idle_tick = mac_budget > 0u;
-    if (!idle_tick && signed_link) {
-        return; /* nothing to do before the next idle tick: not even a look into the outbox */
+    const bool busy = rw_signer_busy(signer);
+    if (signed_link && (busy ? mac_budget == 0u : mac_budget < RW_CORE_MAC_BEGIN_COST)) {
+        return; /* no signing step fits this tick: not even a look into the outbox */
     }
-    if (!rw_signer_busy(signer)) {
+    if (!busy) {
         const rw_outbox_slot *slot = sent ? NULL : rw_outbox_peek(&core->state.outbox);
         if (slot == NULL) {
             return;
@@ -62,9 +62,6 @@ void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t m
             rw_outbox_pop(&core->state.outbox, slot);
             return;
         }
-        if (mac_budget < RW_CORE_MAC_BEGIN_COST) {
-            return;
-        }
         if (!rw_signer_begin(signer, slot->bytes, slot->len, rw_core_take_seq(core, RW_LINK_WIFI),
                              rw_core_session_id(core), core->state.config.key)) {
             rw_outbox_count_drop(&core->state.outbox); /* counted: its seq is spent */
@@ -73,7 +70,7 @@ void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t m
         (void)rw_signer_absorb(signer, mac_budget - RW_CORE_MAC_BEGIN_COST);
         return;
     }
-    if (!idle_tick) {
+    if (mac_budget == 0u) {
         return;
     }
     const size_t now = rw_signer_absorb(signer, mac_budget);

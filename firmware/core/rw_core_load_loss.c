@@ -39,8 +39,8 @@ void rw_core_load_loss_step(rw_core *core)
     const rw_speed_loop *loop = &core->state.loop;
     const bool steady = st == RW_STATE_AIRBORNE && rw_ramp_at_target(&loop->ramp, core->state.target_mps) &&
                         loop->pi.state.saturation == 0;
-    if (!rw_load_monitor_step(&core->state.load_monitor, steady, rw_pi_controller_integral(&loop->pi),
-                              rw_speed_loop_battery_v(loop), dt_s)) {
+    if (!rw_load_monitor_step_q16(&core->state.load_monitor, steady, rw_pi_controller_integral_q16(&loop->pi),
+                                  rw_f32_to_q16(rw_speed_loop_battery_v(loop)), dt_s)) {
         return;
     }
     float drop_mn = rw_load_monitor_drop_n(&core->state.load_monitor) * 1000.0f;

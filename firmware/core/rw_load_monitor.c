@@ -1,7 +1,6 @@
 #include "rw_load_monitor.h"
 
 #include <math.h>
-#include <string.h>
 
 #include "rw_float_bits.h"
 
@@ -38,13 +37,19 @@ void rw_load_monitor_reset(rw_load_monitor *m)
     rw_lowpass_reset(&m->state.reference);
     m->state.steady = false;
     m->state.reported = false;
-    m->state.steady_s = 0.0f;
-    m->state.drop_s = 0.0f;
+    m->state.steady_q16 = 0;
+    m->state.drop_q16 = 0;
 }
 
 void rw_load_monitor_prepare(rw_load_monitor *m, float dt_s)
 {
     m->state.active = rw_f32_positive(m->cfg.drop_n) && rw_load_monitor_config_is_valid(&m->cfg);
+    m->state.n_per_v_q16 = rw_f32_to_q16(m->cfg.n_per_v);
+    m->state.drop_n_q16 = rw_f32_to_q16(m->cfg.drop_n);
+    m->state.time_q16 = rw_f32_to_q16(m->cfg.time_s);
+    m->state.settle_q16 = rw_f32_to_q16(m->cfg.settle_s);
+    m->state.prepared_dt_s = rw_f32_positive_finite(dt_s) ? dt_s : 0.0f;
+    m->state.dt_q16 = rw_f32_to_q16(m->state.prepared_dt_s);
     m->state.load.cfg.tau_s = m->cfg.filter_tau_s;
     m->state.reference.cfg.tau_s = m->cfg.reference_tau_s;
     m->state.rise.cfg.tau_s = m->cfg.rise_tau_s;
@@ -67,20 +72,28 @@ float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resis
 }
 
 /* The filters are the core's Q16.16 low-pass (rw_lowpass.h); forces in N and volts fit Q16.16 with 1.5e-5
- * resolution. */
-static void lp_reset_to(rw_lowpass *f, float y)
-{
-    rw_lowpass_reset_to(f, rw_f32_to_q16(y));
-}
-
-static float lp_step(rw_lowpass *f, float x, float dt_s)
-{
-    return rw_f32_from_q16(rw_lowpass_step(f, rw_f32_to_q16(x), dt_s));
-}
-
+ * resolution, and the whole step runs in those integers. */
 static float lp_output(const rw_lowpass *f)
 {
     return rw_f32_from_q16(rw_lowpass_output_q16(f));
+}
+
+static int32_t sat_i32(int64_t x)
+{
+    return x > INT32_MAX ? INT32_MAX : (x < INT32_MIN ? INT32_MIN : (int32_t)x);
+}
+
+/* F = n_per_v integral V, N Q16.16 (two 32 x 32 -> 64-bit products, saturated). */
+static int32_t force_q16(int32_t n_per_v_q16, int32_t integral_q16, int32_t battery_q16)
+{
+    const int32_t volts_q16 = sat_i32(rw_mul_s32_s64(integral_q16, battery_q16) >> 16);
+    return sat_i32(rw_mul_s32_s64(volts_q16, n_per_v_q16) >> 16);
+}
+
+/* t + dt, saturated just past limit (the timers only need to know they are past it). */
+static int32_t timer_add(int32_t t_q16, int32_t dt_q16, int32_t limit_q16)
+{
+    return t_q16 >= limit_q16 ? t_q16 : t_q16 + dt_q16;
 }
 
 /* x finite and >= 0 (+0 included, -0 not), from the bit pattern: no soft-float call. */
@@ -96,51 +109,57 @@ bool rw_load_monitor_config_is_valid(const rw_load_monitor_config *cfg)
            nonneg_finite(cfg->battery_tau_s) && nonneg_finite(cfg->settle_s);
 }
 
-/* Comparisons and checks on bit patterns (rw_float_bits.h): on the M0+ every float compare is a libgcc call. */
-bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float battery_v, float dt_s)
+/* The law of rw_load_monitor.h in Q16.16: forces N, voltage V, times s. */
+bool rw_load_monitor_step_q16(rw_load_monitor *m, bool steady, int32_t integral_q16, int32_t battery_q16, float dt_s)
 {
-    const rw_load_monitor_config *c = &m->cfg;
-    if (!steady || !m->state.active || !rw_f32_finite(integral) || !rw_f32_finite(battery_v) ||
-        !rw_f32_positive_finite(dt_s)) {
+    if (!steady || !m->state.active || !rw_f32_positive_finite(dt_s)) {
         if (m->state.steady || m->state.reported) {
             rw_load_monitor_reset(m);
         }
         return false;
     }
+    const int32_t dt_q16 = rw_f32_same(dt_s, m->state.prepared_dt_s) ? m->state.dt_q16 : rw_f32_to_q16(dt_s);
     if (!m->state.steady) { /* a new steady spell: start from here */
         m->state.steady = true;
-        m->state.steady_s = 0.0f;
-        m->state.drop_s = 0.0f;
-        lp_reset_to(&m->state.battery, battery_v);
-        float force0_n = c->n_per_v * integral * battery_v;
-        lp_reset_to(&m->state.load, force0_n);
-        lp_reset_to(&m->state.reference, force0_n);
+        m->state.steady_q16 = 0;
+        m->state.drop_q16 = 0;
+        rw_lowpass_reset_to(&m->state.battery, battery_q16);
+        const int32_t force0 = force_q16(m->state.n_per_v_q16, integral_q16, battery_q16);
+        rw_lowpass_reset_to(&m->state.load, force0);
+        rw_lowpass_reset_to(&m->state.reference, force0);
     }
-    float force_n = c->n_per_v * integral * lp_step(&m->state.battery, battery_v, dt_s);
-    float load = lp_step(&m->state.load, force_n, dt_s);
-    if (rw_f32_lt(m->state.steady_s, c->settle_s)) { /* learning: the PI is still settling */
-        m->state.steady_s += dt_s;
-        lp_reset_to(&m->state.reference, load);
+    const int32_t battery_f_q16 = rw_lowpass_step(&m->state.battery, battery_q16, dt_s);
+    const int32_t load = rw_lowpass_step(&m->state.load, force_q16(m->state.n_per_v_q16, integral_q16, battery_f_q16), dt_s);
+    if (m->state.steady_q16 < m->state.settle_q16) { /* learning: the PI is still settling */
+        m->state.steady_q16 = timer_add(m->state.steady_q16, dt_q16, m->state.settle_q16);
+        rw_lowpass_reset_to(&m->state.reference, load);
         return false;
     }
-    float reference = lp_output(&m->state.reference);
-    if (rw_f32_ge(load, reference)) { /* rises: the reference climbs with rise_tau_s */
-        lp_reset_to(&m->state.rise, reference);
-        lp_reset_to(&m->state.reference, lp_step(&m->state.rise, load, dt_s));
-        m->state.drop_s = 0.0f;
+    const int32_t reference = rw_lowpass_output_q16(&m->state.reference);
+    if (load >= reference) { /* rises: the reference climbs with rise_tau_s */
+        rw_lowpass_reset_to(&m->state.rise, reference);
+        rw_lowpass_reset_to(&m->state.reference, rw_lowpass_step(&m->state.rise, load, dt_s));
+        m->state.drop_q16 = 0;
         return false;
     }
-    if (rw_f32_gt(reference - load, c->drop_n)) {
-        m->state.drop_s += dt_s; /* the reference holds while a drop is pending */
-        if (rw_f32_ge(m->state.drop_s, c->time_s) && !m->state.reported) {
+    if ((int64_t)reference - load > m->state.drop_n_q16) {
+        m->state.drop_q16 = timer_add(m->state.drop_q16, dt_q16, m->state.time_q16); /* the reference holds */
+        if (m->state.drop_q16 >= m->state.time_q16 && !m->state.reported) {
             m->state.reported = true;
             return true;
         }
         return false;
     }
-    m->state.drop_s = 0.0f;
-    (void)lp_step(&m->state.reference, load, dt_s);
+    m->state.drop_q16 = 0;
+    (void)rw_lowpass_step(&m->state.reference, load, dt_s);
     return false;
+}
+
+bool rw_load_monitor_step(rw_load_monitor *m, bool steady, float integral, float battery_v, float dt_s)
+{
+    const bool usable = rw_f32_finite(integral) && rw_f32_finite(battery_v);
+    return rw_load_monitor_step_q16(m, steady && usable, usable ? rw_f32_to_q16(integral) : 0,
+                                    usable ? rw_f32_to_q16(battery_v) : 0, dt_s);
 }
 
 float rw_load_monitor_load_n(const rw_load_monitor *m)

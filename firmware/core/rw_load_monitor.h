@@ -68,9 +68,15 @@ typedef struct rw_load_monitor {
         rw_lowpass battery;   /**< battery voltage as the integral follows it, V */
         bool steady;          /**< the previous step was steady */
         bool reported;        /**< the loss was reported (once per steady spell) */
-        float steady_s;       /**< time steady, s (saturates past settle_s) */
-        float drop_s;         /**< time the drop has exceeded drop_n, s */
         bool active;          /**< the configuration is valid and drop_n > 0 (prepared) */
+        int32_t steady_q16;   /**< time steady, s Q16.16 (saturates past settle_s) */
+        int32_t drop_q16;     /**< time the drop has exceeded drop_n, s Q16.16 (saturates past time_s) */
+        int32_t n_per_v_q16;  /**< n_per_v, N/V Q16.16 (prepared) */
+        int32_t drop_n_q16;   /**< drop_n, N Q16.16 (prepared) */
+        int32_t time_q16;     /**< time_s, s Q16.16 (prepared) */
+        int32_t settle_q16;   /**< settle_s, s Q16.16 (prepared) */
+        float prepared_dt_s;  /**< the step dt_q16 is for (0: none) */
+        int32_t dt_q16;       /**< prepared_dt_s, s Q16.16 */
     } state;                  /**< private history */
 } rw_load_monitor;
 
@@ -87,6 +93,12 @@ void rw_load_monitor_prepare(rw_load_monitor *m, float dt_s);
 /** n_per_v for motor_count motors of kv_rpm_per_v behind resistance_ohm each, on wheels of wheel_radius_m;
  *  0 when an argument is not finite and > 0. */
 float rw_load_monitor_n_per_v(float motor_count, float kv_rpm_per_v, float resistance_ohm, float wheel_radius_m);
+/**
+ * One step in fixed point (the core's: no soft-float call): integral_q16 the speed PI's integral term
+ * (throttle fraction, Q16.16), battery_q16 the feed-forward's battery voltage (V, Q16.16); otherwise as
+ * rw_load_monitor_step.
+ */
+bool rw_load_monitor_step_q16(rw_load_monitor *m, bool steady, int32_t integral_q16, int32_t battery_q16, float dt_s);
 /**
  * One speed-loop step. steady: airborne at a setpoint that is not moving, PI not saturated (else the monitor
  * restarts and returns false). integral: the speed PI's integral term (throttle fraction); battery_v: the

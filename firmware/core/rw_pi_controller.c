@@ -161,10 +161,14 @@ int32_t rw_pi_controller_step(rw_pi_controller *c, int32_t setpoint_q16, int32_t
     return c->state.output_q16;
 }
 
+int32_t rw_pi_controller_integral_q16(const rw_pi_controller *c)
+{
+    const int64_t q16 = c->state.integral_q32 >> 16;
+    return q16 > INT32_MAX ? INT32_MAX : (q16 < INT32_MIN ? INT32_MIN : (int32_t)q16);
+}
+
 float rw_pi_controller_integral(const rw_pi_controller *c)
 {
     /* to Q16 (2^-16 of the output unit), then to float by bit operations (no 64-bit float conversion) */
-    int64_t q16 = c->state.integral_q32 >> 16;
-    q16 = q16 > INT32_MAX ? INT32_MAX : (q16 < INT32_MIN ? INT32_MIN : q16);
-    return rw_f32_from_q16((int32_t)q16);
+    return rw_f32_from_q16(rw_pi_controller_integral_q16(c));
 }

@@ -68,6 +68,8 @@ int32_t rw_pi_controller_step(rw_pi_controller *c, int32_t setpoint_q16, int32_t
 int32_t rw_pi_controller_output_q16(const rw_pi_controller *c);
 /** The integral term in output units, to 2^-16 (for slow consumers such as the load-loss check). */
 float rw_pi_controller_integral(const rw_pi_controller *c);
+/** The same, Q16 (saturated to the int32 range). */
+int32_t rw_pi_controller_integral_q16(const rw_pi_controller *c);
 /** true when the gains are finite and >= 0 and out_min <= out_max, both finite. */
 bool rw_pi_controller_config_is_valid(const rw_pi_controller_config *cfg);
 

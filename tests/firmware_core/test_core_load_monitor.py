@@ -31,7 +31,9 @@ class Config(ctypes.Structure):
 class _State(ctypes.Structure):
     _fields_ = [("load", Lowpass), ("reference", Lowpass), ("rise", Lowpass), ("battery", Lowpass),
                 ("steady", c_bool), ("reported", c_bool),
-                ("steady_s", c_float), ("drop_s", c_float), ("active", c_bool)]
+                ("active", c_bool), ("steady_q16", ctypes.c_int32), ("drop_q16", ctypes.c_int32),
+                ("n_per_v_q16", ctypes.c_int32), ("drop_n_q16", ctypes.c_int32), ("time_q16", ctypes.c_int32),
+                ("settle_q16", ctypes.c_int32), ("prepared_dt_s", c_float), ("dt_q16", ctypes.c_int32)]
 
 
 class Monitor(ctypes.Structure):
