@@ -725,8 +725,10 @@ class Client:
         """A heartbeat now if the device, by its own clock, has heard none for a heartbeat period."""
         period_s = 1.0 / self.heartbeat_hz
         last_s = self._device_heartbeat_s
+        idle = self._heartbeat_idle  # paused (a proxy with no live tool): no heartbeat by either clock
         if (not self._connected or sample.heartbeat_age_s < period_s
-                or (last_s is not None and 0.0 <= sample.time_s - last_s < period_s)):
+                or (last_s is not None and 0.0 <= sample.time_s - last_s < period_s)
+                or (idle is not None and idle())):
             return
         self._device_heartbeat_s = sample.time_s
         try:
