@@ -1,5 +1,5 @@
 """`wrangler` as a new user meets it (issue 18): first commands on a fresh HOME, bad numbers, no subcommand,
---version, `help CMD`, --json after the verb. In-process through main(argv, env), against the scripted device."""
+--version, `help CMD`, --json after the verb. In-process through main(argv, env), against the real firmware core (tests/host/core_device.py)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,18 @@ import pytest
 
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.protocol.generated import PARAMS
-from scripted_device import ScriptedDevice
-from test_cli import wrangler
+from core_device import CoreDevice
+from core_harness import FakeSpindle
+from test_cli import FAST_SPINDLE, wrangler
+
+@pytest.fixture
+def device(core_lib):
+    """The real core past its arming hold on its serial link (the CLI's default: no key), reached over UDP, with a
+    fast lead screw, its clock at twice the wall clock (as test_cli.py's)."""
+    with CoreDevice(core_lib, link="serial", params=FAST_SPINDLE, spindle=FakeSpindle(lead_mm_per_rev=20.0),
+                    boot_s=0.25, speedup=2.0) as dev:
+        yield dev
+
 
 
 def test_keygen_creates_the_missing_config_folder_privately(tmp_path) -> None:
@@ -40,10 +50,11 @@ def test_keygen_errors_name_the_argument_the_user_typed(tmp_path) -> None:
     (["watch", "--duration", "inf"], "'inf' is not a finite number of seconds"),
     (["param", "set", "encoder_counts_per_rev", "64.5"], "encoder_counts_per_rev: expected an integer"),
 ])
-def test_numbers_nothing_can_carry_are_usage_errors_before_the_link(argv: list[str], expected: str) -> None:
-    with ScriptedDevice() as dev:
+def test_numbers_nothing_can_carry_are_usage_errors_before_the_link(argv: list[str], expected: str,
+                                                                    core_lib) -> None:
+    with CoreDevice(core_lib, link="serial") as dev:
         run = wrangler("--url", dev.url, *argv)
-        assert dev.received == []
+        assert dev.host_sent() == []
     assert run.status == ExitStatus.USAGE and expected in run.stderr, run.stderr
     assert run.stderr.count("\n") == 1 and "internal error" not in run.stderr
 
@@ -71,19 +82,19 @@ def test_version_and_help_command() -> None:
 
 @pytest.mark.parametrize("argv", [["status", "--json"], ["watch", "--duration", "0.1", "--json"],
                                   ["param", "get", "tov_mps", "--json"], ["arm", "--json"]])
-def test_json_works_after_any_verb(device: ScriptedDevice, argv: list[str]) -> None:
+def test_json_works_after_any_verb(device: CoreDevice, argv: list[str]) -> None:
     run = wrangler("--url", device.url, *argv)
     assert run.status == ExitStatus.OK, run.stderr
     assert run.json_lines and all(isinstance(line, dict) for line in run.json_lines)
 
 
-def test_loop_progress_timeout_and_no_wait_say_what_the_guide_does(device: ScriptedDevice) -> None:
+def test_loop_progress_timeout_and_no_wait_say_what_the_guide_does(device: CoreDevice) -> None:
     """Item 4: a guide move needs a live host. The wait shows progress; a --within timeout says where the guide
     is and that it stops there; --no-wait says the guide goes on only while a host is alive."""
     url = ("--url", device.url)
     assert wrangler(*url, "arm").status == ExitStatus.OK
     assert wrangler(*url, "home").status == ExitStatus.OK
-    device.guide_speed_mps = 0.02  # 20 mm/s: 150 mm take 7.5 s
+    # the fixture's guide moves at most 15 mm/s: 150 mm take seconds more than the 2.5 s allowed
     late = wrangler(*url, "loop", "150", "--within", "2.5")
     assert late.status == ExitStatus.ERROR and late.stdout == ""
     lines = late.stderr.splitlines()
@@ -97,7 +108,7 @@ def test_loop_progress_timeout_and_no_wait_say_what_the_guide_does(device: Scrip
     assert "alone it stops where it is" in " ".join(helped.split())
 
 
-def test_spin_hold_below_the_tov_guard_says_the_loop_never_flew(device: ScriptedDevice) -> None:
+def test_spin_hold_below_the_tov_guard_says_the_loop_never_flew(device: CoreDevice) -> None:
     assert wrangler("--url", device.url, "arm").status == ExitStatus.OK
     run = wrangler("--url", device.url, "spin", "2.5", "--hold", "0.4")
     assert run.status == ExitStatus.OK, run.stderr
@@ -106,14 +117,14 @@ def test_spin_hold_below_the_tov_guard_says_the_loop_never_flew(device: Scripted
     assert flown.json_lines[-1]["airborne"] is True
 
 
-def test_spin_zero_points_at_spindown(device: ScriptedDevice) -> None:
+def test_spin_zero_points_at_spindown(device: CoreDevice) -> None:
     assert wrangler("--url", device.url, "arm").status == ExitStatus.OK
     run = wrangler("--url", device.url, "spin", "0")
     assert run.status == ExitStatus.NACK and "command spindown (`wrangler spindown`)" in run.stderr
     assert "limit crossed" not in run.stderr
 
 
-def test_two_hosts_through_a_proxy_the_holder_reports_what_the_other_did(device: ScriptedDevice, tmp_path) -> None:
+def test_two_hosts_through_a_proxy_the_holder_reports_what_the_other_did(device: CoreDevice, tmp_path) -> None:
     """Host A holds 4 m/s through `wrangler proxy`; host B changes the speed, then ESTOPs. A says the target was
     changed by another host, and after the ESTOP that the device left the spin, not that it was interrupted."""
     import socket
@@ -154,7 +165,7 @@ def test_two_hosts_through_a_proxy_the_holder_reports_what_the_other_did(device:
     assert proxy_run[0].status == ExitStatus.OK, proxy_run[0].stderr
 
 
-def test_param_list_is_a_table_with_units_defaults_and_changes_marked(device: ScriptedDevice) -> None:
+def test_param_list_is_a_table_with_units_defaults_and_changes_marked(device: CoreDevice) -> None:
     assert wrangler("--url", device.url, "param", "set", "TOV_Margin", "1.3").stdout == "tov_margin = 1.3 1\n"
     table = wrangler("--url", device.url, "param", "list").stdout.splitlines()
     assert table[0].split() == ["name", "value", "unit", "default", "range"]
@@ -165,7 +176,7 @@ def test_param_list_is_a_table_with_units_defaults_and_changes_marked(device: Sc
     assert len(rows) == len(PARAMS)
 
 
-def test_param_names_are_case_insensitive_with_did_you_mean(device: ScriptedDevice) -> None:
+def test_param_names_are_case_insensitive_with_did_you_mean(device: CoreDevice) -> None:
     assert wrangler("--url", device.url, "param", "get", "TOV_MPS").stdout == "tov_mps = 2.6 m/s\n"
     typo = wrangler("--url", device.url, "param", "get", "Tov_Mrgin")
     assert typo.status == ExitStatus.USAGE and "did you mean tov_margin" in typo.stderr

@@ -19,11 +19,22 @@ from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.cli.main import main
 from robowrangler.recorder import schemas_generated as sg
 from robowrangler.recorder.json_schema_check import first_error
-from scripted_device import ScriptedDevice
-from test_cli import wrangler
+import pytest
+from core_device import CoreDevice
+from core_harness import FakeSpindle
+from test_cli import FAST_SPINDLE, wrangler
 
 SUBPROTOCOL = "foxglove.sdk.v1"  # the Foxglove WebSocket protocol (formerly foxglove.websocket.v1)
 MESSAGE_DATA = 0x01  # binary opcode of a message on a subscription
+
+@pytest.fixture
+def device(core_lib):
+    """The real core past its arming hold on its serial link (the CLI's default: no key), reached over UDP, with a
+    fast lead screw, its clock at twice the wall clock (as test_cli.py's)."""
+    with CoreDevice(core_lib, link="serial", params=FAST_SPINDLE, spindle=FakeSpindle(lead_mm_per_rev=20.0),
+                    boot_s=0.25, speedup=2.0) as dev:
+        yield dev
+
 
 
 def _free_udp_port() -> int:
@@ -32,7 +43,7 @@ def _free_udp_port() -> int:
         return s.getsockname()[1]
 
 
-def test_a_websocket_client_sees_the_link_live_with_the_recording_schemas(device: ScriptedDevice) -> None:
+def test_a_websocket_client_sees_the_link_live_with_the_recording_schemas(device: CoreDevice) -> None:
     port = _free_udp_port()
     runs: list = []
     err = io.StringIO()
@@ -89,7 +100,7 @@ def test_a_websocket_client_sees_the_link_live_with_the_recording_schemas(device
     assert params["tov_guard_mps"] == params["tov_mps"] * params["tov_margin"]
 
 
-def test_watch_foxglove_serves_the_stream_it_prints(device: ScriptedDevice) -> None:
+def test_watch_foxglove_serves_the_stream_it_prints(device: CoreDevice) -> None:
     err = io.StringIO()
     out = io.StringIO()
     runs: list = []
