@@ -39,7 +39,8 @@ static inline uint8_t *rw_fuzz_exact_copy(const uint8_t *data, size_t n)
     X(retract, RETRACT) X(grasp, GRASP) X(release, RELEASE) X(home, HOME) X(hello, HELLO)                     \
     X(provision_set_key, PROVISION_SET_KEY) X(provision_set_wifi_ssid, PROVISION_SET_WIFI_SSID)               \
     X(provision_set_wifi_password, PROVISION_SET_WIFI_PASSWORD) X(provision_commit, PROVISION_COMMIT)        \
-    X(provision_get, PROVISION_GET) X(sil_sensors, SIL_SENSORS) X(sil_actuators, SIL_ACTUATORS)
+    X(provision_get, PROVISION_GET) X(sil_sensors, SIL_SENSORS) X(sil_actuators, SIL_ACTUATORS)             \
+    X(burst_start, BURST_START) X(burst_data, BURST_DATA)
 
 /* Unpack payload (exactly the message's payload length) into its struct, re-encode it with seq into out
  * (out_cap bytes); returns the encoded frame length (0: unknown id). */

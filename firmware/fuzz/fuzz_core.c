@@ -158,7 +158,7 @@ static void check_outgoing(const fake_link *l, const uint8_t *frame, size_t len)
     RW_FUZZ_REQUIRE(rw_frame_decode(copy, len, &f) == RW_DECODE_OK);
     const rw_msg_info *info = rw_msg_info_find(f.msg_id);
     RW_FUZZ_REQUIRE(info->kind == RW_MSG_KIND_REPLY || info->kind == RW_MSG_KIND_TELEMETRY ||
-                    info->kind == RW_MSG_KIND_EVENT);
+                    info->kind == RW_MSG_KIND_EVENT || info->kind == RW_MSG_KIND_BURST);
     const rw_config *c = &h.core.state.config;
     bool is_signed = (f.flags & RW_FRAME_FLAG_SIGNED) != 0u;
     if (l->id == RW_LINK_WIFI && c->key_set != 0u) {
