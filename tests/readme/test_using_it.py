@@ -25,6 +25,8 @@ NOT_RUN = {  # README line -> why this test does not run it
     "uv run wrangler sil --scenario tennis_ball --render out/ball":
         "a whole MuJoCo wrangle (minutes); tests/sil_chain runs the scenarios",
     "uv run wrangler sil --scenario door_handle --viewer": "opens MuJoCo's viewer window: needs a display",
+    "uv run wrangler identify photos/manifest.json --out my_table.json":
+        "needs the user's photos of the flying loop; tests/sim_identify runs identify on synthetic photos",
 }
 
 
@@ -52,7 +54,10 @@ def test_the_readme_using_it_block_runs_top_to_bottom_on_a_fresh_home(native_bui
     commands = [line.split("  #")[0].rstrip() for line in lines]
     assert set(NOT_RUN) <= set(commands), "a line this test skips is no longer in the README: update NOT_RUN"
     device_port, proxy_port = _free_udp_ports(2)
-    script = ["set -euo pipefail", "set -x", "set -m", f"export ROBOWRANGLER_URL=udp://127.0.0.1:{device_port}"]
+    # on any exit (a failing line under set -e too) the background jobs go with the shell, so that their open
+    # pipes never keep this test waiting past the failure it should report
+    script = ["set -euo pipefail", "set -x", "set -m", "trap 'kill $(jobs -p) 2>/dev/null || true' EXIT",
+              f"export ROBOWRANGLER_URL=udp://127.0.0.1:{device_port}"]
     for command in commands:
         if command in NOT_RUN:
             script.append(f": not run: {command}")
