@@ -23,9 +23,11 @@ class Provisioner:
     """Sends PROVISION_* and PARAM_SET over a trusted transport and waits for each answer.
 
     pump: called while waiting (a SIL stepped in lockstep advances its clock here); None sleeps briefly.
+    timeout_s: how long to wait for each answer before LinkTimeout: a bound for a firmware that is not there,
+        generous because a busy machine (a test suite on both cores) delays a present one by seconds.
     """
 
-    def __init__(self, transport: Transport, *, url: str = "serial", timeout_s: float = 3.0,
+    def __init__(self, transport: Transport, *, url: str = "serial", timeout_s: float = 15.0,
                  pump: Callable[[], None] | None = None) -> None:
         self._transport = transport
         self._url = url
