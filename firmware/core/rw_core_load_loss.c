@@ -16,7 +16,7 @@
 #include "rw_core_internal.h"
 #include "rw_float_bits.h"
 
-/* Motors on the one ESC command (DESIGN.md: two, pinching the rope). */
+/* Motors on the one ESC command (two, pinching the rope: docs/architecture.md, docs/drive_plant.md). */
 #define RW_CORE_DRIVE_MOTOR_COUNT 2.0f
 
 void rw_core_load_loss_apply_params(rw_core *core)
