@@ -86,6 +86,28 @@ bool rw_arduino_esc_output_begin(rw_arduino_esc_output *esc, uint16_t min_us, ui
     return true;
 }
 
+namespace {
+
+/* Both compare registers to `counts` (TCC1 counts, 1/3 us) in the same period; skipped when they hold it already
+ * (saves two synchronised register writes per tick). */
+void load_counts(rw_arduino_esc_output *esc, uint32_t counts)
+{
+    if (counts == esc->pulse_counts) {
+        return;
+    }
+    tcc1_sync(TCC_SYNCBUSY_CTRLB);
+    TCC1->CTRLBSET.reg = TCC_CTRLBSET_LUPD;
+    tcc1_sync(TCC_SYNCBUSY_CTRLB | TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
+    TCC1->CCB[0].reg = counts;
+    TCC1->CCB[1].reg = counts;
+    tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
+    TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
+    esc->pulse_counts = counts;
+    esc->pulse_us = static_cast<uint16_t>(((counts + 1u) * 21846u) >> 16); /* / 3 rounded, no division on the M0+ */
+}
+
+} // namespace
+
 void rw_arduino_esc_output_write_us(rw_arduino_esc_output *esc, uint16_t pulse_us)
 {
     uint16_t us = pulse_us;
@@ -96,19 +118,7 @@ void rw_arduino_esc_output_write_us(rw_arduino_esc_output *esc, uint16_t pulse_u
         us = esc->max_us;
         ++esc->out_of_range;
     }
-    if (static_cast<uint32_t>(us) * TCC_COUNTS_PER_US == esc->pulse_counts) {
-        return; /* nothing to do: saves two synchronised register writes per tick */
-    }
-    const uint32_t counts = static_cast<uint32_t>(us) * TCC_COUNTS_PER_US;
-    tcc1_sync(TCC_SYNCBUSY_CTRLB);
-    TCC1->CTRLBSET.reg = TCC_CTRLBSET_LUPD;
-    tcc1_sync(TCC_SYNCBUSY_CTRLB | TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
-    TCC1->CCB[0].reg = counts;
-    TCC1->CCB[1].reg = counts;
-    tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
-    TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
-    esc->pulse_us = us;
-    esc->pulse_counts = counts;
+    load_counts(esc, static_cast<uint32_t>(us) * TCC_COUNTS_PER_US);
 }
 
 void rw_arduino_esc_output_write_third_us(rw_arduino_esc_output *esc, uint16_t pulse_third_us)
@@ -123,18 +133,7 @@ void rw_arduino_esc_output_write_third_us(rw_arduino_esc_output *esc, uint16_t p
         counts = hi;
         ++esc->out_of_range;
     }
-    if (counts == esc->pulse_counts) {
-        return; /* nothing to do: saves two synchronised register writes per tick */
-    }
-    tcc1_sync(TCC_SYNCBUSY_CTRLB);
-    TCC1->CTRLBSET.reg = TCC_CTRLBSET_LUPD;
-    tcc1_sync(TCC_SYNCBUSY_CTRLB | TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
-    TCC1->CCB[0].reg = counts;
-    TCC1->CCB[1].reg = counts;
-    tcc1_sync(TCC_SYNCBUSY_CCB0 | TCC_SYNCBUSY_CCB1);
-    TCC1->CTRLBCLR.reg = TCC_CTRLBCLR_LUPD;
-    esc->pulse_counts = counts;
-    esc->pulse_us = static_cast<uint16_t>(((counts + 1u) * 21846u) >> 16); /* / 3 rounded, no division on the M0+ */
+    load_counts(esc, counts);
 }
 
 void rw_arduino_esc_output_apply(rw_arduino_esc_output *esc)
