@@ -63,7 +63,7 @@ def group_of(func: str) -> str:
         return "integer division"
     if func == "rw_crc16_ccitt":
         return "CRC-16 (table)"
-    if func.startswith(("rw_siphash", "rw_signer_")) or func in ("compress", "load_le64"):
+    if func.startswith(("rw_siphash", "rw_signer_", "sip_")) or func in ("compress", "load_le32", "finalize_rounds"):
         return "SipHash-2-4 (MAC)"
     if func in ("__aeabi_llsl", "__aeabi_llsr", "__aeabi_lasr", "__ashldi3", "__lshrdi3", "__ashrdi3"):
         return "64-bit shifts (libgcc)"

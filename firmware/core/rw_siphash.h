@@ -18,7 +18,7 @@ extern "C" {
 #define RW_SIPHASH_BLOCK_LEN 8u
 
 typedef struct rw_siphash {
-    uint64_t v[4];    /* the SipHash state words v0..v3 */
+    uint32_t v[8];    /* the SipHash state words v0..v3 as 32-bit halves: v[2i] low, v[2i+1] high (rw_siphash.c) */
     size_t absorbed; /* message bytes absorbed so far (a whole number of blocks) */
 } rw_siphash;
 

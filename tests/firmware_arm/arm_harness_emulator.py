@@ -353,17 +353,20 @@ class HarnessEmulator:
         """The session id of the core's current boot (its stored boot counter; 1 after the first tick)."""
         return self.call("harness_session_id")[0]
 
-    def siphash(self, data: bytes, *, count: bool = False) -> tuple[int, CallProfile | None]:
+    def siphash(self, data: bytes, *, count: bool = False, offset: int = 0) -> tuple[int, CallProfile | None]:
         """rw_siphash24(harness_test_key, data) run on the emulated core: (64-bit tag, profile or None).
 
-        data is staged in harness_rx (at most its size); use between ticks only.
+        data is staged in harness_rx at byte offset `offset` (0..3: 0 is word aligned, the others exercise the
+        unaligned path); at most its size; use between ticks only.
         """
         from unicorn.arm_const import UC_ARM_REG_R1
 
         cap = self.symbols["harness_rx"].size
-        if len(data) > cap:
-            raise ValueError(f"data: expected at most {cap} bytes, got {len(data)}")
-        rx = self.symbols["harness_rx"].address
+        if not 0 <= offset <= 3:
+            raise ValueError(f"offset: expected 0..3, got {offset}")
+        if len(data) + offset > cap:
+            raise ValueError(f"data: expected at most {cap - offset} bytes, got {len(data)}")
+        rx = self.symbols["harness_rx"].address + offset
         self.uc.mem_write(rx, bytes(data))
         low, profile = self.call("rw_siphash24", self.symbols["harness_test_key"].address, rx, len(data), count=count)
         return low | (self.uc.reg_read(UC_ARM_REG_R1) << 32), profile
