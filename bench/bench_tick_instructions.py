@@ -76,8 +76,7 @@ def group_of(func: str) -> str:
     return "core logic"
 
 
-MAC_ROOTS = ("rw_frame_tag_valid", "rw_frame_sign", "rw_signer_load", "rw_signer_checksum", "rw_signer_absorb",
-             "rw_signer_seal_counter", "rw_signer_seal_last", "rw_signer_seal_tag")
+MAC_ROOTS = ("rw_frame_tag_valid", "rw_frame_sign", "rw_signer_begin", "rw_signer_absorb", "rw_signer_finish")
 
 # What ran in a tick, by the functions it executed (each is in its own translation unit: never inlined).
 TICK_PARTS = (
@@ -85,13 +84,9 @@ TICK_PARTS = (
     ("spindle", "rw_spindle_step"),
     ("telemetry pack", "rw_msg_telemetry_pack"),
     ("battery", "rw_throttle_map_prepare_battery"),
-    ("mac load", "rw_signer_load"),
-    ("mac crc", "rw_signer_checksum"),
+    ("mac begin", "rw_signer_begin"),
     ("mac absorb", "rw_signer_absorb"),
-    ("mac seal", "rw_signer_seal_counter"),
-    ("mac last", "rw_signer_seal_last"),
-    ("mac tag", "rw_signer_seal_tag"),
-    ("send", "rw_signer_sent"),
+    ("mac finish+send", "rw_signer_finish"),
     ("rx verify", "rw_frame_tag_valid"),
     ("reply sign", "rw_frame_sign"),
     ("burst pack", "rw_msg_burst_data_pack"),

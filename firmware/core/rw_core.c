@@ -97,7 +97,6 @@ void rw_core_init(rw_core *core)
     core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
     core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
     rw_burst_reset(&core->state.burst);
-    core->state.load_check_due_ms = RW_CORE_LOAD_CHECK_OFFSET_MS;
 }
 
 /* Bindings hand rw_config_set_params the core's address for its parameter values. */
@@ -140,14 +139,13 @@ void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, 
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_EVENT, frame, len);
 }
 
-/* The periodic job of an "other" tick (the schedule, rw_core.h), at most one a tick, in this order; a battery
- * refresh and the signing of queued frames share what the job leaves of the tick's budget. */
+/* The periodic job of an "other" tick (the schedule, rw_core.h), at most one a tick, in this order. */
 typedef enum {
-    RW_CORE_JOB_NONE = 0,   /* an idle tick: the whole budget signs */
+    RW_CORE_JOB_NONE = 0,   /* an idle tick: the signing of queued frames advances */
     RW_CORE_JOB_TELEMETRY,  /* pack a TELEMETRY frame */
-    RW_CORE_JOB_SPINDLE,    /* the spindle loop */
-    RW_CORE_JOB_LOAD_CHECK, /* the load-loss check */
-    RW_CORE_JOB_BURST,      /* pack the next BURST_DATA frame of a captured burst */
+    RW_CORE_JOB_SPINDLE,    /* the spindle loop and the load-loss check */
+    RW_CORE_JOB_BATTERY,    /* the feed-forward's battery factor (one division) for a changed reading, and
+                               signing with what is left of the budget */
 } rw_core_job;
 
 static bool due(uint32_t now_ms, uint32_t due_ms)
@@ -164,22 +162,11 @@ static rw_core_job other_tick_job(const rw_core *core)
     if (due(now_ms, core->state.spindle_due_ms)) {
         return RW_CORE_JOB_SPINDLE;
     }
-    if (due(now_ms, core->state.load_check_due_ms)) {
-        return RW_CORE_JOB_LOAD_CHECK;
-    }
-    if (rw_burst_streaming(&core->state.burst) && !core->state.burst_frame_queued) {
-        return RW_CORE_JOB_BURST;
+    if (!rw_f32_same(core->state.battery_v, rw_speed_loop_battery_v(&core->state.loop))) {
+        return RW_CORE_JOB_BATTERY;
     }
     return RW_CORE_JOB_NONE;
 }
-
-static const uint8_t job_cost[] = {
-    [RW_CORE_JOB_NONE] = 0u,
-    [RW_CORE_JOB_TELEMETRY] = RW_CORE_COST_TELEMETRY_PACK,
-    [RW_CORE_JOB_SPINDLE] = RW_CORE_COST_SPINDLE,
-    [RW_CORE_JOB_LOAD_CHECK] = RW_CORE_COST_LOAD_CHECK,
-    [RW_CORE_JOB_BURST] = RW_CORE_COST_BURST_PACK,
-};
 
 void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
 {
@@ -238,10 +225,9 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     bool sent = hal->serial != NULL && rw_core_handle_datagram(core, hal, RW_LINK_SERIAL);
     sent = rw_core_handle_datagram(core, hal, RW_LINK_WIFI) || sent;
 
-    /* 3. supervision; the periodic jobs only on other ticks, one job a tick, within the tick's work budget */
+    /* 3. supervision; the periodic jobs only on other ticks, one job a tick */
     rw_core_supervise(core, dt_s, dt_ms, primed ? counts_delta : 1u);
     const rw_core_job job = speed_tick ? RW_CORE_JOB_NONE : other_tick_job(core);
-    uint32_t budget = speed_tick ? RW_CORE_SPEED_TICK_MAC_UNITS : RW_CORE_TICK_WORK_UNITS - job_cost[job];
     switch (job) {
     case RW_CORE_JOB_SPINDLE: {
         /* the real time since the last spindle step: after a tick gap the dead reckoning must cover it */
@@ -250,30 +236,23 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
             elapsed_ms = RW_CORE_SPINDLE_PERIOD_MS; /* first step */
         }
         rw_core_spindle_step(core, hal, elapsed_ms);
+        /* the load-loss check shares the 10 ms slot (its time constants are 50 ms and more; it reads the PI's
+         * integral, which the speed ticks keep current). Its dt is the slot's period: the slot keeps it but
+         * when a telemetry tick holds it back once (2 ms), and a constant dt keeps the filters' coefficients
+         * prepared (a float division each). */
+        rw_core_load_loss_step(core);
         core->state.spindle_last_ms = core->state.uptime_ms;
         core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
         break;
     }
-    case RW_CORE_JOB_LOAD_CHECK:
-        /* the load-loss check has its own 10 ms slot (its time constants are 50 ms and more; it reads the PI's
-         * integral, which the speed ticks keep current). Its dt is the slot's period: the slot keeps it but when
-         * another job holds it back a tick or two, and a constant dt keeps the filters' coefficients prepared (a
-         * float division each). */
-        rw_core_load_loss_step(core);
-        core->state.load_check_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
+    case RW_CORE_JOB_BATTERY:
+        /* the feed-forward's battery division happens here, never on a speed tick (it sees the battery a few
+         * ms late) */
+        rw_speed_loop_set_battery(loop, core->state.battery_v);
         break;
     case RW_CORE_JOB_TELEMETRY:
-    case RW_CORE_JOB_BURST:
     case RW_CORE_JOB_NONE:
         break;
-    }
-    /* the feed-forward's battery division happens on an other tick that has room for it, never on a speed tick,
-     * at most every RW_CORE_BATTERY_PERIOD_MS (it sees the battery up to that late) */
-    if (!speed_tick && budget >= RW_CORE_COST_BATTERY && due(core->state.uptime_ms, core->state.battery_due_ms) &&
-        !rw_f32_same(core->state.battery_v, rw_speed_loop_battery_v(loop))) {
-        rw_speed_loop_set_battery(loop, core->state.battery_v);
-        budget -= RW_CORE_COST_BATTERY;
-        core->state.battery_due_ms = core->state.uptime_ms + RW_CORE_BATTERY_PERIOD_MS;
     }
 
     /* 4. control: the speed step on speed ticks; a state that stops driving the rope sets the ESC minimum at
@@ -308,8 +287,14 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         late_ms = late_ms <= RW_CORE_SCHEDULE_MAX_HOLD_MS ? late_ms : 0u;
         core->state.telemetry_due_ms = core->state.uptime_ms + core->state.telemetry_period_ms - late_ms;
     }
-    if (job == RW_CORE_JOB_BURST) {
-        rw_core_queue_burst_frame(core);
+    uint32_t mac_budget = speed_tick ? 0u
+                          : job == RW_CORE_JOB_NONE    ? RW_CORE_MAC_TICK_BUDGET
+                          : job == RW_CORE_JOB_BATTERY ? RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BATTERY_COST
+                                                       : 0u;
+    if ((job == RW_CORE_JOB_NONE || job == RW_CORE_JOB_BATTERY) && !speed_tick &&
+        rw_burst_streaming(&core->state.burst) && rw_core_queue_burst_frame(core)) {
+        mac_budget = 0u; /* this tick's work was the burst frame's pack (as a telemetry tick's is), with at most
+                            the battery division beside it */
     }
-    rw_core_send_queued(core, hal, sent, budget);
+    rw_core_send_queued(core, hal, sent, mac_budget);
 }

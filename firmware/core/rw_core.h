@@ -77,40 +77,18 @@
 #define RW_CORE_SPINDLE_PERIOD_MS 10u
 /* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
-/* The per-tick work budget. Target: every periodic tick under 10 % of the 1 ms tick with one flash wait state
- * (x1.5), i.e. 3,200 modelled Cortex-M0+ cycles (bench/bench_tick_instructions.py). A tick's fixed work
- * (sensors, supervision, the ESC write: about 1,000 cycles on an other tick) is outside the budget; the budget
- * is counted in units of 50 modelled cycles, and every periodic job and signing step has a cost in those units
- * (its worst case measured by the bench, rounded up). An "other" tick has RW_CORE_TICK_WORK_UNITS: its job (at
- * most one of telemetry pack, spindle step, load-loss check, burst pack) takes its cost, a battery refresh when
- * due its cost, and what is left signs the next queued frame in steps (rw_signer.h). A speed tick (the speed
- * step is most of its 10 %) has RW_CORE_SPEED_TICK_MAC_UNITS for signing steps. */
-#define RW_CORE_TICK_WORK_UNITS 42u
-#define RW_CORE_SPEED_TICK_MAC_UNITS 9u
-#define RW_CORE_COST_TELEMETRY_PACK 32u
-#define RW_CORE_COST_SPINDLE 28u
-#define RW_CORE_COST_LOAD_CHECK 21u
-#define RW_CORE_COST_BURST_PACK 31u
-/* the feed-forward's battery factor (one float division) */
-#define RW_CORE_COST_BATTERY 11u
-/* Signing steps (rw_signer.h): load (the outbox's next frame copied with its seq, session id, MAC init), a
- * checksum chunk (RW_SIGNER_CRC_CHUNK_LEN bytes), absorbing (a call, then each MAC block), seal in three (the counter and its whole block on a
- * copy of the MAC state; the padded last block; four finalization rounds and the tag), send (the HAL copies the frame out) */
-#define RW_CORE_MAC_LOAD_COST 24u
-#define RW_CORE_MAC_CRC_CHUNK_COST 7u
-#define RW_CORE_MAC_ABSORB_CALL_COST 4u
-#define RW_CORE_MAC_BLOCK_COST 3u
-#define RW_CORE_MAC_SEAL_COUNTER_COST 10u
-#define RW_CORE_MAC_SEAL_LAST_COST 12u
-#define RW_CORE_MAC_SEAL_TAG_COST 12u
-#define RW_CORE_MAC_SEND_COST 6u
-/* The load-loss check has its own 10 ms slot, this far after the spindle's (each slot one job beside the
- * per-tick work). */
-#define RW_CORE_LOAD_CHECK_OFFSET_MS 5u
-/* The feed-forward's battery factor is refreshed at most this often (ms): the reading carries ADC noise that
- * changes it nearly every tick, and following that noise would spend a division every other tick; battery sag
- * is much slower (tens of ms and more), and the PI takes up the rest. */
-#define RW_CORE_BATTERY_PERIOD_MS 10u
+/* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
+ * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
+ * and what finishing it costs (the last two blocks, four finalization rounds, the send). A full 64-byte
+ * payload (TELEMETRY, BURST_DATA: 73 bytes + session id = 9 fixed blocks) is then signed and sent in two idle
+ * ticks: begin + 4 blocks, then 5 blocks + finish; each under 10 % of a 1 kHz tick on the M0+
+ * (bench/bench_tick_instructions.py). */
+#define RW_CORE_MAC_TICK_BUDGET 9u
+#define RW_CORE_MAC_BEGIN_COST 5u
+#define RW_CORE_MAC_FINISH_COST 4u
+/* An idle tick that also refreshes the feed-forward's battery factor (one float division, ~500 cycles) signs
+ * this much less. */
+#define RW_CORE_MAC_BATTERY_COST 2u
 
 typedef struct rw_core_counters {
     uint16_t rx_ok;
@@ -164,9 +142,6 @@ typedef struct rw_core {
         uint32_t telemetry_due_ms;
         uint32_t spindle_due_ms;
         uint32_t spindle_last_ms;
-        uint32_t load_check_due_ms; /* the load-loss check's slot (RW_CORE_LOAD_CHECK_OFFSET_MS after the spindle's) */
-        uint32_t battery_due_ms;    /* the next battery-factor refresh may happen from then (RW_CORE_BATTERY_PERIOD_MS) */
-        bool burst_frame_queued;    /* a BURST_DATA frame waits in the outbox (at most one at a time) */
         uint32_t battery_low_ms;
         bool grasp_pending;       /* GRASP: RELAX goes on to RETRACT once the rope has stopped */
         bool speed_tick_next;     /* schedule: the next call is a speed tick (see the schedule above) */

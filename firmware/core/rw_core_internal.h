@@ -64,21 +64,16 @@ uint16_t rw_core_take_seq(rw_core *core, rw_link_id link);
  * WiFi are signed when a key is set. */
 void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len);
 /* Step 5's send: the next outbox frame to the peer, at most one datagram a tick (none when `sent`: this tick
- * already answered a command); over a keyed WiFi link signed in steps with what is left of the tick's work
- * budget (budget units, rw_core.h). */
-void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t budget);
+ * already answered a command); over a keyed WiFi link signed in steps with up to mac_budget units of MAC work
+ * (RW_CORE_MAC_TICK_BUDGET on an idle tick, less on a battery tick, 0 on a tick with another job). */
+void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t mac_budget);
 
 /* ---- rw_core_boot.c ---- */
 /* First tick: the stored configuration (key, parameters) and a new session, then the BOOT event. */
 void rw_core_boot(rw_core *core, const rw_hal *hal);
 
-/* ---- rw_core_burst.c ---- */
-/* The next BURST_DATA frame of a captured burst into the outbox, when none is queued and at least
- * RW_CORE_BURST_FREE_SLOTS slots are free (else it waits: no sample is lost). */
-#define RW_CORE_BURST_FREE_SLOTS 3u
-/* A BURST_DATA frame's signing begins only when the next telemetry frame is due later than this (ms): about
- * how long its signing takes (begin, 9 blocks, finish over idle and speed ticks; bench/bench_burst.py). */
-#define RW_CORE_BURST_SIGN_MS 0u
-void rw_core_queue_burst_frame(rw_core *core);
+/* The next BURST_DATA frame of a captured burst into the outbox, when it is empty and nothing is being signed
+ * (rw_core_burst.c); true when one was packed. */
+bool rw_core_queue_burst_frame(rw_core *core);
 
 #endif /* RW_CORE_INTERNAL_H */

@@ -89,15 +89,11 @@ const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o)
 
 void rw_outbox_pop(rw_outbox *o, const rw_outbox_slot *slot)
 {
-    /* the slot's index from its address (no scan: this runs in the tick that begins a frame's signing) */
-    const uintptr_t offset = (uintptr_t)slot - (uintptr_t)o->state.slots;
-    if (offset >= sizeof o->state.slots || offset % sizeof o->state.slots[0] != 0u) {
-        return; /* not one of this outbox's slots */
-    }
-    rw_outbox_slot *s = &o->state.slots[offset / sizeof o->state.slots[0]];
-    if (s->used) {
-        s->used = false;
-        --o->state.used;
+    for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
+        if (&o->state.slots[i] == slot && o->state.slots[i].used) {
+            o->state.slots[i].used = false;
+            --o->state.used;
+        }
     }
 }
 

@@ -18,7 +18,7 @@ typedef enum {
     RW_OUTBOX_REPLY = 0,     /* PARAM_VALUE after an ACK */
     RW_OUTBOX_EVENT = 1,     /* to the peer */
     RW_OUTBOX_TELEMETRY = 2, /* to the peer */
-    RW_OUTBOX_BURST = 3,     /* BURST_DATA to the peer: one at a time, sent after everything else */
+    RW_OUTBOX_BURST = 3,     /* BURST_DATA to the peer: queued only into an empty outbox, sent after everything */
 } rw_outbox_class;
 
 typedef struct rw_outbox_slot {
@@ -52,11 +52,6 @@ bool rw_outbox_commit(rw_outbox *o, rw_outbox_slot *slot, rw_outbox_class cls, s
 const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o);
 void rw_outbox_pop(rw_outbox *o, const rw_outbox_slot *slot);
 uint16_t rw_outbox_dropped(const rw_outbox *o);
-/* Slots free (no scan). */
-static inline unsigned rw_outbox_free_slots(const rw_outbox *o)
-{
-    return RW_OUTBOX_SLOTS - o->state.used;
-}
 /* Count a frame lost after it left the outbox (taken for signing, then void: a new session began). */
 void rw_outbox_count_drop(rw_outbox *o);
 

@@ -251,7 +251,7 @@ void rw_siphash_absorb(rw_siphash *s, const uint8_t *data, size_t n_blocks)
     s->absorbed += RW_SIPHASH_BLOCK_LEN * n_blocks;
 }
 
-void rw_siphash_absorb_last(rw_siphash *s, const uint8_t *data, size_t len)
+uint64_t rw_siphash_finish(rw_siphash *s, const uint8_t *data, size_t len)
 {
     size_t whole = len / RW_SIPHASH_BLOCK_LEN;
     rw_siphash_absorb(s, data, whole);
@@ -263,22 +263,11 @@ void rw_siphash_absorb_last(rw_siphash *s, const uint8_t *data, size_t len)
         last[i] = data[RW_SIPHASH_BLOCK_LEN * whole + i];
     }
     compress(s->v, last, 1u);
-    s->absorbed = total;
-}
-
-uint64_t rw_siphash_finalize(rw_siphash *s)
-{
     s->v[4] ^= 0xFFu;
     finalize_rounds(s->v);
     const uint32_t lo = s->v[0] ^ s->v[2] ^ s->v[4] ^ s->v[6];
     const uint32_t hi = s->v[1] ^ s->v[3] ^ s->v[5] ^ s->v[7];
     return ((uint64_t)hi << 32) | lo;
-}
-
-uint64_t rw_siphash_finish(rw_siphash *s, const uint8_t *data, size_t len)
-{
-    rw_siphash_absorb_last(s, data, len);
-    return rw_siphash_finalize(s);
 }
 
 uint64_t rw_siphash24(const uint8_t key[16], const uint8_t *data, size_t len)

@@ -29,10 +29,6 @@ void rw_siphash_absorb(rw_siphash *s, const uint8_t *data, size_t n_blocks);
 /* Absorb the rest of the message, data[0..len) (any length, whole blocks included), and return the tag of
  * everything absorbed. The state is spent afterwards. */
 uint64_t rw_siphash_finish(rw_siphash *s, const uint8_t *data, size_t len);
-/* rw_siphash_finish in two steps: absorb the rest (the padded last block included), then the finalization
- * rounds and the tag. */
-void rw_siphash_absorb_last(rw_siphash *s, const uint8_t *data, size_t len);
-uint64_t rw_siphash_finalize(rw_siphash *s);
 
 /* The tag of data[0..len) under key[0..16); the 8 tag bytes on the wire are this value little-endian. */
 uint64_t rw_siphash24(const uint8_t key[16], const uint8_t *data, size_t len);
