@@ -78,9 +78,14 @@ const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o)
     if (o->state.used == 0u) {
         return NULL;
     }
-    for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
+    unsigned seen = 0u;
+    for (unsigned i = 0u; i < RW_OUTBOX_SLOTS && seen < o->state.used; ++i) { /* stops after the last used slot */
         const rw_outbox_slot *s = &o->state.slots[i];
-        if (s->used && (best == NULL || s->cls < best->cls || (s->cls == best->cls && s->order < best->order))) {
+        if (!s->used) {
+            continue;
+        }
+        ++seen;
+        if (best == NULL || s->cls < best->cls || (s->cls == best->cls && s->order < best->order)) {
             best = s;
         }
     }
@@ -89,11 +94,15 @@ const rw_outbox_slot *rw_outbox_peek(const rw_outbox *o)
 
 void rw_outbox_pop(rw_outbox *o, const rw_outbox_slot *slot)
 {
-    for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
-        if (&o->state.slots[i] == slot && o->state.slots[i].used) {
-            o->state.slots[i].used = false;
-            --o->state.used;
-        }
+    /* the slot's index from its address (no scan: this runs in the tick that begins a frame's signing) */
+    const uintptr_t offset = (uintptr_t)slot - (uintptr_t)o->state.slots;
+    if (offset >= sizeof o->state.slots || offset % sizeof o->state.slots[0] != 0u) {
+        return; /* not one of this outbox's slots */
+    }
+    rw_outbox_slot *s = &o->state.slots[offset / sizeof o->state.slots[0]];
+    if (s->used) {
+        s->used = false;
+        --o->state.used;
     }
 }
 
