@@ -97,7 +97,6 @@ void rw_core_init(rw_core *core)
     core->state.pulse_us = (uint16_t)rw_params_get(&core->params, RW_PARAM_ESC_MIN_US);
     core->state.pulse_third_us = (uint16_t)(3u * core->state.pulse_us);
     rw_burst_reset(&core->state.burst);
-    core->state.load_check_due_ms = RW_CORE_LOAD_CHECK_OFFSET_MS;
 }
 
 /* Bindings hand rw_config_set_params the core's address for its parameter values. */
@@ -144,8 +143,7 @@ void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, 
 typedef enum {
     RW_CORE_JOB_NONE = 0,   /* an idle tick: the signing of queued frames advances */
     RW_CORE_JOB_TELEMETRY,  /* pack a TELEMETRY frame */
-    RW_CORE_JOB_SPINDLE,    /* the spindle loop */
-    RW_CORE_JOB_LOAD_CHECK, /* the load-loss check (its own slot, RW_CORE_LOAD_CHECK_OFFSET_MS after the spindle's) */
+    RW_CORE_JOB_SPINDLE,    /* the spindle loop and the load-loss check */
     RW_CORE_JOB_BATTERY,    /* the feed-forward's battery factor (one division) for a changed reading, and
                                signing with what is left of the budget */
 } rw_core_job;
@@ -163,9 +161,6 @@ static rw_core_job other_tick_job(const rw_core *core)
     }
     if (due(now_ms, core->state.spindle_due_ms)) {
         return RW_CORE_JOB_SPINDLE;
-    }
-    if (due(now_ms, core->state.load_check_due_ms)) {
-        return RW_CORE_JOB_LOAD_CHECK;
     }
     if (!rw_f32_same(core->state.battery_v, rw_speed_loop_battery_v(&core->state.loop))) {
         return RW_CORE_JOB_BATTERY;
@@ -241,18 +236,15 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
             elapsed_ms = RW_CORE_SPINDLE_PERIOD_MS; /* first step */
         }
         rw_core_spindle_step(core, hal, elapsed_ms);
+        /* the load-loss check shares the 10 ms slot (its time constants are 50 ms and more; it reads the PI's
+         * integral, which the speed ticks keep current). Its dt is the slot's period: the slot keeps it but
+         * when a telemetry tick holds it back once (2 ms), and a constant dt keeps the filters' coefficients
+         * prepared (a float division each). */
+        rw_core_load_loss_step(core);
         core->state.spindle_last_ms = core->state.uptime_ms;
         core->state.spindle_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
         break;
     }
-    case RW_CORE_JOB_LOAD_CHECK:
-        /* the load-loss check has its own 10 ms slot, apart from the spindle step, so that neither tick carries
-         * both (its time constants are 50 ms and more; it reads the PI's integral, which the speed ticks keep
-         * current). Its dt is the slot's period: the slot keeps it but when another job holds it back a tick or
-         * two, and a constant dt keeps the filters' coefficients prepared (a float division each). */
-        rw_core_load_loss_step(core);
-        core->state.load_check_due_ms = core->state.uptime_ms + RW_CORE_SPINDLE_PERIOD_MS;
-        break;
     case RW_CORE_JOB_BATTERY:
         /* the feed-forward's battery division happens here, never on a speed tick (it sees the battery a few
          * ms late) */

@@ -75,8 +75,6 @@
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
 /* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
 #define RW_CORE_SPINDLE_PERIOD_MS 10u
-/* The load-loss check has its own 10 ms slot, this far after the spindle's (each slot one job a tick). */
-#define RW_CORE_LOAD_CHECK_OFFSET_MS 5u
 /* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
 /* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
@@ -86,8 +84,8 @@
  * ticks: begin + 4 blocks, then 5 blocks + finish; each under 10 % of a 1 kHz tick on the M0+
  * (bench/bench_tick_instructions.py). */
 #define RW_CORE_MAC_TICK_BUDGET 9u
-#define RW_CORE_MAC_BEGIN_COST 9u
-#define RW_CORE_MAC_FINISH_COST 5u
+#define RW_CORE_MAC_BEGIN_COST 5u
+#define RW_CORE_MAC_FINISH_COST 4u
 /* An idle tick that also refreshes the feed-forward's battery factor (one float division, ~500 cycles) signs
  * this much less. */
 #define RW_CORE_MAC_BATTERY_COST 2u
@@ -144,7 +142,6 @@ typedef struct rw_core {
         uint32_t telemetry_due_ms;
         uint32_t spindle_due_ms;
         uint32_t spindle_last_ms;
-        uint32_t load_check_due_ms; /* the load-loss check's slot (RW_CORE_LOAD_CHECK_OFFSET_MS after the spindle's) */
         uint32_t battery_low_ms;
         bool grasp_pending;       /* GRASP: RELAX goes on to RETRACT once the rope has stopped */
         bool speed_tick_next;     /* schedule: the next call is a speed tick (see the schedule above) */
