@@ -60,6 +60,8 @@ class DiagnosisResult:
     model: DiagnosedModel
     timings_s: dict[str, float]
     series: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+    spindle: dict = field(default_factory=dict)
+    """The spindle half's section of report.json (spindle_stage.SpindleDiagnosis.section)."""
 
     @property
     def first_line(self) -> str:
@@ -101,6 +103,8 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     """
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
+    from robowrangler_sim.diagnose.spindle_stage import diagnose_spindle, merge_spindle, spindle_candidates
+    spindle_cands, effects = spindle_candidates(effects)
     candidates = _resolve_effects(effects)
     data = load_drive_data(recording_path)
     if model is None:
@@ -287,8 +291,7 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     model_out = base.extended(final_theta, effects=chosen if verdict == "missing_physics" else [],
                               load_spans_s=[(a + data.time_s[0] * 0, b) for a, b in below]
                               if "external_rope_load" in chosen else [], recording=str(data.path))
-    timings["total_s"] = time.perf_counter() - t0
-    return DiagnosisResult(
+    result = DiagnosisResult(
         recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
         nominal_refit=nominal_refit, unexplained_fraction=unexplained,
         coverage={**cov, "effects_not_testable": [d["id"] for d in not_ident if "candidates" not in d],
@@ -301,6 +304,11 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
                 "nominal_battery_v": pred0["battery_v"][0], "refit_battery_v": nominal.prediction_["battery_v"],
                 "after_battery_v": chosen_fit.prediction_["battery_v"],
                 "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"]})
+    _progress(progress, "spindle channels")
+    merge_spindle(result, diagnose_spindle(data.path, base=base.spindle_params, candidates=spindle_cands,
+                                           progress=progress))
+    result.timings_s["total_s"] = time.perf_counter() - t0
+    return result
 
 
 def _tick_mask(data: DriveData, spans: list[tuple[float, float]]) -> np.ndarray:

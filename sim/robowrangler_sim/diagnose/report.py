@@ -40,6 +40,11 @@ def first_line(result) -> str:
         parts.append(f"{e.effect_id.replace('_', ' ')} " + ", ".join(ps))
     e0 = result.effects[0]
     where = f"located in {len(e0.spans_s)} span(s)" if e0.spans_s else "spread over the recording"
+    if "rope_speed_mps" not in e0.heldout_rms_before:  # a spindle effect: its own channels
+        return (f"left out: {'; '.join(parts)}, {where}, held-out spindle load error "
+                f"{e0.heldout_rms_before['spindle_load_permille']:.1f} -> {e0.heldout_rms_after['spindle_load_permille']:.1f}"
+                f" per mille, guide motion {e0.heldout_rms_before['guide_step_mm'] * 1e3:.1f} -> "
+                f"{e0.heldout_rms_after['guide_step_mm'] * 1e3:.1f} um per 0.1 s")
     return (f"left out: {'; '.join(parts)}, {where}, held-out error {_mmps(e0.heldout_rms_before)} -> "
             f"{_mmps(e0.heldout_rms_after)} mm/s")
 
@@ -71,6 +76,7 @@ def report_json(result) -> dict:
         "not_identifiable": result.not_identifiable, "nominal_refit": result.nominal_refit,
         "unexplained_fraction": result.unexplained_fraction, "coverage": result.coverage,
         "located": result.located, "candidates": result.candidates, "timings_s": result.timings_s,
+        "spindle": getattr(result, "spindle", {}), "closed_loop": getattr(result, "closed_loop", None),
     })
 
 
