@@ -114,3 +114,22 @@ def test_no_spindle_motion_reports_the_spindle_effects_not_testable(recs):
     assert {"screw_backlash", "servo_deadband"} <= set(cov["effects_not_testable"])
     assert "hardly moves" in cov["spindle_not_testable_reason"]
     assert res.report["spindle"]["status"] == "not_testable"
+
+
+def test_closed_loop_error_falls_with_the_fitted_model(tmp_path):
+    """A closed-loop SIL recording (the real firmware core) of a spindle with a dead band: diagnosed, the written
+    model loaded in the SIL, which replays the recording's commands closed loop: the guide's error falls."""
+    from robowrangler_sim.diagnose.proof.spindle_sil_recording import record_spindle_sil
+
+    path = record_spindle_sil(tmp_path / "sil.mcap", truth={"deadband_in_raw": 150.0, "deadband_out_raw": 150.0},
+                              seed=2, moves_mm=(8.0, 14.0, 12.0, 12.5, 6.0, 7.0, 6.5), hold_s=0.9)
+    res = diagnose(path, effects=["screw_backlash", "servo_deadband"], closed_loop=True)
+    assert [e.effect_id for e in res.effects] == ["servo_deadband"]
+    d = res.effects[0].params["deadband_raw"]
+    assert d["ci95"][0] <= 150.0 <= d["ci95"][1]
+    cl = res.report["closed_loop"]
+    assert cl["replayed_commands"] >= 10 and cl["not_replayed"] == []
+    guide = cl["rms"]["guide_position_m"]
+    assert guide["fitted"] < 0.5 * guide["nominal"]
+    paths = write_report(res, tmp_path / "out")
+    assert "Closed loop" in paths["html"].read_text()

@@ -1,4 +1,5 @@
-"""`wrangler diagnose REC.mcap|DIR [--model FILE] [--out DIR] [--effects ID,...] [--json]`: where the drive model
+"""`wrangler diagnose REC.mcap|DIR [--model FILE] [--out DIR] [--effects ID,...] [--closed-loop] [--json]`: where the
+drive and spindle model
 and a recording disagree, the missing physics, and the fitted model (robowrangler_sim.diagnose).
 
 A directory diagnoses every .mcap in it, one Ray job per recording (local by default, --address for a cluster).
@@ -21,12 +22,13 @@ class DiagnosisFailed(RoboWranglerError):
     """The recording or model cannot be diagnosed; the message names the file and what is missing."""
 
 
-def _one(path: Path, model, effects, out: Path | None, ctx: CliContext) -> dict:
+def _one(path: Path, model, effects, out: Path | None, ctx: CliContext, closed_loop: bool = False) -> dict:
     from robowrangler_sim.diagnose import DiagnoseError, diagnose
     from robowrangler_sim.diagnose.report import write_report
 
     try:
-        result = diagnose(path, model=model, effects=effects, progress=None if ctx.json_mode else ctx.env.stderr)
+        result = diagnose(path, model=model, effects=effects, progress=None if ctx.json_mode else ctx.env.stderr,
+                          closed_loop=closed_loop)
     except DiagnoseError as err:
         raise DiagnosisFailed(str(err)) from None
     out_dir = out if out is not None else path.with_suffix(".diagnosis")
@@ -77,20 +79,24 @@ def _ray_many(paths: list[Path], model, effects, out: Path | None, address: str 
               help="Report folder (default: REC.diagnosis next to the recording).")
 @click.option("--effects", default=None, metavar="ID,...", help="Candidate effects to try (default: the whole library).")
 @click.option("--address", default=None, help="Ray cluster address for a folder of recordings (default: local).")
+@click.option("--closed-loop", "closed_loop", is_flag=True, default=False,
+              help="Also run the SIL firmware on the recording's commands with the given and the fitted model and "
+                   "report both closed-loop errors (one recording; needs the native SIL build).")
 @pass_context
 def diagnose_command(ctx: CliContext, recording: Path, model_file: Path | None, out_dir: Path | None,
-                     effects: str | None, address: str | None) -> None:
+                     effects: str | None, address: str | None, closed_loop: bool) -> None:
     """Diagnose a recording's drive channels: missing physics, where, the fitted model (report.json, HTML, PNGs)."""
-    from robowrangler_sim.diagnose.candidates import LIBRARY
+    from robowrangler_sim.diagnose.candidates import LIBRARY, SPINDLE_LIBRARY
     from robowrangler_sim.diagnose.errors import DiagnoseError
     from robowrangler_sim.diagnose.model_file import load_model
 
     ids = None
     if effects:
         ids = [e.strip() for e in effects.split(",") if e.strip()]
-        unknown = [e for e in ids if e not in LIBRARY]
+        known = {**LIBRARY, **SPINDLE_LIBRARY}
+        unknown = [e for e in ids if e not in known]
         if unknown:
-            raise click.UsageError(f"--effects: unknown id(s) {', '.join(unknown)}; known: {', '.join(LIBRARY)}")
+            raise click.UsageError(f"--effects: unknown id(s) {', '.join(unknown)}; known: {', '.join(known)}")
     model = None
     if model_file is not None:
         try:
@@ -108,5 +114,5 @@ def diagnose_command(ctx: CliContext, recording: Path, model_file: Path | None, 
         if failed:
             raise DiagnosisFailed(f"{len(failed)} of {len(docs)} recordings could not be diagnosed")
         return
-    doc = _one(recording, model, ids, out_dir, ctx)
+    doc = _one(recording, model, ids, out_dir, ctx, closed_loop=closed_loop)
     ctx.result(doc, f"{doc['summary']}\nreport: {doc['outputs']['html']}")

@@ -62,6 +62,8 @@ class DiagnosisResult:
     series: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
     spindle: dict = field(default_factory=dict)
     """The spindle half's section of report.json (spindle_stage.SpindleDiagnosis.section)."""
+    closed_loop: dict | None = None
+    """Closed-loop before/after (closed_loop.py) when diagnose ran it: RMS per channel, model as given vs fitted."""
 
     @property
     def first_line(self) -> str:
@@ -95,10 +97,13 @@ def _resolve_effects(effects) -> list[Candidate]:
 
 
 def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel | None = None,
-             effects: list[str] | None = None, progress=None, pairs: bool = True) -> DiagnosisResult:
+             effects: list[str] | None = None, progress=None, pairs: bool = True,
+             closed_loop: bool = False) -> DiagnosisResult:
     """Diagnose the drive channels of one recording against the model (None: the nominal DriveParams).
 
     effects: candidate ids to try (None: the whole library). progress: a text stream for progress lines.
+    closed_loop: also run the SIL firmware on the recording's /host/command records with the model as given and
+    with the fitted one (closed_loop.py) and report both closed-loop errors.
     Raises DiagnoseError subclasses for recordings or models it cannot work on.
     """
     timings: dict[str, float] = {}
@@ -307,6 +312,14 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     _progress(progress, "spindle channels")
     merge_spindle(result, diagnose_spindle(data.path, base=base.spindle_params, candidates=spindle_cands,
                                            progress=progress))
+    if closed_loop:
+        from robowrangler_sim.diagnose.closed_loop import closed_loop_compare
+        _progress(progress, "closed loop: the SIL firmware on the recording's commands, model as given and fitted")
+        t1 = time.perf_counter()
+        cmp = closed_loop_compare(data.path, nominal=base, fitted=result.model)
+        result.series.update({f"closed_loop_{k}": v for k, v in cmp.pop("series").items()})
+        result.closed_loop = cmp
+        result.timings_s["closed_loop_s"] = time.perf_counter() - t1
     result.timings_s["total_s"] = time.perf_counter() - t0
     return result
 

@@ -136,9 +136,18 @@ def write_report(result, out_dir: str | Path) -> dict[str, Path]:
                    f'{base64.b64encode(paths[k].read_bytes()).decode()}"></p>' for k in ("overlay", "residual_map"))
     rows = "".join(f"<tr><td>{html.escape(str(c['id']))}</td><td>{html.escape(str(c.get('status')))}</td>"
                    f"<td>{html.escape(json.dumps(_clean(c.get('heldout_rms', ''))))}</td></tr>" for c in result.candidates)
+    cl = getattr(result, "closed_loop", None)
+    cl_html = ""
+    if cl:
+        unit = {"rope_speed_mps": ("mm/s", 1e3), "guide_position_m": ("um", 1e6), "spindle_load_permille": ("per mille", 1.0)}
+        cl_rows = "".join(f"<tr><td>{html.escape(ch)}</td><td>{v['nominal'] * unit[ch][1]:.1f}</td>"
+                          f"<td>{v['fitted'] * unit[ch][1]:.1f}</td><td>{unit[ch][0]}</td></tr>"
+                          for ch, v in cl["rms"].items() if ch in unit)
+        cl_html = ("<h2>Closed loop: the SIL firmware on the recording's commands</h2><table border=1><tr><th>channel"
+                   "</th><th>RMS, model as given</th><th>RMS, fitted model</th><th>unit</th></tr>" + cl_rows + "</table>")
     paths["html"].write_text(
         "<!doctype html><html><head><meta charset='utf-8'><title>wrangler diagnose</title></head><body>"
-        f"<h1>{html.escape(first_line(result))}</h1>{imgs}<h2>Candidates</h2><table border=1>"
+        f"<h1>{html.escape(first_line(result))}</h1>{imgs}{cl_html}<h2>Candidates</h2><table border=1>"
         f"<tr><th>id</th><th>status</th><th>held-out RMS</th></tr>{rows}</table>"
         f"<h2>report.json</h2><pre>{html.escape(json.dumps(doc, indent=1))}</pre></body></html>\n")
     return paths

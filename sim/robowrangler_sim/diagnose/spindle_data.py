@@ -1,7 +1,8 @@
 """The spindle channels of one recording (guide position, spindle load, the spindle's command), on the 1 ms tick
 grid the spindle replay runs on. Reads /device/telemetry only (never /sim/plant_truth).
 
-A recording without these fields (older schema), or in which the spindle never moves, is not an error: the
+Only samples from the first one whose spindle_flags has HOMED on are used (before homing the position counts from
+power-up). A recording without these fields (older schema), or in which the spindle never moves, is not an error: the
 drive can still be diagnosed. ``load_spindle_data`` then returns None and the reason, and the spindle effects
 are reported as not testable in the coverage.
 """
@@ -62,6 +63,13 @@ def load_spindle_data(path: str | Path) -> tuple[SpindleData | None, str]:
         return None, f"/device/telemetry lacks {', '.join(missing)}"
     cols = {f: np.asarray(tel[f], dtype=float) for f in FIELDS}
     ok = np.all(np.isfinite(np.vstack(list(cols.values()))), axis=0)
+    if "spindle_flags" in tel:
+        # the guide position means "from home" only once the spindle is homed (before, it counts from power-up
+        # and homing jumps it to 0): diagnose from the first homed sample on
+        homed = np.array(["HOMED" in (f if isinstance(f, (list, tuple, np.ndarray)) else str(f).split(","))
+                          for f in tel["spindle_flags"]])
+        if homed.any():
+            ok &= np.arange(homed.size) >= int(np.argmax(homed))
     if ok.sum() < 20:
         return None, "fewer than 20 complete spindle samples"
     order = np.argsort(cols["time_s"][ok], kind="stable")
