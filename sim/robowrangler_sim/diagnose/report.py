@@ -81,7 +81,8 @@ def report_json(result) -> dict:
 
 
 def write_report(result, out_dir: str | Path) -> dict[str, Path]:
-    """report.json, model.json, residual_map.png, overlay.png and report.html in out_dir; returns the paths."""
+    """report.json, model.json, residual_map.png, overlay.png, spindle_overlay.png (when the spindle was diagnosed)
+    and report.html in out_dir; returns the paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -132,8 +133,31 @@ def write_report(result, out_dir: str | Path) -> dict[str, Path]:
     fig.tight_layout()
     fig.savefig(paths["residual_map"], dpi=90)
     plt.close(fig)
+    figures = ["overlay", "residual_map"]
+    if "spindle_time_s" in s:  # the spindle half: recorded guide motion and load, nominal refit and chosen model
+        paths["spindle_overlay"] = out / "spindle_overlay.png"
+        ts = s["spindle_time_s"]
+        fig, ax = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
+        ax[0].plot(ts, s["spindle_guide_mm"], "k.", ms=2, label="recording")
+        ax[0].plot(ts, s["spindle_refit_guide_mm"], label="nominal refit (open loop)")
+        ax[0].plot(ts, s["spindle_after_guide_mm"], label="with the chosen effects")
+        ax[0].set_ylabel("guide [mm]")
+        ax[0].legend(loc="upper right")
+        ax[1].plot(ts, s["spindle_load_permille"], "k.", ms=2)
+        ax[1].plot(ts, s["spindle_refit_load_permille"])
+        ax[1].plot(ts, s["spindle_after_load_permille"])
+        ax[1].set_ylabel("spindle load [per mille]")
+        ax[2].plot(ts, s["spindle_load_permille"] - s["spindle_refit_load_permille"], label="nominal refit")
+        ax[2].plot(ts, s["spindle_load_permille"] - s["spindle_after_load_permille"], label="chosen model")
+        ax[2].set_ylabel("load residual")
+        ax[2].set_xlabel("time [s]")
+        ax[2].legend(loc="upper right")
+        fig.tight_layout()
+        fig.savefig(paths["spindle_overlay"], dpi=90)
+        plt.close(fig)
+        figures.append("spindle_overlay")
     imgs = "".join(f'<p><img alt="{k}" src="data:image/png;base64,'
-                   f'{base64.b64encode(paths[k].read_bytes()).decode()}"></p>' for k in ("overlay", "residual_map"))
+                   f'{base64.b64encode(paths[k].read_bytes()).decode()}"></p>' for k in figures)
     rows = "".join(f"<tr><td>{html.escape(str(c['id']))}</td><td>{html.escape(str(c.get('status')))}</td>"
                    f"<td>{html.escape(json.dumps(_clean(c.get('heldout_rms', ''))))}</td></tr>" for c in result.candidates)
     cl = getattr(result, "closed_loop", None)
