@@ -7,7 +7,8 @@ others are listed as not replayed), sent at the device time they were sent: a re
 arrives, so the send time is its log time less reply_latency_s, moved onto the device clock by the median offset
 between the telemetry's log times and its time_s. Everything else (heartbeats, the firmware's own loops) is the
 SIL's. Compared per channel over the recording's telemetry times: rope_speed_mps, guide_position_m,
-spindle_load_permille (RMS of recording - SIL).
+spindle_load_permille (RMS of recording - SIL; the spindle's two from the first sample whose spindle_flags has
+HOMED on).
 
     cmp = closed_loop_compare("run.mcap", nominal=DiagnosedModel.nominal(), fitted=result.model)
     cmp["rms"]["guide_position_m"]  ->  {"nominal": 0.0021, "fitted": 0.0004}
@@ -98,15 +99,24 @@ def closed_loop_compare(path: str | Path, *, nominal, fitted, seed: int = 0) -> 
             for name, m in (("nominal", nominal), ("fitted", fitted))}
     rms: dict[str, dict[str, float]] = {}
     series: dict[str, np.ndarray] = {"time_s": t_rec}
+    homed_from_s = float(t_rec[0])
+    if "spindle_flags" in tel:
+        homed = np.array(["HOMED" in (f if isinstance(f, (list, tuple, np.ndarray)) else str(f).split(","))
+                          for f in tel["spindle_flags"]])
+        if homed.any():
+            homed_from_s = float(t_rec[int(np.argmax(homed))])
     for ch in CHANNELS:
         if ch not in tel:
             continue
         y = np.asarray(tel[ch], dtype=float)
         rms[ch] = {}
         series[ch] = y
+        # the spindle's channels from the first homed sample on (before it, the position counts from power-up and
+        # homing ends on a stall spike whose timing a few ticks either way would decide the RMS)
+        t_from = homed_from_s if ch != "rope_speed_mps" else float(t_rec[0])
         for name, run in runs.items():
             sim = np.interp(t_rec, run["time_s"], run[ch])
-            ok = (t_rec >= run["time_s"][0]) & (t_rec <= run["time_s"][-1]) & np.isfinite(y)
+            ok = (t_rec >= max(run["time_s"][0], t_from)) & (t_rec <= run["time_s"][-1]) & np.isfinite(y)
             rms[ch][name] = float(np.sqrt(np.mean((y[ok] - sim[ok]) ** 2)))
             series[f"{name}_{ch}"] = sim
     return {"rms": rms, "replayed_commands": len(commands), "not_replayed": skipped,
