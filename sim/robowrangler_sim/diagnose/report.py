@@ -42,7 +42,8 @@ def first_line(result) -> str:
     where = f"located in {len(e0.spans_s)} span(s)" if e0.spans_s else "spread over the recording"
     if "rope_speed_mps" not in e0.heldout_rms_before:  # a spindle effect: its own channels
         return (f"left out: {'; '.join(parts)}, {where}, held-out spindle load error "
-                f"{e0.heldout_rms_before['spindle_load_permille']:.1f} -> {e0.heldout_rms_after['spindle_load_permille']:.1f}"
+                f"{e0.heldout_rms_before['spindle_load_permille']:.1f} -> "
+                f"{e0.heldout_rms_after['spindle_load_permille']:.1f}"
                 f" per mille, guide motion {e0.heldout_rms_before['guide_step_mm'] * 1e3:.1f} -> "
                 f"{e0.heldout_rms_after['guide_step_mm'] * 1e3:.1f} um per 0.1 s")
     return (f"left out: {'; '.join(parts)}, {where}, held-out error {_mmps(e0.heldout_rms_before)} -> "
@@ -163,12 +164,14 @@ def write_report(result, out_dir: str | Path) -> dict[str, Path]:
     cl = getattr(result, "closed_loop", None)
     cl_html = ""
     if cl:
-        unit = {"rope_speed_mps": ("mm/s", 1e3), "guide_position_m": ("um", 1e6), "spindle_load_permille": ("per mille", 1.0)}
+        unit = {"rope_speed_mps": ("mm/s", 1e3), "guide_position_m": ("um", 1e6),
+                "spindle_load_permille": ("per mille", 1.0)}
         cl_rows = "".join(f"<tr><td>{html.escape(ch)}</td><td>{v['nominal'] * unit[ch][1]:.1f}</td>"
                           f"<td>{v['fitted'] * unit[ch][1]:.1f}</td><td>{unit[ch][0]}</td></tr>"
                           for ch, v in cl["rms"].items() if ch in unit)
         cl_html = ("<h2>Closed loop: the SIL firmware on the recording's commands</h2><table border=1><tr><th>channel"
-                   "</th><th>RMS, model as given</th><th>RMS, fitted model</th><th>unit</th></tr>" + cl_rows + "</table>")
+                   "</th><th>RMS, model as given</th><th>RMS, fitted model</th><th>unit</th></tr>" + cl_rows
+                   + "</table>")
     paths["html"].write_text(
         "<!doctype html><html><head><meta charset='utf-8'><title>wrangler diagnose</title></head><body>"
         f"<h1>{html.escape(first_line(result))}</h1>{imgs}{cl_html}<h2>Candidates</h2><table border=1>"

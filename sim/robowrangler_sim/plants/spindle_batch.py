@@ -149,6 +149,7 @@ def simulate_spindle_batch(theta: np.ndarray, moving_speed_raw: np.ndarray, samp
     p = params or SpindleParams()
     out_pos = np.empty((theta.shape[0], ticks.size))
     out_load = np.empty((theta.shape[0], ticks.size))
-    _kernel(theta, raw, ticks, float(start_position_mm), first_direction(raw) if play_start is None else float(play_start), p.lead_mm_per_rev,
+    play0 = first_direction(raw) if play_start is None else float(play_start)
+    _kernel(theta, raw, ticks, float(start_position_mm), play0, p.lead_mm_per_rev,
             -p.end_stop_margin_mm, p.stroke_mm + p.end_stop_margin_mm, out_pos, out_load)
     return {"guide_position_mm": out_pos, "load_permille": out_load}

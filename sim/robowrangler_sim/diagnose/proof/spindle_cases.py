@@ -72,7 +72,8 @@ class SpindleProofCase:
                                           truth_for_scoring={KEY_PARAM[e]: key})
 
 
-def spindle_proof_cases(*, seeds: list[int], clean_seeds: list[int], duration_s: float = 10.0) -> list[SpindleProofCase]:
+def spindle_proof_cases(*, seeds: list[int], clean_seeds: list[int],
+                        duration_s: float = 10.0) -> list[SpindleProofCase]:
     cases = [SpindleProofCase(f"{e}/{c}/{s}", s * 100 + 50 + i * 10 + j, e, c, duration_s)
              for s in seeds for i, e in enumerate(EFFECTS) for j, c in enumerate(CONCEALMENTS)]
     cases += [SpindleProofCase(f"none/-/{s}", s, None, "-", duration_s) for s in clean_seeds]

@@ -53,8 +53,8 @@ def perturbed_spindle_params(rng: np.random.Generator, *, low: float = 0.03, hig
 def spindle_program(rng: np.random.Generator, duration_s: float, *, short_moves: bool = False,
                     start_mm: float = 40.0) -> np.ndarray:
     """Moving-speed register per 1 ms tick: 0.5 s still, then moves (0.2-1.0 s; 0.1-0.3 s when short_moves) at
-    fast (300-1000, 30 %), medium (100-300, 25 %) or slow (10-120, 45 %) commands, reversing often, with rests; keeps the guide
-    between 8 and 170 mm; changes only at telemetry ticks."""
+    fast (300-1000, 30 %), medium (100-300, 25 %) or slow (10-120, 45 %) commands, reversing often, with rests;
+    keeps the guide    between 8 and 170 mm; changes only at telemetry ticks."""
     n = int(round(duration_s * 1000))
     raw = np.zeros(n, dtype=np.int64)
     k = 500
@@ -137,7 +137,8 @@ def generate_spindle_recording(path: str | Path, *, truth: dict[str, float] | No
                 w.write("/device/telemetry", _telemetry(t_s, seq, meas, pulse, drive.battery_adc_v, noisy_mm,
                                                         _signed_load(o.load_raw), raw))
                 w.write("/sim/plant_truth", {"time_s": round(t_s, 3), "rope_speed_mps": drive.rope_speed_mps,
-                                             "battery_v": drive.battery_v, "guide_position_m": sp.nut_position_mm * 1e-3})
+                                             "battery_v": drive.battery_v,
+                                             "guide_position_m": sp.nut_position_mm * 1e-3})
                 seq += 1
             drive.step_us(esc_pulse_us=pulse, dt_us=1000)
             sp.update(SpindleInputs(moving_speed_raw=raw), 1e-3)
