@@ -77,7 +77,8 @@ def _sil_modules():
 @click.option("--state-file", default=None, metavar="PATH",
               help="The SIL device's flash (key, parameters, boot counter); default: a temporary one.")
 @click.option("--model", "model_file", default=None, metavar="FILE", type=click.Path(exists=True, dir_okay=False),
-              help="Drive model written by `wrangler diagnose` (model.json): refitted parameters and effect terms.")
+              help="Model written by `wrangler diagnose` (model.json): refitted drive and spindle parameters and "
+                   "effect terms.")
 @click.option("--scenario", "scenario", type=ScenarioName(), default=None,
               help="Run a wrangling scenario with the firmware in the loop instead of serving a device: the "
                    "rope chain (MuJoCo) is the plant; the simulation judges the grasp. Unpaced.")
