@@ -80,8 +80,13 @@ class LoopCase:
 
 
 def generate_loop_recording(path: str | Path, *, truth: LoopTruth, script: LoopScript, seed: int,
-                            noise_m: float = 0.002, loop_length_m: float = 2.0, true_part: str | None = None) -> LoopCase:
-    """Run the string shooter through the script and write the recording (see module doc)."""
+                            noise_m: float = 0.002, loop_length_m: float = 2.0, true_part: str | None = None,
+                            branch_bump_m: float = 0.0, branch: str = "upper_branch") -> LoopCase:
+    """Run the string shooter through the script and write the recording (see module doc).
+
+    branch_bump_m: an effect confined to one branch (a stretch of rope that flies differently, e.g. a stiffer or
+    heavier piece): the true contour pushed outward along its normal by a Gaussian bump of this height, centred a
+    quarter of the arc from the exit (upper_branch) or from the return point (lower_branch), 8 % of the arc wide."""
     path = Path(path)
     rng = np.random.default_rng([seed, 0x100F])
     motion = ModuleMotion(wheel_speed_mps=script.speed, phi_rad=script.phi)
@@ -98,6 +103,8 @@ def generate_loop_recording(path: str | Path, *, truth: LoopTruth, script: LoopS
                 shooter.step_for(target - shooter.time_s)
             fr = shooter.frame()
             pts = resample_by_arc_length(fr.loop_plane_xz_m(), N_POINTS)
+            if branch_bump_m:
+                pts = pts + _bump(pts, branch_bump_m, branch)
             obs = pts + rng.normal(0.0, noise_m, size=pts.shape) if noise_m > 0 else pts
             phi = math.atan2(math.sin(fr.phi_rad), math.cos(fr.phi_rad))
             w.write("/loop/observation", {"time_s": round(t_rec, 6), "camera_id": "proof0", "frame_index": k,
@@ -107,4 +114,16 @@ def generate_loop_recording(path: str | Path, *, truth: LoopTruth, script: LoopS
             w.write("/sim/plant_truth", {"time_s": round(t_rec, 6), "rope_speed_mps": fr.rope_speed_mps,
                                          "phi_rad": phi, "loop_reach_m": float(np.max(pts[:, 0]))},
                     log_time_ns=round(t_rec * 1e9))
-    return LoopCase(path, seed, truth.effect_id, dict(truth.truth), script, true_part)
+    return LoopCase(path, seed, truth.effect_id, dict(truth.truth), script, true_part or (branch if branch_bump_m
+                                                                                           else None))
+
+
+def _bump(pts: np.ndarray, height_m: float, branch: str) -> np.ndarray:
+    if branch not in ("upper_branch", "lower_branch"):
+        raise ValueError(f"branch: expected 'upper_branch' or 'lower_branch', got {branch!r}")
+    s = np.linspace(0.0, 1.0, pts.shape[0])
+    centre = 0.25 if branch == "upper_branch" else 0.75
+    tang = np.gradient(pts, axis=0)
+    tang /= np.maximum(np.linalg.norm(tang, axis=1, keepdims=True), 1e-12)
+    normal = np.column_stack([-tang[:, 1], tang[:, 0]])
+    return height_m * np.exp(-0.5 * ((s - centre) / 0.08) ** 2)[:, None] * normal

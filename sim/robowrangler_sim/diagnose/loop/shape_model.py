@@ -13,7 +13,8 @@ neutral value leaves the nominal chain unchanged. Effect laws (all in the table'
     speed:      S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)] + [S_lin(v sqrt(C_f/C_f0) c_w) - S_lin(v c_w)]
                 (S_lin: linear in speed between the table's speeds; g_v speed_shape_gain, C_f skin friction;
                 c_w = cos(delta)^0.5, the wind's change of effective gravity)
-    wind:       delta = atan(0.5 rho C_n d w |w| / (lambda g)); shape = R(delta) S(phi - delta)
+    wind:       relative air speed v - w t_x along the rope (t_x: x share of the flow direction; first order in w)
+                plus the normal drag tilt delta = atan(0.5 x 0.5 rho C_n d w |w| / (lambda g)): R(delta) S(phi - delta)
     rotation:   phi_eff = phi - tau_n dphi/dt - k_g v dphi/dt   (normal drag lag; Coriolis on the running rope)
     bending:    tangent angle along the arc smoothed over l_b (Gaussian), end error spread linearly along the arc
     dynamics:   wave speed c = 0: first-order lag tau (the chain); c > 0: each point follows the target with the
@@ -41,6 +42,9 @@ TH_WIND_MPS = 7
 TH_GYRO_S2_PER_M = 8
 N_THETA = 9
 PHI_STEP_DEG = 0.25
+WIND_NORMAL_SHARE = 0.5
+WIND_AXIAL_SHARE = 1.0
+"""Mean of sin^2 of the angle between a uniform wind and the rope round a loop: the share of w|w| that is normal."""
 
 
 class LoopShapeModel:
@@ -105,7 +109,7 @@ class LoopShapeModel:
         rope = self.rope
         v = np.broadcast_to(speed_mps[None, :], (B, speed_mps.size))
         w = col(TH_WIND_MPS)
-        f_w = 0.5 * STANDARD_AIR_DENSITY_KG_PER_M3 * rope.normal_drag_coeff * rope.diameter_m * w * np.abs(w)
+        f_w = WIND_NORMAL_SHARE * 0.5 * STANDARD_AIR_DENSITY_KG_PER_M3 * rope.normal_drag_coeff * rope.diameter_m * w * np.abs(w)
         delta = np.arctan2(f_w, rope.linear_density_kg_per_m * GRAVITY_MPS2)  # (B, 1)
         c_w = np.sqrt(np.cos(delta))
         phi_eff = (phi_rad[None, :] - col(TH_ROT_LAG_S) * phidot_rad_s[None, :]
@@ -116,9 +120,13 @@ class LoopShapeModel:
         shape = snap + col(TH_SPEED_GAIN)[..., None, None] * (lin_v - snap)
         ratio = np.sqrt(col(TH_CF) / rope.skin_friction_coeff)
         moved = (np.abs(ratio - 1.0) > 1e-12) | (np.abs(c_w - 1.0) > 1e-12)
+        v_w = v * c_w
         if np.any(moved):
-            v_w = v * c_w
             shape = shape + self._lin(v_w * ratio, phi_deg) - lin_v
+        if np.any(w != 0.0):
+            # the lift comes from the outgoing (upper) branch's skin friction at the relative air speed v - w: the loop
+            # flies as at that speed
+            shape = shape + self._lin(v_w * ratio - w * WIND_AXIAL_SHARE, phi_deg) - self._lin(v_w * ratio, phi_deg)
         if np.any(delta != 0.0):
             cd, sd = np.cos(delta)[..., None], np.sin(delta)[..., None]  # (B, 1, 1)
             x, z = shape[..., 0], shape[..., 1]
