@@ -77,7 +77,8 @@ def _sil_modules():
 @click.option("--state-file", default=None, metavar="PATH",
               help="The SIL device's flash (key, parameters, boot counter); default: a temporary one.")
 @click.option("--model", "model_file", default=None, metavar="FILE", type=click.Path(exists=True, dir_okay=False),
-              help="Drive model written by `wrangler diagnose` (model.json): refitted parameters and effect terms.")
+              help="Drive model written by `wrangler diagnose` (model.json): refitted parameters and effect terms; or, "
+                   "with --scenario, a loop model (loop_model.json): the rope chain's shape table with the loop effects.")
 @click.option("--scenario", "scenario", type=ScenarioName(), default=None,
               help="Run a wrangling scenario with the firmware in the loop instead of serving a device: the "
                    "rope chain (MuJoCo) is the plant; the simulation judges the grasp. Unpaced.")
@@ -119,6 +120,8 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
             raise click.UsageError("--shape-table needs --scenario (the shape table drives the rope chain, which only "
                                    "a scenario simulates)")
         table = _load_shape_table(shape_table)
+    if model_file is not None:
+        table = _loop_model_table(ctx, model_file, scenario=scenario, table=table)
     if scenario is not None:
         _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir, viewer=viewer,
                       viewer_speedup=None if unpaced else speedup, table=table)
@@ -169,6 +172,30 @@ def _load_shape_table(path: str):
     except (OSError, ShapeTableError) as exc:
         detail = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
         raise click.BadParameter(f"{path}: {detail}", param_hint="--shape-table") from exc
+
+
+def _loop_model_table(ctx: CliContext, path: str, *, scenario: str | None, table):
+    """A loop model (loop_model.json of `wrangler diagnose`) gives the rope chain its shape table, with the diagnosed
+    steady loop effects baked in; a drive model leaves the table as it is."""
+    from robowrangler_sim.diagnose.errors import DiagnoseError
+    from robowrangler_sim.diagnose.loop.model_file import NOT_IN_CHAIN, LoopModel, is_loop_model_file
+
+    if not is_loop_model_file(path):
+        return table
+    if scenario is None:
+        raise click.UsageError("--model: a loop model (robowrangler.loop_model) drives the rope chain, which only "
+                               "--scenario simulates")
+    if table is not None:
+        raise click.UsageError("--model (a loop model) and --shape-table both give the rope chain's shape table")
+    try:
+        model = LoopModel.load(path)
+        out = model.shape_table()
+    except DiagnoseError as exc:
+        raise click.BadParameter(str(exc), param_hint="--model") from exc
+    left = [e for e in model.effects if e in NOT_IN_CHAIN or e == "transient_wave_dynamics"]
+    ctx.note(f"loop model {path}: shape table with {sorted(set(model.effects) - set(left)) or 'no'} loop effects"
+             + (f"; not in the scenario's chain: {', '.join(left)}" if left else ""))
+    return out
 
 
 def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None,

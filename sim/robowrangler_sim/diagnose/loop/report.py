@@ -15,6 +15,10 @@ from robowrangler_sim.diagnose.report import _clean
 
 def loop_first_line(res) -> str:
     base = res.candidates[0]["heldout_rms_mm"]
+    if res.verdict == "none" and base > 2.0 * res.noise_mm:
+        where = f" (largest on the {res.located['part'].replace('_', ' ')})" if res.located.get("part") else ""
+        return (f"loop: none of the loop candidates explains it, but the contours differ from the refitted chain by "
+                f"{base:.1f} mm held out against {res.noise_mm:.1f} mm camera noise{where}: physics outside the library")
     if res.verdict == "none":
         return (f"loop: none beyond noise: the refitted chain explains the contours (held-out contour error "
                 f"{base:.1f} mm, camera noise {res.noise_mm:.1f} mm)")
@@ -34,6 +38,7 @@ def loop_report_json(res) -> dict:
                      "heldout_rms_mm_before": e.heldout_rms_mm_before, "heldout_rms_mm_after": e.heldout_rms_mm_after,
                      "evidence": e.evidence} for e in res.effects],
         "not_identifiable": res.not_identifiable, "nominal_refit": res.nominal_refit, "noise_mm": res.noise_mm,
+        "beyond_noise": bool(res.candidates[0]["heldout_rms_mm"] > 2.0 * res.noise_mm),
         "frames": res.frames, "located": res.located, "candidates": res.candidates, "notes": res.notes,
         "timings_s": res.timings_s,
     })
