@@ -79,6 +79,11 @@ def test_skin_friction_is_recovered_with_an_interval(recs, tmp_path):
     base = LoopModel().shape_table()
     moved = np.abs(table.contour(5.7, rope_speed_mps=5.0) - base.contour(5.7, rope_speed_mps=5.0)).max()
     assert moved > 0.01
+    from robowrangler_sim.chain.plant import ChainPlant, PlantInputs
+
+    plant = ChainPlant(table=table, params=model.chain_params(), initial=PlantInputs(rope_speed_mps=5.0))
+    plant.advance(PlantInputs(rope_speed_mps=5.0), duration_s=0.5)
+    assert plant.outputs().lift == 1.0
 
 
 def test_transient_wave_dynamics_is_named_on_fast_module_turns(recs):
@@ -175,6 +180,8 @@ def test_cli_diagnoses_the_loop_and_exits_nonzero_on_bad_contours(recs, tmp_path
                    lambda d: {**d, "points_m": [[x * 1e3, z * 1e3] for x, z in d["points_m"]]})
     code, _, err = run("diagnose", str(bad), "--out", str(tmp_path / "b"))
     assert code == 1 and "loop" in err and "metres" in err
+    code, _, err = run("sil", "--model", str(tmp_path / "o" / "loop_model.json"), "--duration", "0.1")
+    assert code == 2 and "--scenario" in err
 
 
 def test_the_fast_form_follows_the_chain_plant():
