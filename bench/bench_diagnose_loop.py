@@ -215,7 +215,8 @@ def run_fig6a(out_dir: Path, png: Path) -> None:
         ax[i].plot(rp.data.time_s, before, label=f"chain (nominal): mean {before.mean():.1f} mm")
         ax[i].plot(rp.data.time_s, after, label=f"chain + diagnosed effect: mean {after.mean():.1f} mm")
         ax[i].axhline(res.noise_mm, color="0.5", ls="--", label="camera noise")
-        ax[i].set_title(f"module turned {name}ly (20 deg in {'4 s' if name == 'slow' else '0.4 s'})")
+        ax[i].set_title(f"module turned {'slowly (20 deg in 4 s)' if name == 'slow' else 'fast (20 deg in 0.4 s)'}: "
+                        f"string-shooter truth vs the chain")
         ax[i].set_ylabel("contour error RMS [mm]")
         ax[i].legend(loc="upper right", fontsize=8)
         print(f"{name}: contour error mean {before.mean():.1f} -> {after.mean():.1f} mm, max {before.max():.1f} -> "
