@@ -1,6 +1,7 @@
 """normal_drag_coefficient: normal air drag on the loop swinging with the module: the loop trails the module's
-rotation. Law: phi_eff = phi - tau_n dphi/dt, tau_n = 0.5 rho C_n d L^2 / (...) grows with C_n (reported as the
-lag tau_n itself: the recorded contours give the lag, not C_n apart from the rope's mass)."""
+rotation. Law: phi_eff = phi - tau_n dphi/dt, the lag tau_n growing with C_n. It is reported as tau_n itself: the
+contours give the lag; turning it into C_n needs a model of how the loop's tension carries the drag, which this
+law does not have."""
 
 from __future__ import annotations
 
