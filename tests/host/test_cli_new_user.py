@@ -211,3 +211,26 @@ def test_no_key_at_all_fails_at_the_devices_first_answer_not_after_the_connect_t
         assert hint in message, (hint, message)
     assert message.count("\n") == 1 and "key=" not in message and TEST_KEY.hex() not in message
     assert MsgId.HELLO in sent
+
+
+@pytest.mark.parametrize(("argv", "refused"), [
+    (["loop", "-5"], "guide position -5 mm"),
+    (["spin", "-1", "--hold", "1"], "rope speed -1 m/s"),
+    (["param", "set", "guide_min_mm", "-3"], "guide_min_mm = -3"),
+])
+def test_a_negative_number_reaches_the_device_instead_of_being_taken_for_an_option(device: CoreDevice, argv: list[str],
+                                                                                     refused: str) -> None:
+    # click read `-5` as an unknown option ("No such option '-5'"): the user never learnt the device's limit
+    assert wrangler("--url", device.url, "arm").status == ExitStatus.OK
+    if argv[0] == "loop":
+        assert wrangler("--url", device.url, "home").status == ExitStatus.OK
+    run = wrangler("--url", device.url, *argv)
+    assert run.status == ExitStatus.NACK, run.stderr
+    assert "OUT_OF_RANGE" in run.stderr and refused in run.stderr and "No such option" not in run.stderr
+
+
+def test_a_word_that_is_no_number_is_still_an_unknown_option() -> None:
+    run = wrangler("--url", "udp://127.0.0.1:9", "spin", "-x")
+    assert run.status == ExitStatus.USAGE and "No such option '-x'" in run.stderr
+    inf = wrangler("--url", "udp://127.0.0.1:9", "loop", "-inf")
+    assert inf.status == ExitStatus.USAGE and "expected a finite number, got -inf" in inf.stderr
