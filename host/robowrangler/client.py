@@ -220,7 +220,8 @@ class Client:
                 self._establish_session()
             heartbeat.start()
             if not self._wait_first_telemetry():
-                if self._keyless_but_device_signs():
+                info = self._session_info
+                if self._key is None and info is not None and info.key_set:  # silent to a keyless host all along
                     raise self._needs_key_error()
                 raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
                                   "(or the SIL firmware) running and listening at that address?",
