@@ -14,6 +14,7 @@ from pathlib import Path
 import click
 
 from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.cli.signals import sigterm_as_interrupt
 from robowrangler.errors import RoboWranglerError
 
 
@@ -151,18 +152,22 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
             f.write(session.key.hex() + "\n")
         key_note = f"a new key in {key_path} (export ROBOWRANGLER_KEY_FILE={key_path})"
     try:
-        session.run_in_background()
-        if ctx.json_mode:
-            ctx.json_line({"type": "ready", "url": session.cmd_url, "serial": session.serial_path,
-                           "key": key_note, "speedup": None if unpaced else speedup})
-        else:
-            pace = "unpaced" if unpaced else f"speed-up {speedup:g}x"
-            ctx.note(f"SIL device on {session.cmd_url} ({pace}), USB serial {session.serial_path}, "
-                     f"provisioned with {key_note}; Ctrl-C to stop")
-        while duration_s is None or session.time_s < duration_s:
+        # `kill %1` (SIGTERM; a background job ignores Ctrl-C's SIGINT) stops it as Ctrl-C does: firmware stopped,
+        # temporary flash removed, exit 130
+        with sigterm_as_interrupt():
+            session.run_in_background()
+            if ctx.json_mode:
+                ctx.json_line({"type": "ready", "url": session.cmd_url, "serial": session.serial_path,
+                               "key": key_note, "speedup": None if unpaced else speedup,
+                               "firmware_pid": session.firmware_pid})
+            else:
+                pace = "unpaced" if unpaced else f"speed-up {speedup:g}x"
+                ctx.note(f"SIL device on {session.cmd_url} ({pace}), USB serial {session.serial_path}, "
+                         f"provisioned with {key_note}; Ctrl-C (or SIGTERM) to stop")
+            while duration_s is None or session.time_s < duration_s:
+                session.check()
+                time.sleep(0.05)
             session.check()
-            time.sleep(0.05)
-        session.check()
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(f"the SIL stopped: {exc}") from exc
     finally:
@@ -212,8 +217,9 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
         pace = "as fast as it goes" if viewer_speedup is None else f"paced at {viewer_speedup:g}x"
         ctx.note(f"live in Foxglove at {server.url} (the loop on /loop/observation and /loop/scene, {pace})")
     try:
-        outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
-                               watch=watch, table=table, live=live)
+        with sigterm_as_interrupt():  # SIGTERM ends a scenario as Ctrl-C does: it says what it left
+            outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
+                                   watch=watch, table=table, live=live)
     except ScenarioInterrupted as stop:
         ctx.note(_what_was_left(name, stop, render_dir))
         raise KeyboardInterrupt from None

@@ -53,11 +53,12 @@ def loop_plane_points_m(points_m: np.ndarray, exit_m: np.ndarray, module_rot: np
     fwd[2] = 0.0
     norm = float(np.linalg.norm(fwd))
     fwd = fwd / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])  # launch axis vertical: any horizontal
-    up = np.cross(fwd, module_rot[:, 1])
+    y = module_rot[:, 1]
+    up = np.array([fwd[1] * y[2] - fwd[2] * y[1], fwd[2] * y[0] - fwd[0] * y[2], fwd[0] * y[1] - fwd[1] * y[0]])
     up -= up.dot(fwd) * fwd
     norm = float(np.linalg.norm(up))
     up = up / norm if norm > 1e-9 else np.array([0.0, 0.0, 1.0])
-    return np.column_stack([pts @ fwd, pts @ up])
+    return pts @ np.stack([fwd, up], axis=1)
 
 
 class ScenarioLiveView:
@@ -71,6 +72,7 @@ class ScenarioLiveView:
 
     run_scenario calls tap_sent/tap_received with its host's frames (stamped with simulated seconds), on_tick
     once per control tick, and finish at the end. Attributes: ``contours`` (loop messages published so far),
+    ``publish_wall_s`` (wall seconds spent publishing them),
     ``recorder`` (the LinkRecorder of the host's frames: telemetry_count, event_count, command_count).
     """
 
@@ -92,6 +94,7 @@ class ScenarioLiveView:
         self._next_s = -math.inf
         self._origin: tuple[float, float] | None = None
         self.contours = 0
+        self.publish_wall_s = 0.0  # wall time spent publishing (what the live view costs the run)
 
     # --- the host's frames (RecordingHost's recording interface) ----------------------------------------
     def tap_sent(self, frame: bytes, host_s: float | None = None) -> None:
@@ -108,7 +111,9 @@ class ScenarioLiveView:
         if t_s < self._next_s - 1e-9:  # simulated times are sums of steps: allow their rounding
             return
         self._next_s = t_s + self.period_s
+        start_s = time.perf_counter()
         self.publish(chain, outputs=outputs, rope_speed_mps=rope_speed_mps)
+        self.publish_wall_s += time.perf_counter() - start_s
         self._pace(t_s)
 
     def publish(self, chain, *, outputs, rope_speed_mps: float) -> None:
@@ -125,7 +130,7 @@ class ScenarioLiveView:
         self.live.write(CONTOUR_TOPIC, {
             "time_s": round(float(chain.time_s), 6), "camera_id": CAMERA_ID, "frame_index": self.contours,
             "phi_rad": float(chain.phi_rad), "rope_speed_mps": float(rope_speed_mps),
-            "points_m": [[round(float(x), 5), round(float(z), 5)] for x, z in plane]}, log_time_ns=log_ns)
+            "points_m": np.round(plane, 5).tolist()}, log_time_ns=log_ns)
         objects = {} if outputs is None else outputs.object_pos_m
         self._scene.log(self._scene_update(chain, points, quat, objects), log_time=log_ns)
         self.contours += 1
