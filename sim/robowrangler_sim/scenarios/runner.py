@@ -75,6 +75,7 @@ CLOSE_IN_S = 0.5            # hinged door: the flying loop moves up to the leaf 
 SETTLE_S = 0.5              # after positioning
 HOMING_TIMEOUT_S = 30.0
 GRASP_TIMEOUT_S = 30.0
+SCENARIO_PLANT_TIMEOUT_S = 60  # how long the SIL firmware waits for the plant's next tick before it gives up
 
 
 @dataclass
@@ -192,7 +193,9 @@ class _Run:
             placement, start = self._door_geometry(obj)
         self.trajectory = BaseTrajectory(start_pos_m=start, quat_wxyz=quat)
         self.placement = placement
-        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0)
+        # the plant's side does slow work between ticks (MuJoCo contacts, an OSMesa frame, the viewer): on a busy
+        # machine the first rendered frame alone took over the firmware's default 10 s wait for its sensors
+        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0, plant_timeout_s=SCENARIO_PLANT_TIMEOUT_S)
         guide = min(max(self.sil.spindle_out.guide_position_mm, 0.0), self.params.guide_stroke_mm)
         self.chain = ChainPlant(table=self.table, params=self.params, objects=(placement,), floor_height_m=0.0,
                                 initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=guide,
