@@ -11,7 +11,7 @@ control inputs on the refit's residual (discrete-time sparse regression, simulat
 Two seed sets: `dev` (the seeds looked at while building the engine) and `heldout` (never looked at before this
 run); both are printed separately.
 
-Run:  uv run python bench/bench_diagnose.py [--quick] [--workers 2] [--address ADDR] [--json OUT]
+Run:  uv run python bench/bench_diagnose.py [--quick] [--workers 2] [--address ADDR] [--json OUT] [--spindle]
       uv run python bench/bench_diagnose.py --speed     (a 60 s recording, whole library: wall time per stage)
 """
 
@@ -195,6 +195,8 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=10.0, help="recording length, s")
     ap.add_argument("--json", default=None, help="write every row as JSON here")
     ap.add_argument("--speed", action="store_true", help="only the 60 s speed figure")
+    ap.add_argument("--spindle", action="store_true",
+                    help="also the spindle effects' tables (bench_diagnose_spindle.py, in this process)")
     args = ap.parse_args()
     if args.speed:
         speed()
@@ -228,6 +230,16 @@ def main() -> None:
     for name, rows in results.items():
         _table(rows, f"{name} seeds")
     print(f"\nsweep wall time {wall:.0f} s on {args.workers} worker(s)")
+    if args.spindle:
+        import bench_diagnose_spindle as bs
+
+        from robowrangler_sim.diagnose.proof.spindle_cases import spindle_proof_cases
+        with tempfile.TemporaryDirectory(prefix="rw_diag_bench_spindle_") as work:
+            for name, seeds, clean in (("dev", bs.DEV_SEEDS, bs.DEV_CLEAN),
+                                       ("heldout", bs.HELDOUT_SEEDS, bs.HELDOUT_CLEAN)):
+                rows = [bs.run_case(c, Path(work)) for c in spindle_proof_cases(seeds=seeds, clean_seeds=clean)]
+                bs.table(rows, f"spindle, {name} seeds")
+                results[f"spindle_{name}"] = rows
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1, default=float))
 

@@ -60,6 +60,10 @@ class DiagnosisResult:
     model: DiagnosedModel
     timings_s: dict[str, float]
     series: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+    spindle: dict = field(default_factory=dict)
+    """The spindle half's section of report.json (spindle_stage.SpindleDiagnosis.section)."""
+    closed_loop: dict | None = None
+    """Closed-loop before/after (closed_loop.py) when diagnose ran it: RMS per channel, model as given vs fitted."""
 
     @property
     def first_line(self) -> str:
@@ -93,14 +97,19 @@ def _resolve_effects(effects) -> list[Candidate]:
 
 
 def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel | None = None,
-             effects: list[str] | None = None, progress=None, pairs: bool = True) -> DiagnosisResult:
+             effects: list[str] | None = None, progress=None, pairs: bool = True,
+             closed_loop: bool = False) -> DiagnosisResult:
     """Diagnose the drive channels of one recording against the model (None: the nominal DriveParams).
 
     effects: candidate ids to try (None: the whole library). progress: a text stream for progress lines.
+    closed_loop: also run the SIL firmware on the recording's /host/command records with the model as given and
+    with the fitted one (closed_loop.py) and report both closed-loop errors.
     Raises DiagnoseError subclasses for recordings or models it cannot work on.
     """
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
+    from robowrangler_sim.diagnose.spindle_stage import diagnose_spindle, merge_spindle, spindle_candidates
+    spindle_cands, effects = spindle_candidates(effects)
     candidates = _resolve_effects(effects)
     data = load_drive_data(recording_path)
     if model is None:
@@ -287,8 +296,7 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     model_out = base.extended(final_theta, effects=chosen if verdict == "missing_physics" else [],
                               load_spans_s=[(a + data.time_s[0] * 0, b) for a, b in below]
                               if "external_rope_load" in chosen else [], recording=str(data.path))
-    timings["total_s"] = time.perf_counter() - t0
-    return DiagnosisResult(
+    result = DiagnosisResult(
         recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
         nominal_refit=nominal_refit, unexplained_fraction=unexplained,
         coverage={**cov, "effects_not_testable": [d["id"] for d in not_ident if "candidates" not in d],
@@ -301,6 +309,19 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
                 "nominal_battery_v": pred0["battery_v"][0], "refit_battery_v": nominal.prediction_["battery_v"],
                 "after_battery_v": chosen_fit.prediction_["battery_v"],
                 "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"]})
+    _progress(progress, "spindle channels")
+    merge_spindle(result, diagnose_spindle(data.path, base=base.spindle_params, candidates=spindle_cands,
+                                           progress=progress))
+    if closed_loop:
+        from robowrangler_sim.diagnose.closed_loop import closed_loop_compare
+        _progress(progress, "closed loop: the SIL firmware on the recording's commands, model as given and fitted")
+        t1 = time.perf_counter()
+        cmp = closed_loop_compare(data.path, nominal=base, fitted=result.model)
+        result.series.update({f"closed_loop_{k}": v for k, v in cmp.pop("series").items()})
+        result.closed_loop = cmp
+        result.timings_s["closed_loop_s"] = time.perf_counter() - t1
+    result.timings_s["total_s"] = time.perf_counter() - t0
+    return result
 
 
 def _tick_mask(data: DriveData, spans: list[tuple[float, float]]) -> np.ndarray:
