@@ -40,10 +40,36 @@ def test_batched_plant_matches_the_per_tick_plant():
 @pytest.fixture(scope="module")
 def recordings(tmp_path_factory):
     d = tmp_path_factory.mktemp("diag")
-    clean = generate_recording(d / "clean.mcap", effect=None, seed=11, duration_s=10.0)
-    lat = generate_recording(d / "latency.mcap", seed=1, duration_s=12.0,
+    clean = generate_recording(d / "clean.mcap", effect=None, seed=11, duration_s=8.0)
+    lat = generate_recording(d / "latency.mcap", seed=1, duration_s=8.0,
                              effect=LatencyTruth("esc_latency", {"delay_s": 0.010}, delay_s=0.010, jitter_s=0.001))
     return {"clean": clean, "latency": lat, "dir": d}
+
+
+def test_excite_recording_gives_bursts_fine_pulse_and_encoder_speed(recordings):
+    data = load_drive_data(recordings["latency"].path)
+    assert data.speed_source == "encoder" and data.bursts == 4 and data.burst_s == pytest.approx(4.0)
+    assert data.telemetry_hz == pytest.approx(100.0)
+    assert "fine" in data.pulse_source and "interpolated" in data.pulse_source
+    assert data.notes == []
+    # the mean speed between edge times agrees with the telemetry's filtered speed in steady holds
+    tel = data.tel & data.speed_valid
+    steady = np.interp(data.time_s[tel], data.tel_time_s, data.tel_speed_mps)
+    hold = (data.time_s[tel] > 1.2) & (data.time_s[tel] < 1.3)
+    assert np.allclose(data.speed_mps[tel][hold], steady[hold], atol=0.05)
+    # burst samples carry the 1 kHz pulse, telemetry at 1/3 us
+    assert np.any(np.abs(data.pulse_us * 3 - np.round(data.pulse_us * 3)) < 1e-6)
+
+
+def test_older_50_hz_recording_still_diagnosed_and_says_what_it_lacks(tmp_path):
+    rec = tmp_path / "old.mcap"
+    generate_recording(rec, effect=None, seed=12, duration_s=8.0, telemetry_hz=50.0, fine_pulse=False, bursts=False)
+    res = diagnose(rec, effects=["esc_latency"])
+    assert res.verdict in ("none", "missing_physics", "not_identifiable")
+    have = res.report["coverage"]["recording"]
+    assert have["bursts"] == 0 and have["telemetry_hz"] == pytest.approx(50.0)
+    assert any("no 1 kHz bursts" in m for m in have["missing"])
+    assert any("whole us" in m for m in have["missing"])
 
 
 def test_effect_free_recording_gives_none(recordings):
@@ -80,7 +106,8 @@ def test_latency_is_named_with_an_interval_and_the_model_improves(recordings, tm
     err = {}
     for name, m in (("nominal", DiagnosedModel.nominal()), ("fitted", model)):
         pred = DriveReplay(data, m.drive_params).predict(m.theta()[None, :])
-        err[name] = float(np.sqrt(np.mean((data.speed_mps - pred["rope_speed_mps"][0]) ** 2)))
+        r = (data.speed_mps - pred["rope_speed_mps"][0])[data.speed_valid]
+        err[name] = float(np.sqrt(np.mean(r ** 2)))
     assert err["fitted"] < 0.6 * err["nominal"]
 
 

@@ -15,7 +15,8 @@ the diagnose library's effect terms, each neutral by default:
 Parameters are rows of ``theta`` (shape (B, N_THETA)), columns named by the ``TH_*`` indices; the
 ``theta_from_params`` helper fills a row from DriveParams. ``latch="exact"`` latches the pulse at the
 ESC's frame times exactly as DrivePlant does (for the equivalence test); ``latch="box"`` latches the
-mean pulse over the last frame, which stands for a frame clock of unknown phase and makes the delay a
+mean pulse over the frame centred on the latch time, which stands for a frame clock of unknown phase (a
+change reaches the motor half a frame later on average, as with a uniform phase) and makes the delay a
 smooth parameter (what the fit uses).
 
 Shapes: pulse_us (T,) per 1 ms tick (the pulse the firmware drove during tick k); load_mask (T,);
@@ -146,7 +147,7 @@ def _cum_at(cum, t_us):
     return cum[k] + (cum[k + 1] - cum[k]) * (x - k)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v, out_meas, out_vb):
     n_b = theta.shape[0]
     n_ticks = pulse_us.shape[0]
@@ -170,7 +171,7 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
     sub_per_frame = int(frame_us // SUBSTEP_US)
     meas_tau = consts[C_MEAS_TAU]
     meas_decay = math.exp(-h / meas_tau) if meas_tau > 0.0 else 0.0
-    for bi in range(n_b):
+    for bi in numba.prange(n_b):  # rows are independent: one thread each (NUMBA_NUM_THREADS)
         kt = theta[bi, TH_KT]
         r_circ = theta[bi, TH_R_CIRCUIT]
         coul_n = theta[bi, TH_COULOMB_N]
@@ -230,7 +231,10 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
                 # ESC frame: latch the pulse (exact, or the frame-mean for an unknown frame phase)
                 p_now = _pulse_at(pulse_us, t_us - delay_us)
                 if box:
-                    p_lat = (_cum_at(cum, t_us - delay_us + h_us) - _cum_at(cum, t_us - delay_us + h_us - frame_us)) / frame_us
+                    # the mean over a frame centred on the latch: with the hold to the next frame, a change
+                    # reaches the motor half a frame later on average, as with a frame phase unknown (uniform)
+                    p_lat = (_cum_at(cum, t_us - delay_us + 0.5 * frame_us)
+                             - _cum_at(cum, t_us - delay_us - 0.5 * frame_us)) / frame_us
                     if p_now < p_invalid:
                         p_lat = p_now
                 else:
