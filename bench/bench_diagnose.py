@@ -211,6 +211,7 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="plain cases and 4 effect-free runs only")
     ap.add_argument("--only", default=None, help="effect ids (comma-separated) to run, and no effect-free runs")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers (0: no Ray, in this process)")
+    ap.add_argument("--local", action="store_true", help="local processes instead of Ray (Ray runs its workers niced)")
     ap.add_argument("--address", default=None, help="Ray cluster address (default: a local one)")
     ap.add_argument("--duration", type=float, default=12.0, help="recording length, s")
     ap.add_argument("--rate", type=float, default=100.0, choices=(50.0, 100.0),
@@ -239,6 +240,8 @@ def main() -> None:
         os.environ["NUMBA_NUM_THREADS"] = "1"  # one recording per worker, one plant thread each
         rows = None
         try:
+            if args.local:
+                raise RuntimeError("--local")
             import ray
 
             env = {"env_vars": {"NUMBA_NUM_THREADS": "1"}}
@@ -258,9 +261,14 @@ def main() -> None:
         if rows is None:
             from concurrent.futures import ProcessPoolExecutor
 
+            rows = []
             with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work, \
                     ProcessPoolExecutor(max_workers=args.workers) as pool:
-                rows = list(pool.map(run_case, cases, [work] * len(cases), [args.rate] * len(cases)))
+                for row in pool.map(run_case, cases, [work] * len(cases), [args.rate] * len(cases)):
+                    rows.append(row)
+                    if args.json:  # each row as it comes (a sweep cut short keeps what it did)
+                        with open(args.json + "l", "a") as f:
+                            f.write(json.dumps(row, default=float) + "\n")
     wall = time.perf_counter() - t0
     _table(rows, f"{args.set} seeds, {args.rate:.0f} Hz recordings")
     cpu = [r["cpu_s"] for r in rows]

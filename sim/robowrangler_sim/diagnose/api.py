@@ -282,6 +282,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs) -> DiagnosisRe
         jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params})
     r_after = _residuals(data, chosen_fit.prediction_)
     effects_out: list[EffectFinding] = []
+    load_spans: list = [(a, b) for a, b in below] if "external_rope_load" in chosen else []
     if verdict == "missing_physics":
         for eid in chosen:
             cand = fits[eid][0]
@@ -291,6 +292,13 @@ def _diagnose(recording_path, *, model, effects, progress, pairs) -> DiagnosisRe
             spans = _improvement_spans(data, r_nom, r_after, weights, on_tel)
             if cand.uses_located_spans:
                 spans = [[round(a, 3), round(b, 3)] for a, b in below]
+            shift = data.tel_time_s[0] - data.preroll_ticks * 1e-3  # replay grid time -> recording time
+            for name in getattr(cand, "time_params", ()):
+                p = params[name]
+                params[name] = {**p, "value": p["value"] + shift, "ci95": [c + shift for c in p["ci95"]]}
+            if getattr(cand, "time_params", ()):
+                spans = [[round(params["load_start_s"]["value"], 3), round(params["load_end_s"]["value"], 3)]]
+                load_spans = spans
             ev = next(r for r in cand_rows if r["id"] == eid)
             effects_out.append(EffectFinding(
                 effect_id=eid, params=params, channels=list(cand.channels), spans_s=spans,
@@ -306,8 +314,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs) -> DiagnosisRe
     unexplained = float(chosen_score.block_sse.sum() / sse_before) if sse_before > 0 else 0.0
     final_theta = chosen_fit.theta_
     model_out = base.extended(final_theta, effects=chosen if verdict == "missing_physics" else [],
-                              load_spans_s=[(a, b) for a, b in below]
-                              if "external_rope_load" in chosen else [], recording=str(data.path))
+                              load_spans_s=load_spans, recording=str(data.path))
     timings["total_s"] = time.perf_counter() - t0
     timings["cpu_s"] = time.process_time() - cpu0  # this process's CPU time (all its threads)
     return DiagnosisResult(
