@@ -216,11 +216,17 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=12.0, help="recording length, s")
     ap.add_argument("--rate", type=float, default=100.0, choices=(50.0, 100.0),
                     help="100: excite-style recordings (100 Hz, fine pulse, bursts); 50: an older board's plain ones")
-    ap.add_argument("--json", default=None, help="write every row as JSON here")
+    ap.add_argument("--json", default=None, help="write every row as JSON here (and each as it comes to OUT + 'l')")
+    ap.add_argument("--resume", action="store_true", help="skip the recordings already in the --json OUT + 'l' file")
+    ap.add_argument("--table", action="store_true", help="only print the table of the rows in --json OUT + 'l'")
     ap.add_argument("--speed", action="store_true", help="only the 60 s speed figure")
     args = ap.parse_args()
     if args.speed:
         speed()
+        return
+    if args.table:
+        rows = [json.loads(line) for line in Path(args.json + "l").read_text().splitlines() if line.strip()]
+        _table(rows, f"{args.set} seeds, {args.rate:.0f} Hz recordings (rows of {args.json}l)")
         return
 
     from robowrangler_sim.diagnose.proof.cases import CONCEALMENTS, EFFECTS, proof_cases
@@ -232,6 +238,19 @@ def main() -> None:
     if args.only:
         clean = []
     cases = proof_cases(seeds=seeds, clean_seeds=clean, duration_s=args.duration, concealments=conc, effects=effects)
+    # interleave effect-free and effect recordings (a sweep cut short still has both kinds)
+    eff_cases = [c for c in cases if c.effect_id is not None]
+    clean_cases = [c for c in cases if c.effect_id is None]
+    order = []
+    for k in range(max(len(eff_cases), len(clean_cases))):
+        order += eff_cases[k:k + 1] + clean_cases[k:k + 1]
+    cases = order
+    done: list[dict] = []
+    if args.resume and args.json and Path(args.json + "l").exists():
+        done = [json.loads(line) for line in Path(args.json + "l").read_text().splitlines() if line.strip()]
+        names = {r["case"] for r in done}
+        cases = [c for c in cases if c.name not in names]
+        print(f"resuming: {len(done)} recordings done before, {len(cases)} to go")
     t0 = time.perf_counter()
     if args.workers == 0 and not args.address:  # in this process, one after the other (no Ray)
         with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
@@ -270,6 +289,7 @@ def main() -> None:
                         with open(args.json + "l", "a") as f:
                             f.write(json.dumps(row, default=float) + "\n")
     wall = time.perf_counter() - t0
+    rows = done + rows
     _table(rows, f"{args.set} seeds, {args.rate:.0f} Hz recordings")
     cpu = [r["cpu_s"] for r in rows]
     print(f"\nsweep wall time {wall:.0f} s on {args.workers} worker(s); diagnose CPU time per recording median "

@@ -11,6 +11,8 @@ from robowrangler_sim.diagnose import (DiagnoseError, MissingChannelsError, Mode
                                        diagnose)
 from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
 from robowrangler_sim.diagnose.proof.generator import generate_recording
+from robowrangler_sim.diagnose.locate import iou_s
+from robowrangler_sim.diagnose.proof.cases import KEY_PARAM, proof_cases
 from robowrangler_sim.diagnose.proof.truth_effects import LatencyTruth
 from robowrangler_sim.diagnose.recording_data import load_drive_data
 from robowrangler_sim.diagnose.replay import DriveReplay
@@ -109,6 +111,42 @@ def test_latency_is_named_with_an_interval_and_the_model_improves(recordings, tm
         r = (data.speed_mps - pred["rope_speed_mps"][0])[data.speed_valid]
         err[name] = float(np.sqrt(np.mean(r ** 2)))
     assert err["fitted"] < 0.6 * err["nominal"]
+
+
+RIVAL = {"esc_latency": "rope_drag_law", "rope_drag_law": "battery_sag", "esc_deadband": "low_speed_friction",
+         "battery_sag": "external_rope_load", "low_speed_friction": "esc_deadband"}
+
+
+def _dev_case(name: str):
+    """A case of the proof's dev set (bench/bench_diagnose.py DEV_SEEDS; the held-out seeds are never used here)."""
+    return next(c for c in proof_cases(seeds=[1], clean_seeds=[]) if c.name == name)
+
+
+@pytest.mark.parametrize("effect_id", list(RIVAL))
+def test_each_candidate_is_recovered_from_a_generated_recording(effect_id, tmp_path):
+    case = _dev_case(f"{effect_id}/plain/1")
+    truth, _ = case.truth_effect()
+    rec = tmp_path / f"{effect_id}.mcap"
+    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
+    res = diagnose(rec, effects=[effect_id, RIVAL[effect_id]])
+    assert res.verdict == "missing_physics", res.first_line
+    assert res.effects[0].effect_id == effect_id
+    e = res.effects[0]
+    assert e.heldout_rms_after["rope_speed_mps"] < e.heldout_rms_before["rope_speed_mps"]
+    key = KEY_PARAM[effect_id]
+    assert e.params[key]["ci95"][0] <= e.params[key]["value"] <= e.params[key]["ci95"][1]
+
+
+def test_a_load_on_one_stretch_is_located_there(tmp_path):
+    case = _dev_case("external_rope_load/one_regime/1")  # a load acting above 5 m/s within one stretch
+    truth, spans = case.truth_effect()
+    rec = tmp_path / "load.mcap"
+    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
+    res = diagnose(rec, effects=["external_rope_load", "rope_drag_law"])
+    assert res.verdict == "missing_physics", res.first_line
+    found = res.effects[0]
+    assert found.effect_id == "external_rope_load"
+    assert iou_s([tuple(x) for x in found.spans_s], list(spans)) >= 0.5
 
 
 def test_sil_session_loads_the_model_file(recordings, tmp_path):
