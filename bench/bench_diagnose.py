@@ -19,6 +19,7 @@ x 2 seeds + 20 effect-free recordings). Each set is printed separately.
 Run:  uv run python bench/bench_diagnose.py --set dev [--quick] [--workers 2] [--address ADDR] [--json OUT]
       uv run python bench/bench_diagnose.py --set heldout --json heldout.json
       uv run python bench/bench_diagnose.py --speed     (a 60 s recording, whole library: time per stage)
+      uv run python bench/bench_diagnose.py --spindle   (also the spindle proof, bench_diagnose_spindle.py)
 """
 
 from __future__ import annotations
@@ -220,6 +221,8 @@ def main() -> None:
     ap.add_argument("--resume", action="store_true", help="skip the recordings already in the --json OUT + 'l' file")
     ap.add_argument("--table", action="store_true", help="only print the table of the rows in --json OUT + 'l'")
     ap.add_argument("--speed", action="store_true", help="only the 60 s speed figure")
+    ap.add_argument("--spindle", action="store_true",
+                    help="also the spindle effects' tables (bench_diagnose_spindle.py, in this process)")
     args = ap.parse_args()
     if args.speed:
         speed()
@@ -294,6 +297,15 @@ def main() -> None:
     cpu = [r["cpu_s"] for r in rows]
     print(f"\nsweep wall time {wall:.0f} s on {args.workers} worker(s); diagnose CPU time per recording median "
           f"{np.median(cpu):.1f} s; load average at the end {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    if args.spindle:
+        import bench_diagnose_spindle as bs
+
+        from robowrangler_sim.diagnose.proof.spindle_cases import spindle_proof_cases
+        with tempfile.TemporaryDirectory(prefix="rw_diag_bench_spindle_") as work:
+            for name, seeds, clean in (("dev", bs.DEV_SEEDS, bs.DEV_CLEAN),
+                                       ("heldout", bs.HELDOUT_SEEDS, bs.HELDOUT_CLEAN)):
+                srows = [bs.run_case(c, Path(work)) for c in spindle_proof_cases(seeds=seeds, clean_seeds=clean)]
+                bs.table(srows, f"spindle, {name} seeds")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1, default=float))
 

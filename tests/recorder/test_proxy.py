@@ -82,7 +82,11 @@ def test_recording_through_the_proxy_loses_nothing_while_another_tool_commands(n
 
     watched = [json.loads(line) for line in watcher.out.getvalue().splitlines()]
     telemetry = [w for w in watched if w["type"] == "telemetry"]
-    assert watcher.status == ExitStatus.OK and len(telemetry) >= 0.8 * 50 * 4, (len(telemetry), watcher.err.getvalue())
+    # 50 Hz of the device's time over what the watcher saw (its --duration is wall time: a busy machine paces the
+    # SIL slower, so the count over wall time is not the product's behaviour)
+    watched_s = telemetry[-1]["time_s"] - telemetry[0]["time_s"] if telemetry else 0.0
+    assert watcher.status == ExitStatus.OK and len(telemetry) >= 20, (len(telemetry), watcher.err.getvalue())
+    assert len(telemetry) >= 0.8 * 50 * watched_s, (len(telemetry), watched_s)
     assert "AIRBORNE" in {w["state"] for w in telemetry}
 
     rec = read_recording(out)

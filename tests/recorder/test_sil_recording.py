@@ -39,8 +39,9 @@ def test_recording_of_a_spin_holds_the_telemetry_the_client_saw(live_sil: SilSes
             collector.start()
             rw.arm(timeout_s=2.0)
             rw.spin(4.0)
-            rw.wait_for_state(State.AIRBORNE, timeout_s=3.0)
-            time.sleep(1.0)  # fly for a second
+            airborne_s = rw.wait_for_state(State.AIRBORNE, timeout_s=3.0).time_s
+            # fly for a second of the device's time (wall time would give fewer samples on a busy machine)
+            rw.wait_for(lambda s: s.time_s >= airborne_s + 1.0, timeout_s=30.0)
             with pytest.raises(CommandRefused):
                 rw.spin(2.0)  # under the ToV guard: NACK
             rw.spindown()

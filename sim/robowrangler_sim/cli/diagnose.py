@@ -1,5 +1,10 @@
-"""`wrangler diagnose REC.mcap|DIR [--model FILE] [--out DIR] [--effects ID,...] [--json]`: where the drive model
-and a recording disagree, the missing physics, and the fitted model (robowrangler_sim.diagnose).
+"""`wrangler diagnose REC.mcap|DIR [--model FILE] [--out DIR] [--effects ID,...] [--closed-loop] [--json]`: where the
+drive and spindle model and a recording disagree, the missing physics, and the fitted model
+(robowrangler_sim.diagnose). A recording with
+/loop/observation contours is diagnosed against the chain's loop as well (robowrangler_sim.diagnose.loop; its
+report under "loop", loop_report.* in the report folder); --effects may name loop effects; --model may be a loop
+model (loop_model.json). --closed-loop also runs the SIL firmware on the recording's commands with the model as
+given and the fitted one (robowrangler_sim.diagnose.closed_loop).
 
 A directory diagnoses every .mcap in it, one Ray job per recording (local by default, --address for a cluster).
 Exit 0 with a report (verdict missing_physics, none or not_identifiable); exit 1 with one line on stderr when a
@@ -21,19 +26,38 @@ class DiagnosisFailed(RoboWranglerError):
     """The recording or model cannot be diagnosed; the message names the file and what is missing."""
 
 
-def _one(path: Path, model, effects, out: Path | None, ctx: CliContext) -> dict:
+def _one(path: Path, model, effects, out: Path | None, ctx: CliContext, loop_model=None,
+         closed_loop: bool = False) -> dict:
     from robowrangler_sim.diagnose import DiagnoseError, diagnose
+    from robowrangler_sim.diagnose.loop.cli_hook import diagnose_loop_section, split_effects
     from robowrangler_sim.diagnose.report import write_report
 
+    out_dir = out if out is not None else path.with_suffix(".diagnosis")
+    drive_ids, loop_ids = split_effects(effects)
+    progress = None if ctx.json_mode else ctx.env.stderr
+    loop_doc = diagnose_loop_section(path, loop_model, loop_ids, out_dir, progress, DiagnosisFailed)
+    if loop_doc is not None and (drive_ids == [] or not _has_telemetry(path)):
+        return {**loop_doc, "loop": loop_doc}  # a loop-only recording (or only loop effects asked for)
     try:
-        result = diagnose(path, model=model, effects=effects, progress=None if ctx.json_mode else ctx.env.stderr)
+        result = diagnose(path, model=model, effects=drive_ids, progress=progress, closed_loop=closed_loop)
     except DiagnoseError as err:
         raise DiagnosisFailed(str(err)) from None
-    out_dir = out if out is not None else path.with_suffix(".diagnosis")
     paths = write_report(result, out_dir)
     doc = result.report
     doc["outputs"] = {k: str(v) for k, v in paths.items()}
+    if loop_doc is not None:
+        doc["loop"] = loop_doc
+        doc["summary"] = f"{doc['summary']}\n{loop_doc['summary']}"
     return doc
+
+
+def _has_telemetry(path: Path) -> bool:
+    from robowrangler.recorder import read_recording
+
+    try:
+        return bool(read_recording(path).records.get("/device/telemetry"))
+    except Exception:  # noqa: BLE001 - the drive diagnosis reports an unreadable file itself
+        return True
 
 
 def _job(p: str, model, effects, out: Path | None) -> dict:
@@ -77,24 +101,34 @@ def _ray_many(paths: list[Path], model, effects, out: Path | None, address: str 
               help="Report folder (default: REC.diagnosis next to the recording).")
 @click.option("--effects", default=None, metavar="ID,...", help="Candidate effects to try (default: the whole library).")
 @click.option("--address", default=None, help="Ray cluster address for a folder of recordings (default: local).")
+@click.option("--closed-loop", "closed_loop", is_flag=True, default=False,
+              help="Also run the SIL firmware on the recording's commands with the given and the fitted model and "
+                   "report both closed-loop errors (one recording; needs the native SIL build).")
 @pass_context
 def diagnose_command(ctx: CliContext, recording: Path, model_file: Path | None, out_dir: Path | None,
-                     effects: str | None, address: str | None) -> None:
+                     effects: str | None, address: str | None, closed_loop: bool) -> None:
     """Diagnose a recording's drive channels: missing physics, where, the fitted model (report.json, HTML, PNGs)."""
-    from robowrangler_sim.diagnose.candidates import LIBRARY
+    from robowrangler_sim.diagnose.candidates import LIBRARY, SPINDLE_LIBRARY
     from robowrangler_sim.diagnose.errors import DiagnoseError
+    from robowrangler_sim.diagnose.loop.candidates import LOOP_LIBRARY
+    from robowrangler_sim.diagnose.loop.model_file import LoopModel, is_loop_model_file
     from robowrangler_sim.diagnose.model_file import load_model
 
     ids = None
     if effects:
         ids = [e.strip() for e in effects.split(",") if e.strip()]
-        unknown = [e for e in ids if e not in LIBRARY]
+        known = list(LIBRARY) + list(SPINDLE_LIBRARY) + list(LOOP_LIBRARY)
+        unknown = [e for e in ids if e not in known]
         if unknown:
-            raise click.UsageError(f"--effects: unknown id(s) {', '.join(unknown)}; known: {', '.join(LIBRARY)}")
+            raise click.UsageError(f"--effects: unknown id(s) {', '.join(unknown)}; known: {', '.join(known)}")
     model = None
+    loop_model = None
     if model_file is not None:
         try:
-            model = load_model(model_file)
+            if is_loop_model_file(model_file):
+                loop_model = LoopModel.load(model_file)
+            else:
+                model = load_model(model_file)
         except DiagnoseError as err:
             raise DiagnosisFailed(str(err)) from None
     if recording.is_dir():
@@ -108,5 +142,5 @@ def diagnose_command(ctx: CliContext, recording: Path, model_file: Path | None, 
         if failed:
             raise DiagnosisFailed(f"{len(failed)} of {len(docs)} recordings could not be diagnosed")
         return
-    doc = _one(recording, model, ids, out_dir, ctx)
+    doc = _one(recording, model, ids, out_dir, ctx, loop_model, closed_loop=closed_loop)
     ctx.result(doc, f"{doc['summary']}\nreport: {doc['outputs']['html']}")

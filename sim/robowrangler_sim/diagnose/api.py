@@ -61,6 +61,10 @@ class DiagnosisResult:
     model: DiagnosedModel
     timings_s: dict[str, float]
     series: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+    spindle: dict = field(default_factory=dict)
+    """The spindle half's section of report.json (spindle_stage.SpindleDiagnosis.section)."""
+    closed_loop: dict | None = None
+    """Closed-loop before/after (closed_loop.py) when diagnose ran it: RMS per channel, model as given vs fitted."""
 
     @property
     def first_line(self) -> str:
@@ -94,22 +98,28 @@ def _resolve_effects(effects) -> list[Candidate]:
 
 
 def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel | None = None,
-             effects: list[str] | None = None, progress=None, pairs: bool = True) -> DiagnosisResult:
+             effects: list[str] | None = None, progress=None, pairs: bool = True,
+             closed_loop: bool = False) -> DiagnosisResult:
     """Diagnose the drive channels of one recording against the model (None: the nominal DriveParams).
 
     effects: candidate ids to try (None: the whole library). progress: a text stream for progress lines.
+    closed_loop: also run the SIL firmware on the recording's /host/command records with the model as given and
+    with the fitted one (closed_loop.py) and report both closed-loop errors.
     Raises DiagnoseError subclasses for recordings or models it cannot work on.
     """
     # the fits' linear algebra is small (tall, ~10 columns): one BLAS thread each is fastest, and the batched
     # plant uses the cores instead (one batch row per thread)
     with threadpool_limits(limits=1):
-        return _diagnose(recording_path, model=model, effects=effects, progress=progress, pairs=pairs)
+        return _diagnose(recording_path, model=model, effects=effects, progress=progress, pairs=pairs,
+                         closed_loop=closed_loop)
 
 
-def _diagnose(recording_path, *, model, effects, progress, pairs) -> DiagnosisResult:
+def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -> DiagnosisResult:
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     cpu0 = time.process_time()
+    from robowrangler_sim.diagnose.spindle_stage import diagnose_spindle, merge_spindle, spindle_candidates
+    spindle_cands, effects = spindle_candidates(effects)
     candidates = _resolve_effects(effects)
     data = load_drive_data(recording_path)
     if model is None:
@@ -315,9 +325,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs) -> DiagnosisRe
     final_theta = chosen_fit.theta_
     model_out = base.extended(final_theta, effects=chosen if verdict == "missing_physics" else [],
                               load_spans_s=load_spans, recording=str(data.path))
-    timings["total_s"] = time.perf_counter() - t0
-    timings["cpu_s"] = time.process_time() - cpu0  # this process's CPU time (all its threads)
-    return DiagnosisResult(
+    result = DiagnosisResult(
         recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
         nominal_refit=nominal_refit, unexplained_fraction=unexplained,
         coverage={**cov, "effects_not_testable": [d["id"] for d in not_ident if "candidates" not in d],
@@ -335,6 +343,20 @@ def _diagnose(recording_path, *, model, effects, progress, pairs) -> DiagnosisRe
                 "after_battery_v": chosen_fit.prediction_["battery_v"],
                 "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"],
                 "telemetry": data.tel.copy(), "speed_valid": valid["rope_speed_mps"].copy()})
+    _progress(progress, "spindle channels")
+    merge_spindle(result, diagnose_spindle(data.path, base=base.spindle_params, candidates=spindle_cands,
+                                           progress=progress))
+    if closed_loop:
+        from robowrangler_sim.diagnose.closed_loop import closed_loop_compare
+        _progress(progress, "closed loop: the SIL firmware on the recording's commands, model as given and fitted")
+        t1 = time.perf_counter()
+        cmp = closed_loop_compare(data.path, nominal=base, fitted=result.model)
+        result.series.update({f"closed_loop_{k}": v for k, v in cmp.pop("series").items()})
+        result.closed_loop = cmp
+        result.timings_s["closed_loop_s"] = time.perf_counter() - t1
+    result.timings_s["total_s"] = time.perf_counter() - t0
+    result.timings_s["cpu_s"] = time.process_time() - cpu0  # this process's CPU time (all its threads)
+    return result
 
 
 def _look_alikes(cand: Candidate) -> list:

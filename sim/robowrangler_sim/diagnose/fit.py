@@ -72,7 +72,9 @@ class ModelFitter:
         solver); bounds_ref: the theta row relative bounds refer to (the model as given; default theta_base)."""
         ref = theta_base if bounds_ref is None else bounds_ref
         data = replay.data
-        measured = {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v}
+        # a replay with other channels (the loop's contours) says what it measured
+        measured = (replay.measured() if hasattr(replay, "measured")
+                    else {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v})
         scales = np.array([s.scale for s in self.specs])
         lo = np.array([s.bounds(ref[s.column])[0] for s in self.specs]) / scales
         hi = np.array([s.bounds(ref[s.column])[1] for s in self.specs]) / scales

@@ -4,7 +4,12 @@
      "drive_params": {DriveParams field: value, ...},           # refitted class estimates folded in
      "effects": {"esc_latency": {"delay_s": 0.0061}, ...},     # library laws, their parameters in SI
      "external_load_spans_s": [[t0, t1], ...],                 # where external_rope_load acts (recording time)
+     "spindle_params": {SpindleParams field: value, ...},       # refitted spindle estimates + its diagnosed terms
      "source_recording": "run.mcap"}
+
+The spindle's effects (screw_backlash: backlash_mm; servo_deadband: deadband_raw, hysteresis_raw) are listed under
+"effects" and carried by "spindle_params" (screw_backlash_mm, servo_deadband_raw, servo_deadband_hysteresis_raw),
+which the spindle plant applies; a file without "spindle_params" is the nominal spindle.
 
 ``load_model(path)`` reads it back (ModelMismatchError naming the field when it is malformed);
 ``DiagnosedModel.sil_drive_params()`` and ``install(session)`` put it into a SilSession
@@ -24,6 +29,7 @@ import numpy as np
 from robowrangler_sim.diagnose.errors import ModelMismatchError
 from robowrangler_sim.plants import DriveParams, DriveParamsError
 from robowrangler_sim.plants import drive_batch as db
+from robowrangler_sim.plants.spindle import SpindleParams, SpindleParamsError
 from robowrangler_sim.rope import RopeParams
 
 FORMAT = "robowrangler.drive_model"
@@ -36,6 +42,11 @@ EFFECT_COLUMNS = {
     "low_speed_friction": {"stribeck_force_n": db.TH_STRIBECK_N, "stribeck_speed_mps": db.TH_STRIBECK_V},
     "external_rope_load": {"external_load_n": db.TH_EXT_LOAD},
 }
+SPINDLE_EFFECT_FIELDS = {
+    "screw_backlash": {"backlash_mm": "screw_backlash_mm"},
+    "servo_deadband": {"deadband_raw": "servo_deadband_raw", "hysteresis_raw": "servo_deadband_hysteresis_raw"},
+}
+"""Spindle effect parameters -> the SpindleParams fields that carry them."""
 
 
 def params_from_theta(base: DriveParams, theta: np.ndarray) -> DriveParams:
@@ -70,6 +81,7 @@ class DiagnosedModel:
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
     external_load_spans_s: list[tuple[float, float]] = field(default_factory=list)
     source_recording: str = ""
+    spindle_params: SpindleParams = field(default_factory=SpindleParams)
 
     @classmethod
     def nominal(cls) -> DiagnosedModel:
@@ -100,13 +112,14 @@ class DiagnosedModel:
         for eid in effects:
             eff[eid] = {name: float(theta[col]) for name, col in EFFECT_COLUMNS.get(eid, {}).items()}
         return DiagnosedModel(params_from_theta(self.drive_params, theta), eff,
-                              [(float(a), float(b)) for a, b in load_spans_s], recording)
+                              [(float(a), float(b)) for a, b in load_spans_s], recording, self.spindle_params)
 
     def to_json(self) -> dict:
         return {"format": FORMAT, "format_version": FORMAT_VERSION,
                 "drive_params": dataclasses.asdict(self.drive_params), "effects": self.effects,
                 "external_load_spans_s": [list(s) for s in self.external_load_spans_s],
-                "source_recording": self.source_recording}
+                "source_recording": self.source_recording,
+                "spindle_params": dataclasses.asdict(self.spindle_params)}
 
     def save(self, path: str | Path) -> Path:
         path = Path(path)
@@ -115,6 +128,10 @@ class DiagnosedModel:
 
     def sil_drive_params(self) -> DriveParams:
         return self.drive_params
+
+    def sil_spindle_params(self) -> SpindleParams:
+        """The spindle plant's parameters: refitted estimates and the diagnosed dead band / backlash terms."""
+        return self.spindle_params
 
     def install(self, session) -> None:
         """Put the effect terms into a SilSession through its seams (actuator filter: latency and dead-band
@@ -151,14 +168,34 @@ def load_model(path: str | Path) -> DiagnosedModel:
     except (DriveParamsError, TypeError, ValueError) as err:
         raise ModelMismatchError(f"model file {path}: drive_params: {err}") from err
     effects = doc.get("effects", {})
+    known_effects = {**EFFECT_COLUMNS, **SPINDLE_EFFECT_FIELDS}
     for eid, values in effects.items():
-        if eid not in EFFECT_COLUMNS:
-            raise ModelMismatchError(f"model file {path}: unknown effect {eid!r}; known: {', '.join(EFFECT_COLUMNS)}")
-        bad = sorted(set(values) - set(EFFECT_COLUMNS[eid]))
+        if eid not in known_effects:
+            raise ModelMismatchError(f"model file {path}: unknown effect {eid!r}; known: {', '.join(known_effects)}")
+        bad = sorted(set(values) - set(known_effects[eid]))
         if bad:
             raise ModelMismatchError(f"model file {path}: effect {eid}: unknown parameters {', '.join(bad)}")
         for k, v in values.items():
             if not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ModelMismatchError(f"model file {path}: effect {eid}.{k}: expected a finite number, got {v!r}")
     spans = [tuple(map(float, s)) for s in doc.get("external_load_spans_s", [])]
-    return DiagnosedModel(params, {k: dict(v) for k, v in effects.items()}, spans, str(doc.get("source_recording", "")))
+    sp = doc.get("spindle_params", {})
+    sp_known = {f.name for f in dataclasses.fields(SpindleParams)}
+    if not isinstance(sp, dict) or set(sp) - sp_known:
+        raise ModelMismatchError(f"model file {path}: unknown spindle_params "
+                                 f"{', '.join(sorted(set(sp) - sp_known)) if isinstance(sp, dict) else sp!r}")
+    try:
+        spindle = SpindleParams(**sp)
+    except (SpindleParamsError, TypeError, ValueError) as err:
+        raise ModelMismatchError(f"model file {path}: spindle_params: {err}") from err
+    # a spindle effect listed under "effects" is what spindle_params carries: they must agree
+    for eid, names in SPINDLE_EFFECT_FIELDS.items():
+        for name, fld in names.items():
+            if eid in effects and name in effects[eid] and abs(effects[eid][name] - getattr(spindle, fld)) > 1e-9:
+                if not sp:
+                    spindle = dataclasses.replace(spindle, **{fld: float(effects[eid][name])})
+                else:
+                    raise ModelMismatchError(f"model file {path}: effect {eid}.{name} = {effects[eid][name]!r} but "
+                                             f"spindle_params.{fld} = {getattr(spindle, fld)!r}")
+    return DiagnosedModel(params, {k: dict(v) for k, v in effects.items()}, spans, str(doc.get("source_recording", "")),
+                          spindle)

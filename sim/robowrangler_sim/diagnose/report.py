@@ -40,6 +40,12 @@ def first_line(result) -> str:
         parts.append(f"{e.effect_id.replace('_', ' ')} " + ", ".join(ps))
     e0 = result.effects[0]
     where = f"located in {len(e0.spans_s)} span(s)" if e0.spans_s else "spread over the recording"
+    if "rope_speed_mps" not in e0.heldout_rms_before:  # a spindle effect: its own channels
+        return (f"left out: {'; '.join(parts)}, {where}, held-out spindle load error "
+                f"{e0.heldout_rms_before['spindle_load_permille']:.1f} -> "
+                f"{e0.heldout_rms_after['spindle_load_permille']:.1f}"
+                f" per mille, guide motion {e0.heldout_rms_before['guide_step_mm'] * 1e3:.1f} -> "
+                f"{e0.heldout_rms_after['guide_step_mm'] * 1e3:.1f} um per 0.1 s")
     return (f"left out: {'; '.join(parts)}, {where}, held-out error {_mmps(e0.heldout_rms_before)} -> "
             f"{_mmps(e0.heldout_rms_after)} mm/s")
 
@@ -71,11 +77,13 @@ def report_json(result) -> dict:
         "not_identifiable": result.not_identifiable, "nominal_refit": result.nominal_refit,
         "unexplained_fraction": result.unexplained_fraction, "coverage": result.coverage,
         "located": result.located, "candidates": result.candidates, "timings_s": result.timings_s,
+        "spindle": getattr(result, "spindle", {}), "closed_loop": getattr(result, "closed_loop", None),
     })
 
 
 def write_report(result, out_dir: str | Path) -> dict[str, Path]:
-    """report.json, model.json, residual_map.png, overlay.png and report.html in out_dir; returns the paths."""
+    """report.json, model.json, residual_map.png, overlay.png, spindle_overlay.png (when the spindle was diagnosed)
+    and report.html in out_dir; returns the paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -126,13 +134,47 @@ def write_report(result, out_dir: str | Path) -> dict[str, Path]:
     fig.tight_layout()
     fig.savefig(paths["residual_map"], dpi=90)
     plt.close(fig)
+    figures = ["overlay", "residual_map"]
+    if "spindle_time_s" in s:  # the spindle half: recorded guide motion and load, nominal refit and chosen model
+        paths["spindle_overlay"] = out / "spindle_overlay.png"
+        ts = s["spindle_time_s"]
+        fig, ax = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
+        ax[0].plot(ts, s["spindle_guide_mm"], "k.", ms=2, label="recording")
+        ax[0].plot(ts, s["spindle_refit_guide_mm"], label="nominal refit (open loop)")
+        ax[0].plot(ts, s["spindle_after_guide_mm"], label="with the chosen effects")
+        ax[0].set_ylabel("guide [mm]")
+        ax[0].legend(loc="upper right")
+        ax[1].plot(ts, s["spindle_load_permille"], "k.", ms=2)
+        ax[1].plot(ts, s["spindle_refit_load_permille"])
+        ax[1].plot(ts, s["spindle_after_load_permille"])
+        ax[1].set_ylabel("spindle load [per mille]")
+        ax[2].plot(ts, s["spindle_load_permille"] - s["spindle_refit_load_permille"], label="nominal refit")
+        ax[2].plot(ts, s["spindle_load_permille"] - s["spindle_after_load_permille"], label="chosen model")
+        ax[2].set_ylabel("load residual")
+        ax[2].set_xlabel("time [s]")
+        ax[2].legend(loc="upper right")
+        fig.tight_layout()
+        fig.savefig(paths["spindle_overlay"], dpi=90)
+        plt.close(fig)
+        figures.append("spindle_overlay")
     imgs = "".join(f'<p><img alt="{k}" src="data:image/png;base64,'
-                   f'{base64.b64encode(paths[k].read_bytes()).decode()}"></p>' for k in ("overlay", "residual_map"))
+                   f'{base64.b64encode(paths[k].read_bytes()).decode()}"></p>' for k in figures)
     rows = "".join(f"<tr><td>{html.escape(str(c['id']))}</td><td>{html.escape(str(c.get('status')))}</td>"
                    f"<td>{html.escape(json.dumps(_clean(c.get('heldout_rms', ''))))}</td></tr>" for c in result.candidates)
+    cl = getattr(result, "closed_loop", None)
+    cl_html = ""
+    if cl:
+        unit = {"rope_speed_mps": ("mm/s", 1e3), "guide_position_m": ("um", 1e6),
+                "spindle_load_permille": ("per mille", 1.0)}
+        cl_rows = "".join(f"<tr><td>{html.escape(ch)}</td><td>{v['nominal'] * unit[ch][1]:.1f}</td>"
+                          f"<td>{v['fitted'] * unit[ch][1]:.1f}</td><td>{unit[ch][0]}</td></tr>"
+                          for ch, v in cl["rms"].items() if ch in unit)
+        cl_html = ("<h2>Closed loop: the SIL firmware on the recording's commands</h2><table border=1><tr><th>channel"
+                   "</th><th>RMS, model as given</th><th>RMS, fitted model</th><th>unit</th></tr>" + cl_rows
+                   + "</table>")
     paths["html"].write_text(
         "<!doctype html><html><head><meta charset='utf-8'><title>wrangler diagnose</title></head><body>"
-        f"<h1>{html.escape(first_line(result))}</h1>{imgs}<h2>Candidates</h2><table border=1>"
+        f"<h1>{html.escape(first_line(result))}</h1>{imgs}{cl_html}<h2>Candidates</h2><table border=1>"
         f"<tr><th>id</th><th>status</th><th>held-out RMS</th></tr>{rows}</table>"
         f"<h2>report.json</h2><pre>{html.escape(json.dumps(doc, indent=1))}</pre></body></html>\n")
     return paths

@@ -16,6 +16,13 @@ What the firmware sees is register values, so the plant produces them as the ser
   in a wrangling scenario); otherwise from a stand-in object of circumference object_circumference_m: once the
   loop is shorter than that, the rope stretches around it (stiffness rope_wrap_stiffness_n_per_m).
 
+Two terms are off in the nominal plant and set by a diagnosed model (SpindleParams): a servo dead band
+(moving speeds up to servo_deadband_raw do not drive; once stopped, the servo drives again only above dead band
++ servo_deadband_hysteresis_raw) and lead-screw backlash (screw_backlash_mm of lost motion between the servo
+output, whose angle the position register reads, and the nut: after a reversal the servo turns through the gap
+without the screw's friction and the rope's pull, so its load reads about 0, then takes the nut along).
+``nut_position_mm`` is where the guide really is; the loop length follows it.
+
 Numbers: AX-12A datasheet (ROBOTIS e-manual): stall torque 1.5 N m and no-load speed 59 rpm at 12 V,
 300 degree position range, 0.111 rpm speed unit. Lead screw: a T8 screw, 8 mm lead, efficiency about 0.35
 (trapezoidal thread, bronze nut). Friction and stiffness values are typical; diagnose can fit them.
@@ -96,6 +103,10 @@ class SpindleParams:
     rope_per_guide_mm: float = 2.0          # rope drawn in per mm of guide travel (two strands)
     rope_wrap_stiffness_n_per_m: float = 3000.0  # rope + object compliance once the loop is tight
     start_angle_deg: float = 120.0          # output angle at power-up (0 = position register 0)
+    # terms `wrangler diagnose` may add (0 = off, the nominal plant):
+    servo_deadband_raw: float = 0.0         # wheel-mode moving speeds up to this magnitude do not drive the servo
+    servo_deadband_hysteresis_raw: float = 0.0  # once stopped, it drives again only above dead band + this
+    screw_backlash_mm: float = 0.0          # lost motion between the servo output (where position is read) and the nut
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -108,6 +119,11 @@ class SpindleParams:
                      "rope_outside_at_home_m", "rope_per_guide_mm", "rope_wrap_stiffness_n_per_m"):
             if getattr(self, name) <= 0:
                 raise SpindleParamsError(f"{name}: expected > 0, got {getattr(self, name)!r}")
+        for name in ("servo_deadband_hysteresis_raw", "screw_backlash_mm"):
+            if getattr(self, name) < 0:
+                raise SpindleParamsError(f"{name}: expected >= 0, got {getattr(self, name)!r}")
+        if not 0 <= self.servo_deadband_raw < 1023:
+            raise SpindleParamsError(f"servo_deadband_raw: expected in [0, 1023), got {self.servo_deadband_raw!r}")
         if not 0 < self.screw_efficiency <= 1:
             raise SpindleParamsError(f"screw_efficiency: expected in (0, 1], got {self.screw_efficiency!r}")
 
@@ -144,6 +160,8 @@ class SpindlePlant:
         self.torque_nm = 0.0
         self.moving_speed_raw = 0
         self._guide_load_n: float | None = None
+        self._servo_on = False  # the dead band's state: driving or stopped
+        self.play_mm = 0.0  # backlash gap taken up on the retract side (0..screw_backlash_mm); nut = guide - play
         self.rope_tension_n = 0.0
         self.position_raw = 0
         self.speed_raw = 0
@@ -156,8 +174,13 @@ class SpindlePlant:
         return (self.output_angle_deg - self._home_angle_deg) * math.pi / 180.0 * self._mm_per_rad
 
     @property
+    def nut_position_mm(self) -> float:
+        """Where the nut (and the rope guide) is: the servo-side position less the backlash gap."""
+        return self.guide_position_mm - self.play_mm
+
+    @property
     def loop_length_m(self) -> float:
-        return self.params.rope_outside_at_home_m - self.params.rope_per_guide_mm * self.guide_position_mm * 1e-3
+        return self.params.rope_outside_at_home_m - self.params.rope_per_guide_mm * self.nut_position_mm * 1e-3
 
     @property
     def limit_switch(self) -> bool:
@@ -216,7 +239,34 @@ class SpindlePlant:
         self.rope_tension_n = self.params.rope_wrap_stiffness_n_per_m * stretch_m if stretch_m > 0 else 0.0
         return self.params.rope_per_guide_mm * self.rope_tension_n
 
-    def _equilibrium_rad_s(self, u: float, load_nm: float) -> float:
+    def _servo_fraction(self, raw: int) -> float:
+        """Drive fraction u in [-1, 1] from the moving-speed register, through the dead band (with hysteresis)."""
+        p = self.params
+        m = raw & 0x3FF
+        if self._servo_on:
+            if m <= p.servo_deadband_raw:
+                self._servo_on = False
+        elif m > p.servo_deadband_raw + p.servo_deadband_hysteresis_raw:
+            self._servo_on = True
+        if not self._servo_on:
+            return 0.0
+        return m / 1023.0 * (-1.0 if raw & 0x400 else 1.0)
+
+    def _engagement(self, u: float) -> float:
+        """1 when the servo drives the nut (the gap is closed in the drive's direction), 0 inside the gap."""
+        b = self.params.screw_backlash_mm
+        if b <= 0.0:
+            return 1.0
+        if u > 0.0:
+            return 1.0 if self.play_mm >= b - 1e-9 else 0.0
+        if u < 0.0:
+            return 1.0 if self.play_mm <= 1e-9 else 0.0
+        return 1.0
+
+    def _move_play(self, dx_mm: float) -> None:
+        self.play_mm = min(max(self.play_mm + dx_mm, 0.0), self.params.screw_backlash_mm)
+
+    def _equilibrium_rad_s(self, u: float, load_nm: float, engagement: float = 1.0) -> float:
         """Output speed where drive, rope load and friction balance: tau_s (u - w/w0) = load + f sgn(w).
 
         The lead screw is self-locking (efficiency < 0.5), so the rope cannot drive it backwards: the speed
@@ -224,7 +274,7 @@ class SpindlePlant:
         p = self.params
         if u == 0.0 or self.stalled:
             return 0.0
-        f = p.friction_torque_nm if u > 0 else -p.friction_torque_nm
+        f = engagement * (p.friction_torque_nm if u > 0 else -p.friction_torque_nm)
         w = self._w0_rad_s * (u - (load_nm + f) / p.stall_torque_nm)
         return max(w, 0.0) if u > 0 else min(w, 0.0)
 
@@ -234,16 +284,19 @@ class SpindlePlant:
             raise ValueError(f"dt_s: expected 0 < dt_s <= 0.05 s, got {dt_s!r}")
         p = self.params
         raw = int(self.moving_speed_raw)
-        u = (raw & 0x3FF) / 1023.0 * (-1.0 if raw & 0x400 else 1.0)
+        u = self._servo_fraction(raw)
         n = max(1, math.ceil(dt_s / 0.001))  # substeps: the end stops and the wrap stiffness are stiff
         h = dt_s / n
         alpha = 1.0 - math.exp(-h / p.response_time_s)
         lo, hi = -p.end_stop_margin_mm, p.stroke_mm + p.end_stop_margin_mm
         for _ in range(n):
             # rope pull on the guide -> torque at the servo output, resisting retraction
-            load_nm = self._rope_force_n() * self._mm_per_rad * 1e-3 / p.screw_efficiency
-            self.speed_rad_s += (self._equilibrium_rad_s(u, load_nm) - self.speed_rad_s) * alpha
+            engagement = self._engagement(u)
+            load_nm = engagement * self._rope_force_n() * self._mm_per_rad * 1e-3 / p.screw_efficiency
+            self.speed_rad_s += (self._equilibrium_rad_s(u, load_nm, engagement) - self.speed_rad_s) * alpha
             self.output_angle_deg += math.degrees(self.speed_rad_s * h)
+            if p.screw_backlash_mm > 0.0:
+                self._move_play(self.speed_rad_s * h * self._mm_per_rad)
             pos = self.guide_position_mm
             if pos < lo or pos > hi:  # hard end stop
                 edge = lo if pos < lo else hi

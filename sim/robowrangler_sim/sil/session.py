@@ -179,6 +179,8 @@ class SilSession:
                 raise ValueError("model: expected either model or drive_params/drive, got both")
             diagnosed = model if isinstance(model, DiagnosedModel) else load_model(model)
             drive_params = diagnosed.sil_drive_params()
+            if spindle_params is None and spindle is None:  # its spindle terms (dead band, backlash) too
+                spindle_params = diagnosed.sil_spindle_params()
         if not isinstance(tick_us, int) or not 100 <= tick_us <= 5000:
             raise ValueError(f"tick_us: expected an int in [100, 5000] us, got {tick_us!r}")
         if speedup is not None and not (isinstance(speedup, (int, float)) and speedup > 0):

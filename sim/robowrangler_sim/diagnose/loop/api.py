@@ -1,0 +1,239 @@
+"""diagnose_loop(recording) -> LoopDiagnosis: the engine's stages (diagnose/api.py) on the loop's contours.
+
+replay (the chain's fast form driven by rope speed, guide and phi) -> residuals (signed normal distance, noise from
+the data) -> locate (loop part, phi / speed band, steady / transient, time spans) -> refit the chain's own
+parameters (servo time constant kd/kp, loop length scale) -> each loop candidate fitted with 95 % intervals
+(diagnose.fit.ModelFitter) -> select on held-out frames and BIC (diagnose.select) -> extended model (loop model
+file) -> report (report_json / write_loop_report).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robowrangler_sim.diagnose.errors import UnknownEffectError
+from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
+from robowrangler_sim.diagnose.loop import shape_model as sm
+from robowrangler_sim.diagnose.loop.candidates import LOOP_LIBRARY, LoopCandidate
+from robowrangler_sim.diagnose.loop.data import LoopData, load_loop_data
+from robowrangler_sim.diagnose.loop.locate import LoopLocator, frame_regimes, part_labels
+from robowrangler_sim.diagnose.loop.model_file import LoopModel
+from robowrangler_sim.diagnose.loop.replay import CHANNEL, LoopReplay
+from robowrangler_sim.diagnose.loop.residuals import LoopResiduals
+from robowrangler_sim.diagnose.parameters import ParamSpec
+from robowrangler_sim.diagnose.residuals import robust_scale
+from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, heldout_p, score_model
+
+BLOCK_S = 1.0
+HELDOUT_EVERY = 3
+ALPHA = 0.01
+
+LOOP_NOMINAL_REFIT: tuple[ParamSpec, ...] = (
+    ParamSpec("servo_time_constant_s", sm.TH_TAU_S, "s", 0.5, 2.0, 0.5, relative=True),
+    ParamSpec("loop_length_scale", sm.TH_LEN_SCALE, "1", 0.95, 1.05, 1.0, relative=True),
+)
+"""The chain's own parameters the refit may move: its servos' kd/kp and the loop length (rope / guide calibration)."""
+
+
+@dataclass
+class LoopFinding:
+    effect_id: str
+    params: dict[str, dict]
+    law: str
+    part: str | None
+    spans_s: list[list[float]]
+    heldout_rms_mm_before: float
+    heldout_rms_mm_after: float
+    evidence: dict
+
+
+@dataclass
+class LoopDiagnosis:
+    """What the loop diagnosis found; ``report`` is its report.json section."""
+
+    recording: Path
+    verdict: str
+    effects: list[LoopFinding]
+    not_identifiable: list[dict]
+    nominal_refit: dict[str, dict]
+    noise_mm: float
+    located: dict
+    candidates: list[dict]
+    model: LoopModel
+    timings_s: dict[str, float]
+    notes: list[str]
+    frames: int
+    series: dict = field(repr=False, default_factory=dict)
+
+    @property
+    def first_line(self) -> str:
+        from robowrangler_sim.diagnose.loop.report import loop_first_line
+        return loop_first_line(self)
+
+    @property
+    def report(self) -> dict:
+        from robowrangler_sim.diagnose.loop.report import loop_report_json
+        return loop_report_json(self)
+
+
+def _resolve(effects) -> list[LoopCandidate]:
+    if effects is None:
+        return [c() for c in LOOP_LIBRARY.values()]
+    out = []
+    for e in effects:
+        if e not in LOOP_LIBRARY:
+            raise UnknownEffectError(f"effects: unknown loop effect id {e!r}; known: {', '.join(LOOP_LIBRARY)}")
+        out.append(LOOP_LIBRARY[e]())
+    return out
+
+
+def _progress(stream, msg: str) -> None:
+    if stream is not None:
+        print(f"diagnose loop: {msg}", file=stream, flush=True)
+
+
+def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel | None = None,
+                  effects: list[str] | None = None, progress=None) -> LoopDiagnosis:
+    """Diagnose the loop contours of one recording against the chain model (None: the nominal chain with the
+    default shape table). effects: loop candidate ids (None: all). Raises DiagnoseError subclasses naming what is
+    wrong (no contours, no phi, contours in another frame, too few points or frames, loop length mismatch)."""
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    cands = _resolve(effects)
+    base = LoopModel.nominal() if model is None else (model if isinstance(model, LoopModel) else LoopModel.load(model))
+    data = load_loop_data(recording_path, takeoff_speed_mps=base.takeoff_speed_mps(),
+                          loop_length_of_guide=base.loop_length_m)
+    shape = base.shape_model()
+    replay = LoopReplay(data, shape, np.array([base.loop_length_m(g) for g in data.guide_m]))
+    theta_base = base.theta(shape)
+    replay.set_normals(theta_base)
+    F, K = data.points_m.shape[:2]
+    block_f = ((data.time_s - data.time_s[0]) // BLOCK_S).astype(int)
+    n_blocks = int(block_f.max()) + 1
+    held_blocks = np.arange(HELDOUT_EVERY - 1, n_blocks, HELDOUT_EVERY)
+    if held_blocks.size < 2:
+        held_blocks = np.arange(1, n_blocks, 2)
+    block_id = np.repeat(block_f, K)
+    fit_mask = ~np.isin(block_id, held_blocks)
+    timings["load_s"] = time.perf_counter() - t0
+    _progress(progress, f"{data.path.name}: {F} airborne frames of {data.frames_total}, {K} points each")
+
+    t1 = time.perf_counter()
+    pred0 = replay.predict(theta_base)[CHANNEL][0]
+    res0 = LoopResiduals().fit(replay, pred0)
+    noise = res0.noise_m_
+    timings["replay_s"] = time.perf_counter() - t1
+
+    t1 = time.perf_counter()
+    _progress(progress, "refitting the chain's own parameters")
+    w0 = {CHANNEL: 1.0 / max(noise, 1e-5)}
+    nominal = ModelFitter(list(LOOP_NOMINAL_REFIT), weights=w0).fit(replay, theta_base, fit_mask=fit_mask)
+    r_nom = replay.measured()[CHANNEL] - nominal.prediction_[CHANNEL]
+    sigma = max(noise, robust_scale(r_nom[fit_mask]))
+    weights = {CHANNEL: 1.0 / sigma}
+    nominal = ModelFitter(list(LOOP_NOMINAL_REFIT), weights=weights).fit(replay, nominal.theta_, fit_mask=fit_mask,
+                                                                         bounds_ref=theta_base)
+    r_nom = replay.measured()[CHANNEL] - nominal.prediction_[CHANNEL]
+    n_eff = effective_counts({CHANNEL: r_nom}, fit_mask)
+    sc_nom = score_model("nominal_refit", len(LOOP_NOMINAL_REFIT), {CHANNEL: r_nom}, weights, fit_mask, block_id,
+                         held_blocks, n_eff)
+    timings["nominal_refit_s"] = time.perf_counter() - t1
+
+    t1 = time.perf_counter()
+    parts = part_labels(data.points_m)
+    regimes = frame_regimes(data, replay.phidot_rad_s, shape.speeds)
+    loc = LoopLocator(alpha=ALPHA).fit(r_nom.reshape(F, K), noise, parts, regimes, data.time_s)
+    timings["locate_s"] = time.perf_counter() - t1
+
+    t1 = time.perf_counter()
+    fits: dict[str, tuple[LoopCandidate, ModelFitter, ModelScore]] = {}
+    not_ident: list[dict] = []
+    rows: list[dict] = [{"id": "nominal_refit", "status": "base", "heldout_rms_mm": _mm(sc_nom),
+                         "fit_rms_mm": round(sc_nom.fit_rms[CHANNEL] * 1e3, 3)}]
+    for cand in cands:
+        ident = cand.identifiable(replay)
+        if not ident.identifiable:
+            not_ident.append({"id": cand.effect_id, "reason": ident.reason,
+                              "separating_measurement": ident.separating_measurement})
+            rows.append({"id": cand.effect_id, "status": "not_identifiable", "reason": ident.reason})
+            continue
+        _progress(progress, f"fitting {cand.effect_id}")
+        th_c = cand.apply_neutral(nominal.theta_)
+        cols, starts = cand.start_grid(th_c)
+        fitter = ModelFitter(list(LOOP_NOMINAL_REFIT) + list(cand.params), weights=weights, max_nfev=15).fit(
+            replay, th_c, fit_mask=fit_mask, starts=starts, start_columns=cols, bounds_ref=theta_base)
+        r_c = replay.measured()[CHANNEL] - fitter.prediction_[CHANNEL]
+        sc = score_model(cand.effect_id, len(LOOP_NOMINAL_REFIT) + len(cand.params), {CHANNEL: r_c}, weights,
+                         fit_mask, block_id, held_blocks, n_eff)
+        ok, ev = accepted(sc, sc_nom, alpha=ALPHA)
+        fits[cand.effect_id] = (cand, fitter, sc)
+        own = {s.name for s in cand.params}
+        rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
+                     "heldout_rms_mm": _mm(sc),
+                     "params": {p.name: round(p.value, 6) for p in fitter.params_ if p.name in own}})
+    timings["candidates_s"] = time.perf_counter() - t1
+
+    t1 = time.perf_counter()
+    ok_ids = sorted([r["id"] for r in rows if r["status"] == "accepted"], key=lambda i: fits[i][2].block_sse.sum())
+    verdict, chosen, chosen_fit, chosen_sc = "none", [], nominal, sc_nom
+    if ok_ids:
+        best = ok_ids[0]
+        rivals = [o for o in ok_ids[1:] if heldout_p(fits[best][2], fits[o][2]) >= ALPHA
+                  and abs(fits[o][2].bic - fits[best][2].bic) < 10.0]
+        chosen, chosen_fit, chosen_sc = [best], fits[best][1], fits[best][2]
+        if rivals:
+            verdict = "not_identifiable"
+            names = [best] + rivals
+            not_ident.insert(0, {"id": " / ".join(names), "candidates": names,
+                                 "reason": "these candidates explain the contours equally well on held-out frames",
+                                 "separating_measurement": "; ".join(f"{i}: {fits[i][0].separating_measurement}"
+                                                                     for i in names)})
+        else:
+            verdict = "missing_physics"
+    timings["select_s"] = time.perf_counter() - t1
+
+    effects_out: list[LoopFinding] = []
+    if verdict == "missing_physics":
+        _progress(progress, "intervals (jackknife)")
+        cand = fits[chosen[0]][0]
+        own = {s.name for s in cand.params}
+        jackknife_intervals(chosen_fit, own, max_nfev=4)
+        r_after = replay.measured()[CHANNEL] - chosen_fit.prediction_[CHANNEL]
+        gain = (r_nom ** 2 - r_after ** 2).reshape(F, K)
+        part_gain = {}
+        for p_i, p_name in enumerate(("near_exit", "upper_branch", "tip", "lower_branch")):
+            m = parts == p_i
+            part_gain[p_name] = float(gain[m].sum())
+        part = max(part_gain, key=part_gain.get)
+        ev = next(r for r in rows if r["id"] == chosen[0])
+        effects_out.append(LoopFinding(
+            effect_id=cand.effect_id, law=cand.law, part=part, spans_s=[s[:2] for s in loc.spans_],
+            params={p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
+                    for p in chosen_fit.params_ if p.name in own},
+            heldout_rms_mm_before=_mm(sc_nom), heldout_rms_mm_after=_mm(chosen_sc),
+            evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"]}))
+    nominal_refit = {p.name: {"nominal": float(theta_base[s.column]), "fitted": p.value, "unit": p.unit,
+                              "ci95": list(p.ci95)}
+                     for p, s in zip(nominal.params_, nominal.specs)}
+    model_out = base.extended(chosen_fit.theta_, effects=chosen if verdict == "missing_physics" else [],
+                              recording=str(data.path))
+    timings["total_s"] = time.perf_counter() - t0
+    located = {"part": loc.part_, "cells": loc.cells_, "spans_s": loc.spans_}
+    return LoopDiagnosis(
+        recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
+        nominal_refit=nominal_refit, noise_mm=round(noise * 1e3, 3), located=located, candidates=rows,
+        model=model_out, timings_s=timings, notes=list(data.notes), frames=F,
+        series={"time_s": data.time_s, "heldout": ~fit_mask.reshape(F, K)[:, 0],
+                "rms_before_mm": np.sqrt(np.mean(r_nom.reshape(F, K) ** 2, axis=1)) * 1e3,
+                "rms_after_mm": np.sqrt(np.mean((replay.measured()[CHANNEL]
+                                                 - chosen_fit.prediction_[CHANNEL]).reshape(F, K) ** 2, axis=1)) * 1e3,
+                "observed": data.points_m, "nominal_theta": theta_base, "after_theta": chosen_fit.theta_,
+                "replay": replay})
+
+
+def _mm(sc: ModelScore) -> float:
+    return round(sc.heldout_rms[CHANNEL] * 1e3, 3)

@@ -1,0 +1,208 @@
+"""The chain model's loop in its fast, steady-shape form, batched over parameter rows, plus the loop effects' laws.
+
+The chain plant (chain/plant.py) drives its in-plane joints to the shape table's contour at the module's
+inclination phi, for the tabulated rope speed at or below the present one, scaled to the loop length the guide
+leaves outside (joint angles do not depend on scale), through overdamped servos: first order with
+tau = kd/kp = 0.5 s. The fast form does the same on the contour points: the table's contour at (phi, speed)
+resampled to K points, times the loop length, followed through a first-order lag of tau per camera frame.
+bench/bench_diagnose_loop.py and tests/diagnose/test_diagnose_loop.py compare it with the MuJoCo chain plant.
+
+Theta columns (TH_*): the nominal chain's own parameters, then one group per loop effect; an effect at its
+neutral value leaves the nominal chain unchanged. Effect laws (all in the table's frame, on the target shape):
+
+    speed:      S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)] + [S_lin(v sqrt(C_f/C_f0) c_w) - S_lin(v c_w)]
+                (S_lin: linear in speed between the table's speeds; g_v speed_shape_gain, C_f skin friction;
+                c_w = cos(delta)^0.5, the wind's change of effective gravity)
+    wind:       relative air speed v - w t_x along the rope (t_x: x share of the flow direction; first order in w)
+                plus the normal drag tilt delta = atan(0.5 x 0.5 rho C_n d w |w| / (lambda g)): R(delta) S(phi - delta)
+    rotation:   phi_eff = phi - tau_n dphi/dt - k_g v dphi/dt   (normal drag lag; Coriolis on the running rope)
+    bending:    tangent angle along the arc smoothed over l_b (Gaussian), end error spread linearly along the arc
+    dynamics:   wave speed c = 0: first-order lag tau (the chain); c > 0: each point follows the target with the
+                transport delay s / c, s its arc distance from the exit (a disturbance carried along the rope)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+
+from robowrangler_sim.rope import GRAVITY_MPS2, STANDARD_AIR_DENSITY_KG_PER_M3, RopeParams
+from robowrangler_sim.shape_table import ShapeTable, resample_by_arc_length
+
+TH_TAU_S = 0
+TH_LEN_SCALE = 1
+TH_SPEED_GAIN = 2
+TH_CF = 3
+TH_ROT_LAG_S = 4
+TH_BEND_LEN_M = 5
+TH_WAVE_MPS = 6
+TH_WIND_MPS = 7
+TH_GYRO_S2_PER_M = 8
+N_THETA = 9
+PHI_STEP_DEG = 0.25
+WIND_NORMAL_SHARE = 0.5
+WIND_AXIAL_SHARE = 1.0
+"""Mean of sin^2 of the angle between a uniform wind and the rope round a loop: the share of w|w| that is normal."""
+
+
+class LoopShapeModel:
+    """Batched fast form of the chain's loop.
+
+    Args:
+        table: the shape table the chain replays.
+        rope: the rope (C_f0, C_n, d, lambda).
+        tau_s: the chain's servo time constant kd/kp.
+        n_points: contour points K.
+    """
+
+    def __init__(self, table: ShapeTable, *, rope: RopeParams, tau_s: float, n_points: int) -> None:
+        self.table = table
+        self.rope = rope
+        self.tau0_s = float(tau_s)
+        self.n_points = int(n_points)
+        lo, hi = float(table.phi_deg[0]), float(table.phi_deg[-1])
+        self.phi_grid_deg = np.arange(lo, hi + 1e-9, PHI_STEP_DEG)
+        self.speeds = np.asarray(table.rope_speed_mps, dtype=float)
+        grid = np.empty((self.speeds.size, self.phi_grid_deg.size, self.n_points, 2))
+        for s in range(self.speeds.size):
+            cs = table._spline(s)(self.phi_grid_deg)
+            for g in range(self.phi_grid_deg.size):
+                c = resample_by_arc_length(cs[g], self.n_points)
+                grid[s, g] = c / float(np.sum(np.linalg.norm(np.diff(c, axis=0), axis=1)))
+        self.grid = grid  # (S, G, K, 2) per metre of loop
+
+    def theta0(self) -> np.ndarray:
+        th = np.zeros(N_THETA)
+        th[TH_TAU_S] = self.tau0_s
+        th[TH_LEN_SCALE] = 1.0
+        th[TH_CF] = self.rope.skin_friction_coeff
+        return th
+
+    # ------------------------------------------------------------------------------------------------------------
+    def _at_phi(self, s_idx: np.ndarray, phi_deg: np.ndarray) -> np.ndarray:
+        """Contours (..., K, 2) at speed indices s_idx and inclinations phi_deg (same shapes), linear on the grid."""
+        x = (np.clip(phi_deg, self.phi_grid_deg[0], self.phi_grid_deg[-1]) - self.phi_grid_deg[0]) / PHI_STEP_DEG
+        i = np.minimum(x.astype(int), self.phi_grid_deg.size - 2)
+        w = (x - i)[..., None, None]
+        return (1.0 - w) * self.grid[s_idx, i] + w * self.grid[s_idx, i + 1]
+
+    def _snap(self, v: np.ndarray, phi_deg: np.ndarray) -> np.ndarray:
+        s = np.clip(np.searchsorted(self.speeds, v, side="right") - 1, 0, self.speeds.size - 1)
+        return self._at_phi(s, phi_deg)
+
+    def _lin(self, v: np.ndarray, phi_deg: np.ndarray) -> np.ndarray:
+        if self.speeds.size == 1:
+            return self._at_phi(np.zeros(v.shape, dtype=int), phi_deg)
+        j = np.clip(np.searchsorted(self.speeds, v, side="right") - 1, 0, self.speeds.size - 2)
+        f = np.clip((v - self.speeds[j]) / (self.speeds[j + 1] - self.speeds[j]), -0.5, 1.5)[..., None, None]
+        a, b = self._at_phi(j, phi_deg), self._at_phi(j + 1, phi_deg)
+        return a + f * (b - a)
+
+    def targets(self, theta: np.ndarray, *, phi_rad: np.ndarray, phidot_rad_s: np.ndarray, speed_mps: np.ndarray,
+                loop_length_m: np.ndarray) -> np.ndarray:
+        """Target contours (B, F, K, 2) in metres for rows theta (B, N_THETA) and frames (F,)."""
+        theta = np.atleast_2d(theta)
+        B = theta.shape[0]
+        col = lambda c: theta[:, c][:, None]  # noqa: E731
+        rope = self.rope
+        v = np.broadcast_to(speed_mps[None, :], (B, speed_mps.size))
+        w = col(TH_WIND_MPS)
+        f_w = WIND_NORMAL_SHARE * 0.5 * STANDARD_AIR_DENSITY_KG_PER_M3 * rope.normal_drag_coeff * rope.diameter_m * w * np.abs(w)
+        delta = np.arctan2(f_w, rope.linear_density_kg_per_m * GRAVITY_MPS2)  # (B, 1)
+        c_w = np.sqrt(np.cos(delta))
+        phi_eff = (phi_rad[None, :] - col(TH_ROT_LAG_S) * phidot_rad_s[None, :]
+                   - col(TH_GYRO_S2_PER_M) * v * phidot_rad_s[None, :] - delta)
+        phi_deg = np.rad2deg(phi_eff)
+        snap = self._snap(v, phi_deg)
+        lin_v = self._lin(v, phi_deg)
+        shape = snap + col(TH_SPEED_GAIN)[..., None, None] * (lin_v - snap)
+        ratio = np.sqrt(col(TH_CF) / rope.skin_friction_coeff)
+        moved = (np.abs(ratio - 1.0) > 1e-12) | (np.abs(c_w - 1.0) > 1e-12)
+        v_w = v * c_w
+        if np.any(moved):
+            shape = shape + self._lin(v_w * ratio, phi_deg) - lin_v
+        if np.any(w != 0.0):
+            # the lift comes from the outgoing (upper) branch's skin friction at the relative air speed v - w: the loop
+            # flies as at that speed
+            shape = shape + self._lin(v_w * ratio - w * WIND_AXIAL_SHARE, phi_deg) - self._lin(v_w * ratio, phi_deg)
+        if np.any(delta != 0.0):
+            cd, sd = np.cos(delta)[..., None], np.sin(delta)[..., None]  # (B, 1, 1)
+            x, z = shape[..., 0], shape[..., 1]
+            shape = np.stack([cd * x - sd * z, sd * x + cd * z], axis=-1)
+        lb = theta[:, TH_BEND_LEN_M]
+        if np.any(lb > 0):
+            shape = self._bend(shape, lb)
+        scale = (loop_length_m[None, :] * col(TH_LEN_SCALE))[..., None, None]
+        return shape * scale
+
+    def _bend(self, shape: np.ndarray, lb_m: np.ndarray) -> np.ndarray:
+        """Smooth the tangent angle over the bending length (per metre of loop: the shapes are unit length)."""
+        out = shape.copy()
+        d = np.diff(shape, axis=-2)
+        ang = np.unwrap(np.arctan2(d[..., 1], d[..., 0]), axis=-1)
+        seg = np.linalg.norm(d, axis=-1)
+        ds = 1.0 / (self.n_points - 1)
+        for b in np.flatnonzero(lb_m > 0):
+            sig = float(lb_m[b]) / 2.0 / ds  # bending length per 2 m loop -> points of the unit contour
+            a = gaussian_filter1d(ang[b], sig, axis=-1, mode="nearest")
+            steps = seg[b][..., None] * np.stack([np.cos(a), np.sin(a)], axis=-1)
+            pts = np.concatenate([shape[b][..., :1, :], shape[b][..., :1, :] + np.cumsum(steps, axis=-2)], axis=-2)
+            err = pts[..., -1:, :] - shape[b][..., -1:, :]
+            frac = np.linspace(0.0, 1.0, self.n_points)[:, None]
+            out[b] = pts - frac * err
+        return out
+
+    def follow(self, theta: np.ndarray, targets: np.ndarray, *, time_s: np.ndarray, segment: np.ndarray,
+               loop_length_m: np.ndarray) -> np.ndarray:
+        """The loop following its targets (B, F, K, 2): first-order lag tau (wave speed 0), or each point the
+        target delayed by its arc distance over the wave speed."""
+        theta = np.atleast_2d(theta)
+        B, F = targets.shape[:2]
+        out = np.empty_like(targets)
+        tau = np.maximum(theta[:, TH_TAU_S], 1e-3)
+        c = theta[:, TH_WAVE_MPS]
+        starts = np.flatnonzero(np.r_[True, segment[1:] != segment[:-1]])
+        ends = np.r_[starts[1:], F]
+        lag_rows = c <= 0
+        if np.any(lag_rows):
+            tr = targets[lag_rows]
+            y = np.empty_like(tr)
+            tl = tau[lag_rows][:, None, None]
+            for a, b in zip(starts, ends):
+                y[:, a] = tr[:, a]
+                for f in range(a + 1, b):
+                    k = 1.0 - np.exp(-(time_s[f] - time_s[f - 1]) / tl)
+                    y[:, f] = y[:, f - 1] + k * (tr[:, f] - y[:, f - 1])
+            out[lag_rows] = y
+        if np.any(~lag_rows):
+            s_frac = np.linspace(0.0, 1.0, self.n_points)
+            for b in np.flatnonzero(~lag_rows):
+                delay = s_frac[None, :] * loop_length_m[:, None] / c[b]  # (F, K)
+                for a, e in zip(starts, ends):
+                    t = time_s[a:e]
+                    tq = np.maximum(t[:, None] - delay[a:e], t[0])  # (n, K)
+                    idx = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, t.size - 1)
+                    nxt = np.minimum(idx + 1, t.size - 1)
+                    dt = np.maximum(t[nxt] - t[idx], 1e-12)
+                    wq = np.where(nxt > idx, (tq - t[idx]) / dt, 0.0)[..., None]
+                    kk = np.arange(self.n_points)[None, :]
+                    tg = targets[b, a:e]
+                    out[b, a:e] = (1.0 - wq) * tg[idx, kk] + wq * tg[nxt, kk]
+        return out
+
+
+def phidot(time_s: np.ndarray, phi_rad: np.ndarray, segment: np.ndarray) -> np.ndarray:
+    """dphi/dt per frame (central differences within each airborne stretch), rad/s."""
+    out = np.zeros_like(phi_rad)
+    for s in np.unique(segment):
+        m = np.flatnonzero(segment == s)
+        if m.size >= 2:
+            out[m] = np.gradient(phi_rad[m], time_s[m])
+    return out
+
+
+def takeoff_ratio(theta_row: np.ndarray, rope: RopeParams) -> float:
+    """Takeoff speed ratio implied by a fitted C_f: v*/v*0 = sqrt(C_f0 / C_f)."""
+    return math.sqrt(rope.skin_friction_coeff / float(theta_row[TH_CF]))

@@ -1,0 +1,215 @@
+"""wrangler diagnose on the rope loop: short recordings from the first-principles string shooter (the truth) with
+one physical change each, diagnosed blind against the chain's loop (robowrangler_sim.diagnose.loop)."""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+
+import numpy as np
+import pytest
+
+from robowrangler.recorder import RecordingWriter, read_recording
+from robowrangler_sim.diagnose import DiagnoseError, MissingChannelsError, ModelMismatchError, NoUsableSpanError
+from robowrangler_sim.diagnose.loop import ContourFrameError, diagnose_loop
+from robowrangler_sim.diagnose.loop.model_file import LoopModel
+from robowrangler_sim.diagnose.loop.proof import LoopScript, LoopTruth, generate_loop_recording
+from robowrangler_sim.diagnose.loop.report import write_loop_report
+
+STEADY = LoopScript(4.0, ((0.0, 5.0),), ((0.0, 0.1),))
+CF0 = 0.08478874859262518
+
+
+@pytest.fixture(scope="module")
+def recs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("loop")
+    out = {}
+    out["none"] = generate_loop_recording(d / "none.mcap", truth=LoopTruth(None), script=STEADY, seed=11)
+    out["speed"] = generate_loop_recording(d / "speed.mcap", truth=LoopTruth("loop_speed_dependence"),
+                                           script=LoopScript(4.0, ((0.0, 4.5),), ((0.0, 0.1),)), seed=12)
+    out["cf"] = generate_loop_recording(d / "cf.mcap", truth=LoopTruth("axial_drag_coefficient", cf_factor=1.25),
+                                        script=STEADY, seed=13)
+    out["wave"] = generate_loop_recording(
+        d / "wave.mcap", truth=LoopTruth("transient_wave_dynamics"), seed=14,
+        script=LoopScript(4.5, ((0.0, 5.0),), ((0.0, 0.0), (1.2, 0.0), (1.7, 0.35), (3.0, 0.35), (3.5, -0.1))))
+    out["wind"] = generate_loop_recording(d / "wind.mcap", truth=LoopTruth("uniform_wind", wind_mps=1.5),
+                                          script=STEADY, seed=15)
+    out["upper"] = generate_loop_recording(d / "upper.mcap", truth=LoopTruth(None), script=STEADY, seed=16,
+                                           branch_bump_m=0.02, branch="upper_branch")
+    return out
+
+
+def test_effect_free_recording_gives_none_and_says_what_cannot_be_seen(recs):
+    res = diagnose_loop(recs["none"].path)
+    assert res.verdict == "none", res.first_line
+    assert res.candidates[0]["heldout_rms_mm"] < 2.0 * res.noise_mm
+    assert 1.0 < res.noise_mm < 3.5  # the camera's 2 mm, estimated from the data
+    blind = {d["id"]: d for d in res.not_identifiable}
+    assert "2-D" in blind["out_of_plane_stiffness"]["reason"]
+    assert "camera" in blind["out_of_plane_stiffness"]["separating_measurement"]
+    assert "gyroscopic_base_rotation" in blind
+
+
+def test_speed_dependence_is_named_between_the_table_speeds(recs):
+    res = diagnose_loop(recs["speed"].path)
+    assert res.verdict in ("missing_physics", "not_identifiable"), res.first_line
+    named = [e.effect_id for e in res.effects] or res.not_identifiable[0]["candidates"]
+    assert "loop_speed_dependence" in named
+    assert any(c["kind"] == "speed_band" and c["label"] == "4-5 m/s" and c["flagged"] for c in res.located["cells"])
+
+
+def test_skin_friction_is_recovered_with_an_interval(recs, tmp_path):
+    res = diagnose_loop(recs["cf"].path)
+    assert res.verdict == "missing_physics", res.first_line
+    e = res.effects[0]
+    assert e.effect_id == "axial_drag_coefficient"
+    p = e.params["skin_friction_coeff"]
+    assert abs(p["value"] - 1.25 * CF0) / (1.25 * CF0) < 0.15
+    assert p["ci95"][0] < p["value"] < p["ci95"][1]
+    assert e.heldout_rms_mm_after < 0.6 * e.heldout_rms_mm_before
+    # the extended model: a file the chain plant loads (shape table with the effect baked in)
+    paths = write_loop_report(res, tmp_path / "rep")
+    doc = json.loads(paths["report"].read_text())
+    assert doc["verdict"] == "missing_physics" and paths["html"].exists() and paths["error"].exists()
+    model = LoopModel.load(paths["model"])
+    assert model.effects["axial_drag_coefficient"]["skin_friction_coeff"] == pytest.approx(p["value"])
+    table = model.shape_table()
+    assert table.rope_speed_mps.size > 3  # dense speed grid
+    base = LoopModel().shape_table()
+    moved = np.abs(table.contour(5.7, rope_speed_mps=5.0) - base.contour(5.7, rope_speed_mps=5.0)).max()
+    assert moved > 0.01
+    from robowrangler_sim.chain.plant import ChainPlant, PlantInputs
+
+    plant = ChainPlant(table=table, params=model.chain_params(), initial=PlantInputs(rope_speed_mps=5.0))
+    plant.advance(PlantInputs(rope_speed_mps=5.0), duration_s=0.5)
+    assert plant.outputs().lift == 1.0
+
+
+def test_transient_wave_dynamics_is_named_on_fast_module_turns(recs):
+    res = diagnose_loop(recs["wave"].path)
+    assert res.verdict == "missing_physics", res.first_line
+    assert res.effects[0].effect_id == "transient_wave_dynamics"
+    assert 1.0 < res.effects[0].params["wave_speed_mps"]["value"] < 20.0
+    motion = {c["label"]: c for c in res.located["cells"] if c["kind"] == "motion"}
+    assert motion["transient"]["flagged"]
+
+
+def test_uniform_wind_is_named(recs):
+    res = diagnose_loop(recs["wind"].path)
+    accepted = [c["id"] for c in res.candidates if c.get("status") == "accepted"]
+    assert "uniform_wind" in accepted, res.first_line
+    assert res.effects and res.effects[0].effect_id == "uniform_wind", res.first_line
+    assert res.effects[0].params["wind_speed_mps"]["value"] > 0  # blowing out along the launch direction
+
+
+def test_an_effect_on_the_upper_branch_is_located_there(recs):
+    res = diagnose_loop(recs["upper"].path)
+    assert res.located["part"] == "upper_branch", res.located["cells"][:4]
+    lower = next(c for c in res.located["cells"] if c["label"] == "lower_branch")
+    upper = next(c for c in res.located["cells"] if c["label"] == "upper_branch")
+    assert upper["significance"] > 3 * lower["significance"]
+
+
+def test_effects_can_be_selected(recs):
+    res = diagnose_loop(recs["cf"].path, effects=["uniform_wind"])
+    assert [c["id"] for c in res.candidates] == ["nominal_refit", "uniform_wind"]
+    with pytest.raises(DiagnoseError, match="unknown loop effect id 'esc_latency'"):
+        diagnose_loop(recs["cf"].path, effects=["esc_latency"])
+
+
+# --- bad input ------------------------------------------------------------------------------------------------------
+def _rewrite(src, dst, change, *, validate=True):
+    rec = read_recording(src)
+    with RecordingWriter(dst, source="simulator", seed=0, time_base="simulation", validate=validate) as w:
+        for r in rec.records["/loop/observation"]:
+            data = change(dict(r.data))
+            if data is not None:
+                w.write("/loop/observation", data, log_time_ns=r.log_time_ns)
+    return dst
+
+
+def test_contours_in_another_frame_are_refused(recs, tmp_path):
+    mm = _rewrite(recs["none"].path, tmp_path / "mm.mcap",
+                  lambda d: {**d, "points_m": [[x * 1e3, z * 1e3] for x, z in d["points_m"]]})
+    with pytest.raises(ContourFrameError, match="loop length"):
+        diagnose_loop(mm)
+    down = _rewrite(recs["none"].path, tmp_path / "down.mcap",
+                    lambda d: {**d, "points_m": [[x, -z] for x, z in d["points_m"]]})
+    with pytest.raises(ContourFrameError, match="z up"):
+        diagnose_loop(down)
+    moved = _rewrite(recs["none"].path, tmp_path / "moved.mcap",
+                     lambda d: {**d, "points_m": [[x + 0.4, z + 1.0] for x, z in d["points_m"]]})
+    with pytest.raises(ContourFrameError, match="exit point at"):
+        diagnose_loop(moved)
+
+
+def test_too_few_points_no_phi_and_a_wrong_loop_length_are_named(recs, tmp_path):
+    few = _rewrite(recs["none"].path, tmp_path / "few.mcap", lambda d: {**d, "points_m": d["points_m"][::8]})
+    with pytest.raises(NoUsableSpanError, match="points"):
+        diagnose_loop(few)
+    no_phi = _rewrite(recs["none"].path, tmp_path / "nophi.mcap",
+                      lambda d: {k: v for k, v in d.items() if k != "phi_rad"}, validate=False)
+    with pytest.raises(DiagnoseError, match="phi_rad"):
+        diagnose_loop(no_phi)
+    longer = _rewrite(recs["none"].path, tmp_path / "long.mcap",
+                      lambda d: {**d, "points_m": [[1.25 * x, 1.25 * z] for x, z in d["points_m"]]})
+    with pytest.raises(ModelMismatchError, match="loop is .* long"):
+        diagnose_loop(longer)
+    short = _rewrite(recs["none"].path, tmp_path / "short.mcap", lambda d: d if d["time_s"] < 0.9 else None)
+    with pytest.raises(NoUsableSpanError, match="airborne camera frames"):
+        diagnose_loop(short)
+
+
+def test_cli_diagnoses_the_loop_and_exits_nonzero_on_bad_contours(recs, tmp_path):
+    from robowrangler.cli.environment import Environment
+    from robowrangler.cli.main import main
+
+    def run(*argv):
+        env = Environment(stdout=io.StringIO(), stderr=io.StringIO(), environ={})
+        return int(main(list(argv), env)), env.stdout.getvalue(), env.stderr.getvalue()
+
+    code, out, _ = run("--json", "diagnose", str(recs["cf"].path), "--out", str(tmp_path / "o"),
+                       "--effects", "axial_drag_coefficient,uniform_wind")
+    assert code == 0
+    doc = json.loads(out.strip().splitlines()[-1])
+    assert doc["loop"]["verdict"] == "missing_physics"
+    assert doc["loop"]["effects"][0]["id"] == "axial_drag_coefficient"
+    assert (tmp_path / "o" / "loop_model.json").exists()
+    bad = _rewrite(recs["none"].path, tmp_path / "mm.mcap",
+                   lambda d: {**d, "points_m": [[x * 1e3, z * 1e3] for x, z in d["points_m"]]})
+    code, _, err = run("diagnose", str(bad), "--out", str(tmp_path / "b"))
+    assert code == 1 and "loop" in err and "metres" in err
+    code, _, err = run("sil", "--model", str(tmp_path / "o" / "loop_model.json"), "--duration", "0.1")
+    assert code == 2 and "--scenario" in err
+
+
+def test_the_fast_form_follows_the_chain_plant():
+    """The fast form (table contour + first-order lag) against the MuJoCo chain plant: at steady state the chain
+    lays its links on the table within its own accuracy (the paper's Fig. 5a: a few cm on a 2 m loop, the free lower
+    branch), and after a 20 deg step both settle to the same shape."""
+    from robowrangler_sim.chain.default_table import load_default_shape_table
+    from robowrangler_sim.chain.params import ChainParams
+    from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxyz
+    from robowrangler_sim.diagnose.loop.shape_model import LoopShapeModel
+    from robowrangler_sim.shape_table import resample_by_arc_length
+
+    table, p = load_default_shape_table(), ChainParams()
+    fast = LoopShapeModel(table, rope=p.rope, tau_s=p.kd_upper_nms_per_rad / p.kp_upper_nm_per_rad, n_points=21)
+    plant = ChainPlant(table=table, params=p, initial=PlantInputs(rope_speed_mps=5.0))
+
+    def fast_contour(phi):
+        return fast.targets(fast.theta0()[None], phi_rad=np.array([phi]), phidot_rad_s=np.zeros(1),
+                            speed_mps=np.array([5.0]), loop_length_m=np.array([p.home_loop_length_m]))[0, 0]
+
+    def chain_contour():
+        return resample_by_arc_length(plant.chain_points_loop_plane_m(), 21)
+
+    plant.advance(PlantInputs(rope_speed_mps=5.0, base_quat_wxyz=pitch_quat_wxyz(0.0)), duration_s=3.0)
+    steady = np.linalg.norm(chain_contour() - fast_contour(0.0), axis=1)
+    assert steady.max() < 0.06
+    plant.advance(PlantInputs(rope_speed_mps=5.0, base_quat_wxyz=pitch_quat_wxyz(math.radians(20))), duration_s=2.5)
+    after = np.linalg.norm(chain_contour() - fast_contour(math.radians(20)), axis=1)
+    assert after.max() < 0.06
+    # and the step moved the loop by far more than that
+    assert np.linalg.norm(fast_contour(math.radians(20)) - fast_contour(0.0), axis=1).max() > 0.15
