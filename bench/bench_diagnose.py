@@ -8,17 +8,25 @@ from the library's laws, the board's measurement chain) and runs `diagnose` on i
 time per recording; baselines side by side: the nominal refit alone (a fixed-structure sysid) and PySINDy with
 control inputs on the refit's residual (discrete-time sparse regression, simulated over the held-out blocks).
 
-Two seed sets: `dev` (the seeds looked at while building the engine) and `heldout` (never looked at before this
-run); both are printed separately.
+Recordings as a user makes them with `wrangler excite --profile drive` (12 s, compressed): 100 Hz telemetry with
+the 1/3 us pulse and the encoder's edge count/time, four 1 kHz bursts at the steps. `--rate 50` makes them as an
+older board's plain recording instead (50 Hz, whole-us pulse, no bursts).
 
-Run:  uv run python bench/bench_diagnose.py [--quick] [--workers 2] [--address ADDR] [--json OUT] [--spindle]
-      uv run python bench/bench_diagnose.py --speed     (a 60 s recording, whole library: wall time per stage)
+Seed sets: `dev` (seeds looked at while building the engine, including the earlier held-out seed 7001) and
+`heldout` (new seeds, fixed before the engine's last changes and run once at the end: 6 effects x 4 concealments
+x 2 seeds + 20 effect-free recordings). Each set is printed separately.
+
+Run:  uv run python bench/bench_diagnose.py --set dev [--quick] [--workers 2] [--address ADDR] [--json OUT]
+      uv run python bench/bench_diagnose.py --set heldout --json heldout.json
+      uv run python bench/bench_diagnose.py --speed     (a 60 s recording, whole library: time per stage)
+      uv run python bench/bench_diagnose.py --spindle   (also the spindle proof, bench_diagnose_spindle.py)
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import tempfile
 import time
 from collections import Counter, defaultdict
@@ -26,10 +34,10 @@ from pathlib import Path
 
 import numpy as np
 
-DEV_SEEDS = [1]
-HELDOUT_SEEDS = [7001]
-DEV_CLEAN = list(range(101, 111))
-HELDOUT_CLEAN = list(range(7101, 7111))
+DEV_SEEDS = [1, 7001]
+DEV_CLEAN = list(range(101, 111)) + list(range(7101, 7111))
+HELDOUT_SEEDS = [52907, 61343]  # new in this round; not run before the engine was final
+HELDOUT_CLEAN = list(range(83011, 83031))  # 20 effect-free recordings
 
 
 def _sindy_baseline(res) -> dict:
@@ -38,11 +46,12 @@ def _sindy_baseline(res) -> dict:
     import pysindy as ps
 
     s = res.series
-    v = s["refit_speed_mps"]
-    y = s["speed_mps"]
+    on = s["telemetry"] & s["speed_valid"]  # the telemetry's samples (uniform rate) where the speed is observed
+    v = s["refit_speed_mps"][on]
+    y = s["speed_mps"][on]
     r = y - v
-    u = np.column_stack([v, (s["pulse_us"] - 1000.0) / 1000.0])
-    held = s["heldout"]
+    u = np.column_stack([v, (s["pulse_us"][on] - 1000.0) / 1000.0])
+    held = s["heldout"][on]
     fit = ~held
     try:
         model = ps.DiscreteSINDy(feature_library=ps.PolynomialLibrary(degree=2), optimizer=ps.STLSQ(threshold=1e-3))
@@ -75,7 +84,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
-def run_case(case, workdir: str) -> dict:
+def run_case(case, workdir: str, rate_hz: float = 100.0) -> dict:
     from robowrangler_sim.diagnose import diagnose
     from robowrangler_sim.diagnose.locate import iou_s
     from robowrangler_sim.diagnose.proof.cases import KEY_PARAM
@@ -83,7 +92,9 @@ def run_case(case, workdir: str) -> dict:
 
     effect, spans = case.truth_effect()
     path = Path(workdir) / f"{case.name.replace('/', '_')}.mcap"
-    generate_recording(path, effect=effect, seed=case.seed, duration_s=case.duration_s)
+    legacy = rate_hz == 50.0
+    generate_recording(path, effect=effect, seed=case.seed, duration_s=case.duration_s, telemetry_hz=rate_hz,
+                       fine_pulse=not legacy, bursts=not legacy)
     t0 = time.perf_counter()
     res = diagnose(path)
     wall = time.perf_counter() - t0
@@ -93,11 +104,12 @@ def run_case(case, workdir: str) -> dict:
     top3 = [c["id"] for c in ranked[:3]]
     nominal = next(c for c in res.candidates if c["id"] == "nominal_refit")
     before = nominal["heldout_rms"]["rope_speed_mps"]
+    ours_sindy = _sindy_baseline(res)
     after = res.effects[0].heldout_rms_after["rope_speed_mps"] if res.effects else before
     out = {"case": case.name, "effect": case.effect_id or "none", "concealment": case.concealment,
            "predicted": pred, "chosen": [e.effect_id for e in res.effects], "top3": top3, "wall_s": wall,
            "heldout_before": before, "heldout_after": after, "first_line": res.first_line,
-           "sindy": _sindy_baseline(res), "timings": res.timings_s}
+           "sindy": ours_sindy, "timings": res.timings_s, "cpu_s": res.timings_s.get("cpu_s", float("nan"))}
     if case.effect_id is not None and case.effect_id in out["chosen"]:
         key = KEY_PARAM[case.effect_id]
         finding = next(e for e in res.effects if e.effect_id == case.effect_id)
@@ -162,11 +174,14 @@ def _table(rows: list[dict], title: str) -> None:
         print(f"  false alarms on effect-free recordings: {len(fa)} of {len(clean)}"
               + (f" ({', '.join(r['predicted'] for r in fa)})" if fa else ""))
     walls = [r["wall_s"] for r in rows]
-    print(f"  diagnose wall time per recording: median {np.median(walls):.1f} s, max {max(walls):.1f} s")
+    cpus = [r["cpu_s"] for r in rows]
+    print(f"  diagnose per recording: wall median {np.median(walls):.1f} s, max {max(walls):.1f} s; CPU median "
+          f"{np.median(cpus):.1f} s, max {max(cpus):.1f} s")
 
 
 def speed(duration_s: float = 60.0) -> None:
-    """One 60 s recording (latency effect) against the whole library: wall time and each stage's share."""
+    """One 60 s excite-style recording (latency effect) against the whole library: wall and CPU time and each
+    stage's share, with the machine's load (the figure is for 2 cores; a shared machine stretches the wall time)."""
     from robowrangler_sim.diagnose import diagnose
     from robowrangler_sim.diagnose.proof.generator import generate_recording
     from robowrangler_sim.diagnose.proof.truth_effects import LatencyTruth
@@ -176,24 +191,35 @@ def speed(duration_s: float = 60.0) -> None:
         generate_recording(path, seed=4242, duration_s=duration_s,
                            effect=LatencyTruth("esc_latency", {"delay_s": 0.008}, delay_s=0.008, jitter_s=0.001))
         diagnose(path, effects=["esc_latency"])  # JIT caches warm
+        load0 = os.getloadavg()[0]
         t0 = time.perf_counter()
         res = diagnose(path)
         wall = time.perf_counter() - t0
-    print(f"\n== speed: a {duration_s:.0f} s recording against the whole library: {wall:.1f} s wall "
-          f"({res.verdict}: {res.first_line})")
+    import numba
+
+    print(f"\n== speed: a {duration_s:.0f} s recording against the whole library: {wall:.1f} s wall, "
+          f"{res.timings_s['cpu_s']:.1f} CPU-s ({numba.get_num_threads()} plant threads; load average "
+          f"{load0:.1f} -> {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)\n  {res.verdict}: {res.first_line}")
     total = res.timings_s["total_s"]
     for k, v in res.timings_s.items():
-        if k != "total_s":
+        if k not in ("total_s", "cpu_s"):
             print(f"  {k:18s} {v:6.1f} s  {v / total:5.0%}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="plain cases and 4 effect-free runs per set only")
+    ap.add_argument("--set", choices=("dev", "heldout"), default="dev", help="which seed set (default: dev)")
+    ap.add_argument("--quick", action="store_true", help="plain cases and 4 effect-free runs only")
+    ap.add_argument("--only", default=None, help="effect ids (comma-separated) to run, and no effect-free runs")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers (0: no Ray, in this process)")
+    ap.add_argument("--local", action="store_true", help="local processes instead of Ray (Ray runs its workers niced)")
     ap.add_argument("--address", default=None, help="Ray cluster address (default: a local one)")
-    ap.add_argument("--duration", type=float, default=10.0, help="recording length, s")
-    ap.add_argument("--json", default=None, help="write every row as JSON here")
+    ap.add_argument("--duration", type=float, default=12.0, help="recording length, s")
+    ap.add_argument("--rate", type=float, default=100.0, choices=(50.0, 100.0),
+                    help="100: excite-style recordings (100 Hz, fine pulse, bursts); 50: an older board's plain ones")
+    ap.add_argument("--json", default=None, help="write every row as JSON here (and each as it comes to OUT + 'l')")
+    ap.add_argument("--resume", action="store_true", help="skip the recordings already in the --json OUT + 'l' file")
+    ap.add_argument("--table", action="store_true", help="only print the table of the rows in --json OUT + 'l'")
     ap.add_argument("--speed", action="store_true", help="only the 60 s speed figure")
     ap.add_argument("--spindle", action="store_true",
                     help="also the spindle effects' tables (bench_diagnose_spindle.py, in this process)")
@@ -201,35 +227,76 @@ def main() -> None:
     if args.speed:
         speed()
         return
+    if args.table:
+        rows = [json.loads(line) for line in Path(args.json + "l").read_text().splitlines() if line.strip()]
+        _table(rows, f"{args.set} seeds, {args.rate:.0f} Hz recordings (rows of {args.json}l)")
+        return
 
-    from robowrangler_sim.diagnose.proof.cases import CONCEALMENTS, proof_cases
+    from robowrangler_sim.diagnose.proof.cases import CONCEALMENTS, EFFECTS, proof_cases
 
     conc = ("plain",) if args.quick else CONCEALMENTS
-    n_clean = 4 if args.quick else len(DEV_CLEAN)
-    sets = {"dev": proof_cases(seeds=DEV_SEEDS, clean_seeds=DEV_CLEAN[:n_clean], duration_s=args.duration,
-                               concealments=conc),
-            "heldout": proof_cases(seeds=HELDOUT_SEEDS, clean_seeds=HELDOUT_CLEAN[:n_clean],
-                                   duration_s=args.duration, concealments=conc)}
-    import ray
-
+    seeds, clean = (DEV_SEEDS, DEV_CLEAN) if args.set == "dev" else (HELDOUT_SEEDS, HELDOUT_CLEAN)
+    clean = clean[:4] if args.quick else clean
+    effects = tuple(args.only.split(",")) if args.only else EFFECTS
+    if args.only:
+        clean = []
+    cases = proof_cases(seeds=seeds, clean_seeds=clean, duration_s=args.duration, concealments=conc, effects=effects)
+    # interleave effect-free and effect recordings (a sweep cut short still has both kinds)
+    eff_cases = [c for c in cases if c.effect_id is not None]
+    clean_cases = [c for c in cases if c.effect_id is None]
+    order = []
+    for k in range(max(len(eff_cases), len(clean_cases))):
+        order += eff_cases[k:k + 1] + clean_cases[k:k + 1]
+    cases = order
+    done: list[dict] = []
+    if args.resume and args.json and Path(args.json + "l").exists():
+        done = [json.loads(line) for line in Path(args.json + "l").read_text().splitlines() if line.strip()]
+        names = {r["case"] for r in done}
+        cases = [c for c in cases if c.name not in names]
+        print(f"resuming: {len(done)} recordings done before, {len(cases)} to go")
     t0 = time.perf_counter()
     if args.workers == 0 and not args.address:  # in this process, one after the other (no Ray)
         with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
-            results = {name: [run_case(c, work) for c in cases] for name, cases in sets.items()}
+            rows = [run_case(c, work, args.rate) for c in cases]
     else:
-        if args.address:
-            ray.init(address=args.address, log_to_driver=False)
+        os.environ["NUMBA_NUM_THREADS"] = "1"  # one recording per worker, one plant thread each
+        rows = None
+        try:
+            if args.local:
+                raise RuntimeError("--local")
+            import ray
+
+            env = {"env_vars": {"NUMBA_NUM_THREADS": "1"}}
+            if args.address:
+                ray.init(address=args.address, log_to_driver=False, runtime_env=env)
+            else:
+                ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False, runtime_env=env)
+        except Exception as err:  # noqa: BLE001 - a local node that does not start: local processes instead
+            if args.address:
+                raise
+            print(f"(Ray did not start: {type(err).__name__}; {args.workers} local processes instead)")
         else:
-            ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False)
-        task = ray.remote(num_cpus=1)(run_case)
-        with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
-            futures = {name: [task.remote(c, work) for c in cases] for name, cases in sets.items()}
-            results = {name: ray.get(f) for name, f in futures.items()}
-        ray.shutdown()
+            task = ray.remote(num_cpus=1)(run_case)
+            with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
+                rows = ray.get([task.remote(c, work, args.rate) for c in cases])
+            ray.shutdown()
+        if rows is None:
+            from concurrent.futures import ProcessPoolExecutor
+
+            rows = []
+            with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work, \
+                    ProcessPoolExecutor(max_workers=args.workers) as pool:
+                for row in pool.map(run_case, cases, [work] * len(cases), [args.rate] * len(cases)):
+                    rows.append(row)
+                    if args.json:  # each row as it comes (a sweep cut short keeps what it did)
+                        with open(args.json + "l", "a") as f:
+                            f.write(json.dumps(row, default=float) + "\n")
     wall = time.perf_counter() - t0
-    for name, rows in results.items():
-        _table(rows, f"{name} seeds")
-    print(f"\nsweep wall time {wall:.0f} s on {args.workers} worker(s)")
+    rows = done + rows
+    _table(rows, f"{args.set} seeds, {args.rate:.0f} Hz recordings")
+    cpu = [r["cpu_s"] for r in rows]
+    print(f"\nsweep wall time {wall:.0f} s on {args.workers} worker(s); diagnose CPU time per recording median "
+          f"{np.median(cpu):.1f} s; load average at the end {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     if args.spindle:
         import bench_diagnose_spindle as bs
 
@@ -237,11 +304,10 @@ def main() -> None:
         with tempfile.TemporaryDirectory(prefix="rw_diag_bench_spindle_") as work:
             for name, seeds, clean in (("dev", bs.DEV_SEEDS, bs.DEV_CLEAN),
                                        ("heldout", bs.HELDOUT_SEEDS, bs.HELDOUT_CLEAN)):
-                rows = [bs.run_case(c, Path(work)) for c in spindle_proof_cases(seeds=seeds, clean_seeds=clean)]
-                bs.table(rows, f"spindle, {name} seeds")
-                results[f"spindle_{name}"] = rows
+                srows = [bs.run_case(c, Path(work)) for c in spindle_proof_cases(seeds=seeds, clean_seeds=clean)]
+                bs.table(srows, f"spindle, {name} seeds")
     if args.json:
-        Path(args.json).write_text(json.dumps(results, indent=1, default=float))
+        Path(args.json).write_text(json.dumps(rows, indent=1, default=float))
 
 
 if __name__ == "__main__":

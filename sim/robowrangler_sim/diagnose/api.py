@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from robowrangler_sim.diagnose.candidates import LIBRARY, Candidate
 from robowrangler_sim.diagnose.errors import UnknownEffectError
@@ -19,7 +20,7 @@ from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
 from robowrangler_sim.diagnose.recording_data import DriveData, load_drive_data
 from robowrangler_sim.diagnose.regimes import coverage, dominant_regime, regime_labels
 from robowrangler_sim.diagnose.replay import DriveReplay
-from robowrangler_sim.diagnose.residuals import CHANNELS, Residuals, robust_scale, sample_sigma
+from robowrangler_sim.diagnose.residuals import CHANNELS, Residuals, channel_noise, channel_weights, observed
 from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, heldout_p, score_model
 from robowrangler_sim.plants import DriveParams
 from robowrangler_sim.plants import drive_batch as db
@@ -106,8 +107,17 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     with the fitted one (closed_loop.py) and report both closed-loop errors.
     Raises DiagnoseError subclasses for recordings or models it cannot work on.
     """
+    # the fits' linear algebra is small (tall, ~10 columns): one BLAS thread each is fastest, and the batched
+    # plant uses the cores instead (one batch row per thread)
+    with threadpool_limits(limits=1):
+        return _diagnose(recording_path, model=model, effects=effects, progress=progress, pairs=pairs,
+                         closed_loop=closed_loop)
+
+
+def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -> DiagnosisResult:
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
+    cpu0 = time.process_time()
     from robowrangler_sim.diagnose.spindle_stage import diagnose_spindle, merge_spindle, spindle_candidates
     spindle_cands, effects = spindle_candidates(effects)
     candidates = _resolve_effects(effects)
@@ -129,17 +139,16 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     if heldout_blocks.size < 3:
         heldout_blocks = np.arange(1, n_blocks, 2)
     fit_mask = ~np.isin(block_id, heldout_blocks)
-    labels = regime_labels(data.time_s, data.speed_mps)
+    labels, tel_labels = _labels(data)
     timings["load_s"] = time.perf_counter() - t0
-    _progress(progress, f"{data.path.name}: {n} samples, {data.duration_s:.1f} s; replaying the nominal model")
+    _progress(progress, f"{data.path.name}: {data.tel_time_s.size} telemetry records at {data.telemetry_hz:.0f} Hz, "
+              f"{data.bursts} burst(s), {data.duration_s:.1f} s; replaying the nominal model")
 
     # --- replay + residuals of the model as given
     t1 = time.perf_counter()
     pred0 = replay.predict(theta_base[None, :])
-    res0 = Residuals().fit(data, pred0)
-    noise = res0.noise_
-    measured = {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v}
-    weights = {c: 1.0 / sample_sigma(data.time_s, measured[c], max(noise[c], 1e-9)) for c in CHANNELS}
+    noise = channel_noise(data)
+    weights = channel_weights(data, None, noise)
     timings["replay_s"] = time.perf_counter() - t1
 
     # --- nominal refit (first with noise weights, then each channel weighted by its refit residual)
@@ -147,22 +156,24 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     _progress(progress, "refitting the nominal parameters")
     nominal = ModelFitter(list(NOMINAL_REFIT), weights=weights).fit(replay, theta_base, fit_mask=fit_mask)
     r_nom = _residuals(data, nominal.prediction_)
-    weights = {c: 1.0 / sample_sigma(data.time_s, measured[c], max(robust_scale(r_nom[c][fit_mask]), noise[c]))
-               for c in CHANNELS}
+    weights = channel_weights(data, {c: r_nom[c] for c in CHANNELS}, noise, fit_mask=fit_mask)
     nominal = ModelFitter(list(NOMINAL_REFIT), weights=weights).fit(replay, nominal.theta_, fit_mask=fit_mask,
                                                                     bounds_ref=theta_base)
     r_nom = _residuals(data, nominal.prediction_)
-    n_eff = effective_counts(r_nom, fit_mask)
+    valid = observed(data)
+    n_eff = effective_counts(r_nom, fit_mask, valid=valid)
     score_nom = score_model("nominal_refit", len(NOMINAL_REFIT), r_nom, weights, fit_mask, block_id, heldout_blocks,
-                            n_eff)
+                            n_eff, valid=valid)
     timings["nominal_refit_s"] = time.perf_counter() - t1
 
     # --- locate
     t1 = time.perf_counter()
-    loc = Locator().fit(data.time_s, r_nom)
+    on_tel = data.tel & valid["rope_speed_mps"]
+    loc = Locator().fit(data.time_s[on_tel], {c: r[on_tel] for c, r in r_nom.items()})
     # the spans an effect may use are located on the fit samples only (the held-out ones judge it later)
-    loc_signed = Locator(signed=True, bridge_s=BLOCK_S).fit(data.time_s[fit_mask],
-                                                            {"rope_speed_mps": r_nom["rope_speed_mps"][fit_mask]})
+    fit_tel = fit_mask & on_tel
+    loc_signed = Locator(signed=True, bridge_s=BLOCK_S).fit(data.time_s[fit_tel],
+                                                            {"rope_speed_mps": r_nom["rope_speed_mps"][fit_tel]})
     below = [(s.t0_s, s.t1_s) for s in loc_signed.spans_ if s.sign < 0]
     located = [{"channel": s.channel, "span_s": [round(s.t0_s, 3), round(s.t1_s, 3)],
                 "significance": round(s.significance, 2),
@@ -175,7 +186,7 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     fits: dict[str, tuple[Candidate, ModelFitter, ModelScore, np.ndarray | None]] = {}
     not_ident: list[dict] = []
     untested: list[dict] = []
-    cov = coverage(labels)
+    cov = coverage(tel_labels)
     cand_rows: list[dict] = [{"id": "nominal_refit", "status": "base", "heldout_rms": score_nom.heldout_rms,
                               "fit_rms": score_nom.fit_rms}]
     for cand in candidates:
@@ -200,12 +211,13 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
             load_mask = _tick_mask(data, below)
         _progress(progress, f"fitting {cand.effect_id}")
         theta_c = cand.apply_neutral(nominal.theta_)
-        fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
+        # the candidate's own parameters and the nominal ones it trades against (the rest stay at the refit)
+        fitter = ModelFitter(_look_alikes(cand) + list(cand.params), weights=weights).fit(
             replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, starts=cand.start_grid(theta_c)[1],
             start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
         r_c = _residuals(data, fitter.prediction_)
         sc = score_model(cand.effect_id, len(NOMINAL_REFIT) + len(cand.params), r_c, weights, fit_mask,
-                         block_id, heldout_blocks, n_eff)
+                         block_id, heldout_blocks, n_eff, valid=valid)
         ok, ev = accepted(sc, score_nom, alpha=ALPHA)
         fits[cand.effect_id] = (cand, fitter, sc, load_mask)
         cand_rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
@@ -248,14 +260,14 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
                     mask2 = fits[second][3] if fits[second][3] is not None else chosen_mask
                     theta_p = cand2.apply_neutral(chosen_fit.theta_)
                     _progress(progress, f"fitting {best} + {second}")
-                    pair = ModelFitter(list(NOMINAL_REFIT) + list(fits[best][0].params) + list(cand2.params),
-                                       weights=weights).fit(replay, theta_p, fit_mask=fit_mask, load_mask=mask2,
+                    pair = ModelFitter(_look_alikes(fits[best][0]) + _look_alikes(cand2) + list(fits[best][0].params)
+                                       + list(cand2.params), weights=weights).fit(replay, theta_p, fit_mask=fit_mask, load_mask=mask2,
                                                             starts=cand2.start_grid(theta_p)[1],
                                                             start_columns=cand2.start_grid(theta_p)[0],
                                                             bounds_ref=theta_base)
                     r_p = _residuals(data, pair.prediction_)
                     sp = score_model(f"{best}+{second}", len(pair.specs), r_p, weights, fit_mask, block_id,
-                                     heldout_blocks, n_eff)
+                                     heldout_blocks, n_eff, valid=valid)
                     ok2, ev2 = accepted(sp, chosen_score, alpha=ALPHA)
                     cand_rows.append({"id": f"{best}+{second}", "status": "accepted" if ok2 else "rejected", **ev2,
                                       "heldout_rms": sp.heldout_rms})
@@ -264,21 +276,39 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
                         chosen_fit, chosen_score, chosen_mask = pair, sp, mask2
     timings["select_s"] = time.perf_counter() - t1
 
-    # --- findings (intervals of the chosen effects' parameters widened by a jackknife over the fit samples)
+    # --- findings: the chosen model refitted with every parameter free (from its fit), intervals of the chosen
+    # effects' parameters widened by a jackknife over the fit samples
     if verdict == "missing_physics":
+        _progress(progress, "refitting the chosen model with every parameter free")
+        chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in fits[eid][0].params]
+        final = ModelFitter(chosen_specs, weights=weights).fit(replay, chosen_fit.theta_, fit_mask=fit_mask,
+                                                               load_mask=chosen_mask, bounds_ref=theta_base)
+        r_f = _residuals(data, final.prediction_)
+        s_f = score_model("+".join(chosen), len(chosen_specs), r_f, weights, fit_mask, block_id, heldout_blocks,
+                          n_eff, valid=valid)
+        if s_f.block_sse.sum() <= chosen_score.block_sse.sum():
+            chosen_fit, chosen_score = final, s_f
         _progress(progress, "intervals (jackknife)")
         jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params})
     r_after = _residuals(data, chosen_fit.prediction_)
     effects_out: list[EffectFinding] = []
+    load_spans: list = [(a, b) for a, b in below] if "external_rope_load" in chosen else []
     if verdict == "missing_physics":
         for eid in chosen:
             cand = fits[eid][0]
             own = {s.name for s in cand.params}
             params = {p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
                       for p in chosen_fit.params_ if p.name in own}
-            spans = _improvement_spans(data, r_nom, r_after, weights)
+            spans = _improvement_spans(data, r_nom, r_after, weights, on_tel)
             if cand.uses_located_spans:
                 spans = [[round(a, 3), round(b, 3)] for a, b in below]
+            shift = data.tel_time_s[0] - data.preroll_ticks * 1e-3  # replay grid time -> recording time
+            for name in getattr(cand, "time_params", ()):
+                p = params[name]
+                params[name] = {**p, "value": p["value"] + shift, "ci95": [c + shift for c in p["ci95"]]}
+            if getattr(cand, "time_params", ()):
+                spans = [[round(params["load_start_s"]["value"], 3), round(params["load_end_s"]["value"], 3)]]
+                load_spans = spans
             ev = next(r for r in cand_rows if r["id"] == eid)
             effects_out.append(EffectFinding(
                 effect_id=eid, params=params, channels=list(cand.channels), spans_s=spans,
@@ -294,21 +324,25 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
     unexplained = float(chosen_score.block_sse.sum() / sse_before) if sse_before > 0 else 0.0
     final_theta = chosen_fit.theta_
     model_out = base.extended(final_theta, effects=chosen if verdict == "missing_physics" else [],
-                              load_spans_s=[(a + data.time_s[0] * 0, b) for a, b in below]
-                              if "external_rope_load" in chosen else [], recording=str(data.path))
+                              load_spans_s=load_spans, recording=str(data.path))
     result = DiagnosisResult(
         recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
         nominal_refit=nominal_refit, unexplained_fraction=unexplained,
         coverage={**cov, "effects_not_testable": [d["id"] for d in not_ident if "candidates" not in d],
-                  "effects_not_tested": untested},
+                  "effects_not_tested": untested, "recording": {
+                      "telemetry_hz": round(data.telemetry_hz, 1), "bursts": data.bursts,
+                      "burst_s": round(data.burst_s, 3), "speed_source": data.speed_source,
+                      "pulse_source": data.pulse_source, "missing": list(data.notes)}},
         located=located, candidates=cand_rows, model=model_out, timings_s=timings,
-        series={"time_s": data.time_s, "speed_mps": data.speed_mps, "battery_v": data.battery_v,
+        series={"time_s": data.time_s, "speed_mps": np.where(valid["rope_speed_mps"], data.speed_mps, np.nan),
+                "battery_v": data.battery_v,
                 "pulse_us": data.pulse_us[data.sample_ticks.clip(max=data.pulse_us.size - 1)],
                 "nominal_speed_mps": pred0["rope_speed_mps"][0], "refit_speed_mps": nominal.prediction_["rope_speed_mps"],
                 "after_speed_mps": chosen_fit.prediction_["rope_speed_mps"],
                 "nominal_battery_v": pred0["battery_v"][0], "refit_battery_v": nominal.prediction_["battery_v"],
                 "after_battery_v": chosen_fit.prediction_["battery_v"],
-                "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"]})
+                "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"],
+                "telemetry": data.tel.copy(), "speed_valid": valid["rope_speed_mps"].copy()})
     _progress(progress, "spindle channels")
     merge_spindle(result, diagnose_spindle(data.path, base=base.spindle_params, candidates=spindle_cands,
                                            progress=progress))
@@ -321,21 +355,34 @@ def diagnose(recording_path: str | Path, *, model: str | Path | DiagnosedModel |
         result.closed_loop = cmp
         result.timings_s["closed_loop_s"] = time.perf_counter() - t1
     result.timings_s["total_s"] = time.perf_counter() - t0
+    result.timings_s["cpu_s"] = time.process_time() - cpu0  # this process's CPU time (all its threads)
     return result
+
+
+def _look_alikes(cand: Candidate) -> list:
+    """The nominal parameters a candidate trades against (its confused_with that are nominal parameters)."""
+    return [s for s in NOMINAL_REFIT if s.name in cand.confused_with]
+
+
+def _labels(data: DriveData) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Regime labels on the observation axis (from the nearest telemetry record) and on the telemetry."""
+    tel = regime_labels(data.tel_time_s, data.tel_speed_mps)
+    k = np.clip(np.searchsorted(data.tel_time_s, data.time_s), 0, data.tel_time_s.size - 1)
+    return {kind: lab[k] for kind, lab in tel.items()}, tel
 
 
 def _tick_mask(data: DriveData, spans: list[tuple[float, float]]) -> np.ndarray:
     m = np.zeros(data.pulse_us.size)
-    t_tick = data.time_s[0] + (np.arange(data.pulse_us.size) - data.preroll_ticks) * 1e-3
+    t_tick = data.tel_time_s[0] + (np.arange(data.pulse_us.size) - data.preroll_ticks) * 1e-3
     for a, b in spans:
         m[(t_tick >= a) & (t_tick <= b)] = 1.0
     return m
 
 
-def _improvement_spans(data: DriveData, r_before, r_after, weights) -> list[list[float]]:
-    """Spans where the chosen model's improvement concentrates (windows with a significant drop in the
-    weighted squared residual, as Locator flags them)."""
+def _improvement_spans(data: DriveData, r_before, r_after, weights, on: np.ndarray) -> list[list[float]]:
+    """Spans where the chosen model's improvement concentrates (windows of the telemetry observations with a
+    significant drop in the weighted squared residual, as Locator flags them)."""
     gain = sum(((r_before[c] * weights[c]) ** 2).clip(max=9.0) - ((r_after[c] * weights[c]) ** 2).clip(max=9.0)
                for c in r_before)
-    loc = Locator(signed=True, alpha=ALPHA).fit(data.time_s, {"gain": gain})
+    loc = Locator(signed=True, alpha=ALPHA).fit(data.time_s[on], {"gain": gain[on]})
     return [[round(s.t0_s, 3), round(s.t1_s, 3)] for s in loc.spans_ if s.sign > 0]

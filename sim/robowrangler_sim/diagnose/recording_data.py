@@ -1,16 +1,29 @@
 """The drive channels of one recording, checked and laid on the 1 ms tick grid the replay runs on.
 
-Reads /device/telemetry only (never /sim/plant_truth: a board has none) and /device/params when present.
+Reads /device/telemetry and /device/burst (never /sim/plant_truth: a board has none) and /device/params when
+present. What the engine compares (the *observations*, one axis in time order):
+
+* rope speed: where the records carry the encoder's edge count and latest edge time (telemetry at 50-100 Hz,
+  and every 1 ms sample of a burst), the mean rope speed over exactly the edges counted between two records
+  (edges x 2 pi r / counts_per_rev over the time between their latest edges): unfiltered, and exact up to the
+  1 us edge clock, so the model is compared on the rope's travel between two edge times. Without encoder
+  fields (an outside writer that has none), the telemetry's filtered ``rope_speed_mps``.
+* battery volts at every record (telemetry and burst samples).
+
+The ESC pulse per tick: the bursts' 1 kHz samples where there are bursts; between telemetry records,
+linear interpolation of the recorded pulse (``esc_pulse_fine_us``, the timer's 1/3 us, when the recording has
+it) for a closed-loop run, or a zero-order hold when the pulse is held between records (an open-loop program).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from robowrangler.recorder import read_recording
+from robowrangler.recorder.burst import bursts as read_bursts
 from robowrangler.recorder.errors import RecordingError
 from robowrangler_sim.diagnose.errors import DiagnoseError, MissingChannelsError, NoUsableSpanError
 
@@ -19,35 +32,62 @@ REQUIRED_FIELDS = ("time_s", "rope_speed_mps", "esc_pulse_us", "battery_v", "mot
 PREROLL_S = 0.3  # zero-throttle pulses prepended so the model's ESC arms as the device's had
 MIN_DURATION_S = 2.0
 MOVING_MPS = 0.3
+MIN_ENCODER_INTERVALS = 50  # fewer intervals with new edges than this: use the filtered speed instead
+REST_GAP_S = 0.02  # no edge for this long: the record observes a rope (nearly) at rest
+HELD_PULSE_SHARE = 0.6  # records with an unchanged pulse while the rope moves, above this share: a held program
+
+KIND_TELEMETRY = 0
+KIND_BURST = 1
 
 
 @dataclass(frozen=True)
 class DriveData:
-    """Telemetry on the tick grid.
+    """A recording's drive observations on the tick grid.
 
     Attributes:
         path: the recording.
-        time_s: (S,) sample times, device clock.
-        sample_ticks: (S,) tick index of each sample in the replay's grid (pre-roll included).
-        pulse_us: (T,) ESC pulse per 1 ms tick (zero-order hold of the recorded pulse, pre-roll first).
-        speed_mps: (S,) measured rope speed; rpm: (S,) motor rpm; battery_v: (S,) battery voltage.
-        state: (S,) device state names.
-        device_params: /device/params as floats (empty if the recording has none).
-        preroll_ticks: ticks before the first sample.
-        truncated: the reader found the file cut short (read up to the cut).
+        time_s: (S,) observation times, device clock, non-decreasing (telemetry and burst samples merged).
+        kind: (S,) KIND_TELEMETRY or KIND_BURST per observation.
+        sample_ticks: (S,) tick index of each observation in the replay's grid (pre-roll included).
+        speed_mps: (S,) the rope speed observed (see ``speed_source``); rpm: (S,) the same as motor rpm;
+        battery_v: (S,) battery volts.
+        speed_valid: (S,) the record observes the speed (else speed_mps is 0 and carries no weight).
+        speed_floor_mps: (S,) a known lower bound of the speed observation's sigma (less than one edge seen).
+        edge_ticks: (S, 2) the interval [first, last] edge time, in fractional ticks, the speed is the mean over
+            (speed_source "encoder"); NaN rows for "filtered".
+        speed_source: "encoder" (mean speed between edge times) or "filtered" (telemetry rope_speed_mps).
+        pulse_us: (T,) ESC pulse per 1 ms tick (pre-roll first).
+        pulse_source: how pulse_us was made ("fine+bursts", "fine", "whole us", with "held"/"interpolated").
+        tel_time_s, tel_speed_mps: the telemetry's own times and filtered rope speed (regimes, plots).
+        state: (S_tel,) device state names. device_params: /device/params as floats.
+        telemetry_hz: telemetry rate; bursts: number of 1 kHz bursts used; burst_s: seconds of burst samples.
+        preroll_ticks: ticks before the first sample. truncated: the reader found the file cut short.
+        notes: what this recording lacks for the diagnosis (coverage).
     """
 
     path: Path
     time_s: np.ndarray
+    kind: np.ndarray
     sample_ticks: np.ndarray
-    pulse_us: np.ndarray
     speed_mps: np.ndarray
     rpm: np.ndarray
     battery_v: np.ndarray
+    speed_valid: np.ndarray
+    speed_floor_mps: np.ndarray
+    edge_ticks: np.ndarray
+    speed_source: str
+    pulse_us: np.ndarray
+    pulse_source: str
+    tel_time_s: np.ndarray
+    tel_speed_mps: np.ndarray
     state: np.ndarray
     device_params: dict[str, float]
+    telemetry_hz: float
+    bursts: int
+    burst_s: float
     preroll_ticks: int
     truncated: bool
+    notes: list[str] = field(default_factory=list)
 
     @property
     def duration_s(self) -> float:
@@ -55,8 +95,49 @@ class DriveData:
 
     @property
     def t_rel_s(self) -> np.ndarray:
-        """Sample times from the first sample, s."""
+        """Observation times from the first one, s."""
         return self.time_s - self.time_s[0]
+
+    @property
+    def tel(self) -> np.ndarray:
+        """(S,) mask of the telemetry observations."""
+        return self.kind == KIND_TELEMETRY
+
+
+def _encoder_speed(time_s, counts, edge_s, group, step_m):
+    """Mean speed over the edges counted since the group's previous record with a new edge.
+
+    Returns (S,) speed, (S, 2) [first, last] edge times, (S,) sigma floor. A record with no new edge whose last
+    edge is REST_GAP_S old or more observes "less than one edge since": speed half an edge over that time, with
+    the uniform spread of [0, one edge) as its sigma floor. Other records without a new edge: NaN.
+    """
+    n = time_s.size
+    speed = np.full(n, np.nan)
+    edges = np.full((n, 2), np.nan)
+    floor = np.zeros(n)
+    last: dict[int, int] = {}
+    for i in range(n):
+        g = int(group[i])
+        if not (np.isfinite(counts[i]) and np.isfinite(edge_s[i])):
+            continue
+        j = last.get(g)
+        if j is None:
+            last[g] = i
+            continue
+        dn = counts[i] - counts[j]
+        if dn <= 0:
+            gap = time_s[i] - edge_s[j]
+            if gap >= REST_GAP_S:
+                speed[i] = 0.5 * step_m / gap
+                edges[i] = (edge_s[j], time_s[i])
+                floor[i] = step_m / gap / np.sqrt(12.0)
+            continue
+        dt = edge_s[i] - edge_s[j]
+        if dt > 0:
+            speed[i] = dn * step_m / dt
+            edges[i] = (edge_s[j], edge_s[i])
+        last[g] = i
+    return speed, edges, floor
 
 
 def load_drive_data(path: str | Path) -> DriveData:
@@ -76,28 +157,32 @@ def load_drive_data(path: str | Path) -> DriveData:
     missing = [f for f in REQUIRED_FIELDS if f not in tel]
     if missing:
         raise MissingChannelsError(f"{path}: /device/telemetry lacks {', '.join(missing)}")
-    t = np.asarray(tel["time_s"], dtype=float)
+    t_all = np.asarray(tel["time_s"], dtype=float)
     cols = {f: np.asarray(tel[f], dtype=float) for f in REQUIRED_FIELDS}
     ok = np.all(np.isfinite(np.vstack(list(cols.values()))), axis=0)
     if ok.sum() < 10:
         raise MissingChannelsError(f"{path}: /device/telemetry has {int(ok.sum())} complete samples of "
                                    f"{', '.join(REQUIRED_FIELDS)}; at least 10 needed")
-    order = np.argsort(t[ok], kind="stable")
-    t = t[ok][order]
-    cols = {f: v[ok][order] for f, v in cols.items()}
-    keep = np.concatenate(([True], np.diff(t) > 0.0))  # duplicates (same time_s) keep the first
-    t = t[keep]
-    cols = {f: v[keep] for f, v in cols.items()}
-    states = np.asarray(tel.get("state", np.array(["UNKNOWN_0"] * len(ok))), dtype=object)[ok][order][keep]
-    duration = t[-1] - t[0]
+    # time order, duplicates (same time_s) keep the first
+    idx = np.flatnonzero(ok)
+    idx = idx[np.argsort(t_all[idx], kind="stable")]
+    keep = np.concatenate(([True], np.diff(t_all[idx]) > 0.0))
+    idx = idx[keep]
+    sel = np.zeros(t_all.size, dtype=bool)
+    sel[idx] = True
+    tel_t = t_all[idx]
+    tel_speed = cols["rope_speed_mps"][idx]
+    states = np.asarray(tel.get("state", np.array(["UNKNOWN_0"] * t_all.size)), dtype=object)[idx]
+    duration = tel_t[-1] - tel_t[0]
     if duration < MIN_DURATION_S:
         raise NoUsableSpanError(f"{path}: telemetry spans {duration:.2f} s; the diagnosis needs at least "
                                 f"{MIN_DURATION_S} s with the rope moving")
-    moving = cols["rope_speed_mps"] > MOVING_MPS
-    if moving.sum() * np.median(np.diff(t)) < 1.0:
+    dt_tel = float(np.median(np.diff(tel_t)))
+    moving = tel_speed > MOVING_MPS
+    if moving.sum() * dt_tel < 1.0:
         raise NoUsableSpanError(f"{path}: the rope moves (> {MOVING_MPS} m/s) for less than 1 s of the "
                                 f"{duration:.1f} s recorded: no span to compare the drive model on")
-    if not np.any(cols["esc_pulse_us"] > 0):
+    if not np.any(cols["esc_pulse_us"][idx] > 0):
         raise NoUsableSpanError(f"{path}: esc_pulse_us is 0 throughout: no drive input to replay")
     params: dict[str, float] = {}
     for name, value in rec.metadata.get("/device/params", {}).items():
@@ -105,15 +190,118 @@ def load_drive_data(path: str | Path) -> DriveData:
             params[name] = float(value)
         except ValueError:
             continue
+    notes: list[str] = []
+    telemetry_hz = 1.0 / dt_tel
+    fine = "esc_pulse_fine_us" in tel and np.any(np.abs(np.asarray(tel["esc_pulse_fine_us"], float)[idx]
+                                                        - np.round(np.asarray(tel["esc_pulse_fine_us"], float)[idx]))
+                                                 > 1e-6)
+    # telemetry records
+    t_list = [tel_t]
+    kind_list = [np.full(tel_t.size, KIND_TELEMETRY)]
+    group_list = [np.zeros(tel_t.size)]
+    pulse_src = np.asarray(tel["esc_pulse_fine_us"], float)[idx] if "esc_pulse_fine_us" in tel else cols["esc_pulse_us"][idx]
+    pulse_list = [pulse_src]
+    batt_list = [cols["battery_v"][idx]]
+    if "encoder_counts" in tel and "encoder_edge_us" in tel:
+        c = np.asarray(tel["encoder_counts"], float)[idx]
+        e = np.asarray(tel["encoder_edge_us"], float)[idx]
+        c = c[0] + np.concatenate(([0.0], np.cumsum(np.mod(np.diff(c), 2.0 ** 32))))
+        age_us = np.mod(np.round(tel_t * 1e6) - e, 2.0 ** 32)
+        counts_list = [c]
+        edge_list = [tel_t - age_us * 1e-6]
+    else:
+        counts_list = [np.full(tel_t.size, np.nan)]
+        edge_list = [np.full(tel_t.size, np.nan)]
+    n_bursts = 0
+    burst_s = 0.0
+    try:
+        burst_list = read_bursts(rec)
+    except (KeyError, TypeError, ValueError):
+        burst_list = []
+        notes.append("the /device/burst records could not be put together; bursts not used")
+    for b in burst_list:
+        present = np.isfinite(b.encoder_counts) & np.isfinite(b.esc_pulse_fine_us) & np.isfinite(b.battery_v)
+        if present.sum() < 10:
+            continue
+        n_bursts += 1
+        burst_s += float(present.sum()) * b.tick_s
+        t_list.append(b.time_s[present])
+        kind_list.append(np.full(int(present.sum()), KIND_BURST))
+        group_list.append(np.full(int(present.sum()), float(n_bursts)))
+        pulse_list.append(b.esc_pulse_fine_us[present])
+        batt_list.append(b.battery_v[present])
+        counts_list.append(b.encoder_counts[present])
+        edge_list.append(b.start_time_s + b.encoder_edge_s[present])
+    time_s = np.concatenate(t_list)
+    order = np.argsort(time_s, kind="stable")
+    time_s = time_s[order]
+    kind = np.concatenate(kind_list)[order].astype(np.int8)
+    group = np.concatenate(group_list)[order]
+    pulse_rec = np.concatenate(pulse_list)[order]
+    battery = np.concatenate(batt_list)[order]
+    counts = np.concatenate(counts_list)[order]
+    edge_s = np.concatenate(edge_list)[order]
+    # a burst sample at a telemetry record's time: both kept (different observations of one instant)
+    r_m = params.get("wheel_radius_m", 0.015)
+    cpr = params.get("encoder_counts_per_rev", 64.0)
+    step_m = 2.0 * np.pi * r_m / cpr
+    enc_speed, enc_edges, enc_floor = _encoder_speed(time_s, counts, edge_s, group, step_m)
+    t0 = float(tel_t[0])
     preroll = int(round(PREROLL_S / TICK_S))
-    ticks = preroll + np.round((t - t[0]) / TICK_S).astype(np.int64)
-    n_ticks = int(ticks[-1]) + 1
+    ticks_all = preroll + np.round((time_s - t0) / TICK_S).astype(np.int64)
+    n_ticks = int(ticks_all.max()) + 1
+    # pulse per tick
+    tel_m = kind == KIND_TELEMETRY
+    p_tel = pulse_rec[tel_m]
+    mov = np.asarray(tel_speed > MOVING_MPS)
+    same = np.abs(np.diff(p_tel)) < 1e-9
+    held = bool(np.mean(same[mov[1:] & mov[:-1]]) > HELD_PULSE_SHARE) if np.any(mov[1:] & mov[:-1]) else True
+    grid = np.arange(preroll, n_ticks)
+    if held:
+        k = np.searchsorted(ticks_all[tel_m], grid, side="right") - 1
+        pulse_grid = p_tel[np.clip(k, 0, None)]
+    else:
+        pulse_grid = np.interp(grid, ticks_all[tel_m], p_tel)
+    if n_bursts:
+        bm = kind == KIND_BURST
+        pulse_grid[ticks_all[bm] - preroll] = pulse_rec[bm]
     pulse = np.empty(n_ticks)
-    first_pulse = cols["esc_pulse_us"][0]
-    at_rest = cols["rope_speed_mps"][0] < MOVING_MPS
+    first_pulse = p_tel[0]
+    at_rest = tel_speed[0] < MOVING_MPS
     pulse[:preroll] = params.get("esc_min_us", 1000.0) if (at_rest and first_pulse > 0) else first_pulse
-    idx = np.searchsorted(ticks, np.arange(preroll, n_ticks), side="right") - 1
-    pulse[preroll:] = cols["esc_pulse_us"][idx]
-    return DriveData(path=path, time_s=t, sample_ticks=ticks, pulse_us=pulse, speed_mps=cols["rope_speed_mps"],
-                     rpm=cols["motor_rpm"], battery_v=cols["battery_v"], state=states, device_params=params,
-                     preroll_ticks=preroll, truncated=bool(rec.truncated))
+    pulse[preroll:] = pulse_grid
+    pulse_source = ("fine (1/3 us)" if fine else "whole us") + (", held between records" if held else
+                                                                ", interpolated between records")
+    if n_bursts:
+        pulse_source += f", 1 kHz in {n_bursts} burst(s)"
+    # observations: every record (battery volts); its speed where the encoder gives one
+    use_encoder = int(np.isfinite(enc_speed).sum()) >= MIN_ENCODER_INTERVALS
+    if use_encoder:
+        valid = np.isfinite(enc_speed)
+        edges = (enc_edges - t0) / TICK_S + preroll
+        valid &= (edges[:, 0] >= 0) & (edges[:, 1] <= n_ticks - 1)
+        speed = np.where(valid, enc_speed, 0.0)
+        edges[~valid] = np.column_stack([ticks_all, ticks_all + 1.0])[~valid].clip(max=n_ticks - 1)
+        floor = np.where(valid, enc_floor, 0.0)
+        source = "encoder"
+    else:
+        valid = tel_m.copy()
+        speed = np.where(valid, np.interp(time_s, tel_t, tel_speed), 0.0)
+        edges = np.column_stack([ticks_all, ticks_all]).astype(float)
+        floor = np.zeros(time_s.size)
+        source = "filtered"
+        notes.append("no encoder counts/edge times: compared on the filtered rope speed")
+    if not n_bursts:
+        notes.append("no 1 kHz bursts: latency, dead band and low-speed effects are judged from "
+                      f"{telemetry_hz:.0f} Hz telemetry only (record with `wrangler excite --profile drive`)")
+    if telemetry_hz < 90.0:
+        notes.append(f"telemetry at {telemetry_hz:.0f} Hz (the firmware can send 100 Hz)")
+    if not fine:
+        notes.append("ESC pulse in whole us only (the firmware's esc_pulse_fine_us has 1/3 us)")
+    r_wheel = r_m
+    return DriveData(path=path, time_s=time_s, kind=kind, sample_ticks=ticks_all,
+                     speed_mps=speed, rpm=speed / (2 * np.pi * r_wheel) * 60.0, battery_v=battery,
+                     speed_valid=valid, speed_floor_mps=floor, edge_ticks=edges, speed_source=source, pulse_us=pulse, pulse_source=pulse_source,
+                     tel_time_s=tel_t, tel_speed_mps=tel_speed, state=states, device_params=params,
+                     telemetry_hz=telemetry_hz, bursts=n_bursts, burst_s=burst_s, preroll_ticks=preroll,
+                     truncated=bool(rec.truncated), notes=notes)

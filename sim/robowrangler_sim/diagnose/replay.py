@@ -1,5 +1,11 @@
 """Replay: drive a model (a batch of parameter rows) with the recording's ESC pulses, open loop, on the tick
-grid; predictions at the telemetry samples, in the recorded channels' terms."""
+grid; predictions at the observations (recording_data.DriveData), in the recorded channels' terms.
+
+Rope speed from the encoder (speed_source "encoder"): the model's rope travel between the two edge times the
+observation spans, over that time (its position is the integral of its speed, sampled every tick, linear
+inside a tick). From the filtered telemetry (speed_source "filtered"): the model's speed through the
+firmware's low-pass (its time constant from /device/params) and the M/T estimate's half-tick delay.
+"""
 
 from __future__ import annotations
 
@@ -18,9 +24,9 @@ class DriveReplay:
     """The batched drive model fed the recording's inputs.
 
     Args:
-        data: the recording's drive channels.
+        data: the recording's drive observations.
         base_params: the model's DriveParams (its fixed constants: geometry, ESC protocol, battery curve).
-    Attributes: consts (kernel constants), theta0 (N_THETA,) the base model's row.
+    Attributes: consts (kernel constants), theta0 (N_THETA,) the base model's row, simulations (rows simulated).
     """
 
     def __init__(self, data: DriveData, base_params: DriveParams) -> None:
@@ -30,15 +36,34 @@ class DriveReplay:
         self.consts = db.consts_from_params(base_params, meas_tau_s=tau)
         self.theta0 = db.theta_from_params(base_params)
         self.simulations = 0
+        self._encoder = data.speed_source == "encoder"
+        n_ticks = data.pulse_us.size
+        if self._encoder:
+            self._ticks = np.arange(n_ticks)  # speed every tick: the position between any two edge times
+            e = np.clip(data.edge_ticks, 0.0, n_ticks - 1 - 1e-9)
+            self._i0, self._i1 = np.floor(e[:, 0]).astype(np.int64), np.floor(e[:, 1]).astype(np.int64)
+            self._f0, self._f1 = e[:, 0] - self._i0, e[:, 1] - self._i1
+            self._span_s = np.maximum(e[:, 1] - e[:, 0], 1e-6) * 1e-3
+            self._at = data.sample_ticks.clip(max=n_ticks - 1)
+        else:
+            self._ticks, self._at = np.unique(data.sample_ticks, return_inverse=True)
 
     def predict(self, theta: np.ndarray, *, load_mask: np.ndarray | None = None) -> dict[str, np.ndarray]:
-        """Model channels (B, S) for parameter rows theta (B, N_THETA): rope_speed_mps (measured as the
-        firmware does), motor_rpm, battery_v."""
+        """Model channels (B, S) for parameter rows theta (B, N_THETA): rope_speed_mps (observed as the recording
+        observes it), motor_rpm, battery_v, true_speed_mps (the model's speed at the observation's tick)."""
         theta = np.atleast_2d(theta)
-        out = db.simulate_drive_batch(theta, self.consts, self.data.pulse_us, self.data.sample_ticks,
+        out = db.simulate_drive_batch(theta, self.consts, self.data.pulse_us, self._ticks,
                                       load_mask=load_mask, latch="box")
         self.simulations += theta.shape[0]
-        speed = out["measured_speed_mps"]
+        v = out["rope_speed_mps"]
+        if self._encoder:
+            x = np.zeros_like(v)
+            x[:, 1:] = np.cumsum(0.5 * (v[:, 1:] + v[:, :-1]), axis=1) * 1e-3
+            x0 = x[:, self._i0] + (x[:, self._i0 + 1] - x[:, self._i0]) * self._f0
+            x1 = x[:, self._i1] + (x[:, self._i1 + 1] - x[:, self._i1]) * self._f1
+            speed = np.abs(x1 - x0) / self._span_s
+        else:
+            speed = out["measured_speed_mps"][:, self._at]
         r = self.consts[db.C_R_WHEEL]
-        return {"rope_speed_mps": speed, "motor_rpm": speed / r * RAD_S_TO_RPM, "battery_v": out["battery_v"],
-                "true_speed_mps": out["rope_speed_mps"]}
+        return {"rope_speed_mps": speed, "motor_rpm": speed / r * RAD_S_TO_RPM,
+                "battery_v": out["battery_v"][:, self._at], "true_speed_mps": v[:, self._at]}

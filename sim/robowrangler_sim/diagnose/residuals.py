@@ -45,10 +45,69 @@ class Residuals:
 
     def fit(self, data, prediction: dict[str, np.ndarray]) -> Residuals:
         measured = {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v, "motor_rpm": data.rpm}
-        self.residuals_ = {c: measured[c] - prediction[c].reshape(-1) for c in self.channels}
-        self.noise_ = {c: noise_sigma(measured[c]) for c in self.channels}
-        self.rms_ = {c: float(np.sqrt(np.mean(self.residuals_[c] ** 2))) for c in self.channels}
+        valid = observed(data)
+        # an observation that does not observe the channel has residual 0 (and weight 0 in every fit)
+        self.residuals_ = {c: np.where(valid[c], measured[c] - prediction[c].reshape(-1), 0.0) for c in self.channels}
+        self.noise_ = channel_noise(data)
+        self.rms_ = {c: float(np.sqrt(np.mean(self.residuals_[c][valid[c]] ** 2))) for c in self.channels}
         return self
+
+
+def observed(data) -> dict[str, np.ndarray]:
+    """channel -> (S,) bool: the observation observes the channel."""
+    return {"rope_speed_mps": np.asarray(data.speed_valid, dtype=bool),
+            "motor_rpm": np.asarray(data.speed_valid, dtype=bool),
+            "battery_v": np.ones(data.time_s.size, dtype=bool)}
+
+
+def _measured(data) -> dict[str, np.ndarray]:
+    return {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v, "motor_rpm": data.rpm}
+
+
+def channel_noise(data) -> dict[str, dict[int, float]]:
+    """channel -> {observation kind: sigma}: each kind's noise from its own samples (noise_sigma; each burst and
+    the telemetry are separate series, sigma the median over bursts)."""
+    out: dict[str, dict[int, float]] = {}
+    valid = observed(data)
+    meas = _measured(data)
+    for c in CHANNELS:
+        out[c] = {}
+        for k in np.unique(data.kind):
+            m = (data.kind == k) & valid[c]
+            x = meas[c][m]
+            if x.size < 5:
+                continue
+            t = data.time_s[m]
+            # split at gaps (bursts are separate series)
+            cuts = np.flatnonzero(np.diff(t) > 5.0 * np.median(np.diff(t))) + 1
+            parts = [p for p in np.split(x, cuts) if p.size >= 5]
+            out[c][int(k)] = float(np.median([noise_sigma(p) for p in parts])) if parts else noise_sigma(x)
+    return out
+
+
+def channel_weights(data, residuals: dict[str, np.ndarray] | None, noise: dict[str, dict[int, float]], *,
+                    fit_mask: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """channel -> (S,) 1 / sigma per observation, 0 where the channel is not observed. sigma per kind: the
+    larger of the noise and the residual's robust scale on the fit samples (when residuals are given), plus the
+    timing term (sample_sigma, per kind) and the observation's own floor (speed_floor_mps)."""
+    valid = observed(data)
+    meas = _measured(data)
+    out = {}
+    for c in CHANNELS:
+        sigma = np.full(data.time_s.size, np.inf)
+        for k, nk in noise[c].items():
+            m = (data.kind == k) & valid[c]
+            scale = max(nk, 1e-9)
+            if residuals is not None:
+                mf = m & (fit_mask if fit_mask is not None else True)
+                if mf.sum() > 10:
+                    scale = max(scale, robust_scale(residuals[c][mf]))
+            if m.sum() >= 2:
+                sigma[m] = sample_sigma(data.time_s[m], meas[c][m], scale)
+        if c == "rope_speed_mps":
+            sigma = np.sqrt(sigma ** 2 + np.asarray(data.speed_floor_mps) ** 2)
+        out[c] = np.where(valid[c] & np.isfinite(sigma), 1.0 / sigma, 0.0)
+    return out
 
 
 TIMING_SIGMA_S = 2.5e-3 / np.sqrt(12.0)
@@ -56,10 +115,10 @@ TIMING_SIGMA_S = 2.5e-3 / np.sqrt(12.0)
 does not give (uniform over 2.5 ms)."""
 
 
-def sample_sigma(t_s: np.ndarray, measured: np.ndarray, scale: float) -> np.ndarray:
+def sample_sigma(t_s: np.ndarray, measured: np.ndarray, scale: float | np.ndarray) -> np.ndarray:
     """Per-sample sigma: the channel's residual scale plus the timing uncertainty times the signal's slope,
     sqrt(scale^2 + (TIMING_SIGMA_S dy/dt)^2), the slope taken as the larger one-sided difference."""
-    d = np.diff(measured) / np.diff(t_s)
+    d = np.diff(measured) / np.maximum(np.diff(t_s), 1e-4)
     slope = np.zeros(measured.shape)
     slope[1:] = np.abs(d)
     slope[:-1] = np.maximum(slope[:-1], np.abs(d))

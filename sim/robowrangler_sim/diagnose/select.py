@@ -35,33 +35,44 @@ class ModelScore:
     fit_rms: dict[str, float]
 
 
-def effective_counts(residuals: dict[str, np.ndarray], fit_mask: np.ndarray) -> dict[str, float]:
+def effective_counts(residuals: dict[str, np.ndarray], fit_mask: np.ndarray, *,
+                     valid: dict[str, np.ndarray] | None = None) -> dict[str, float]:
     """Independent-sample count per channel on the fit set (from the base model's residual, then shared by
-    every model compared with it, so their BICs are on one scale)."""
-    return {c: max(2.0, float(fit_mask.sum()) * effective_fraction(r[fit_mask])) for c, r in residuals.items()}
+    every model compared with it, so their BICs are on one scale). valid: channel -> (S,) observed samples."""
+    out = {}
+    for c, r in residuals.items():
+        m = fit_mask & (valid[c] if valid is not None and c in valid else True)
+        out[c] = max(2.0, float(m.sum()) * effective_fraction(r[m]))
+    return out
 
 
 def score_model(name: str, n_params: int, residuals: dict[str, np.ndarray], weights: dict[str, float],
                 fit_mask: np.ndarray, block_id: np.ndarray, heldout_blocks: np.ndarray,
-                n_eff: dict[str, float]) -> ModelScore:
+                n_eff: dict[str, float], *, valid: dict[str, np.ndarray] | None = None) -> ModelScore:
     """residuals: channel -> (S,) recording - model; weights: channel -> (S,) 1/sigma per sample. block_id: (S,)
     block index of each sample. n_eff: effective_counts of the base model. Scores use the Huber rho of the
     weighted residual (the fit's own loss), so step-edge samples weigh as in the fit."""
+    ok = {c: (valid[c] if valid is not None and c in valid else np.ones(r.shape, dtype=bool))
+          for c, r in residuals.items()}
     bic = 0.0
     n_eff_total = 0.0
     for c, r in residuals.items():
         z = huber(r * weights[c], HUBER_SCALE)
         n_c = n_eff[c]
-        bic += n_c * np.log(max(float(np.mean(z[fit_mask])), 1e-30))
+        bic += n_c * np.log(max(float(np.mean(z[fit_mask & ok[c]])), 1e-30))
         n_eff_total += n_c
     bic += n_params * np.log(n_eff_total)
     held = np.isin(block_id, heldout_blocks)
     sse = np.zeros(int(held.sum()))
     for c, r in residuals.items():
         sse += huber(r * weights[c], HUBER_SCALE)[held]
+
+    def rms(r, m):
+        return float(np.sqrt(np.mean(r[m] ** 2))) if m.any() else float("nan")
+
     return ModelScore(name, n_params, float(bic), sse,
-                      {c: float(np.sqrt(np.mean(r[held] ** 2))) for c, r in residuals.items()},
-                      {c: float(np.sqrt(np.mean(r[fit_mask] ** 2))) for c, r in residuals.items()})
+                      {c: rms(r, held & ok[c]) for c, r in residuals.items()},
+                      {c: rms(r, fit_mask & ok[c]) for c, r in residuals.items()})
 
 
 def heldout_p(better: ModelScore, worse: ModelScore, *, max_lag: int = 25) -> float:

@@ -10,12 +10,14 @@ the diagnose library's effect terms, each neutral by default:
     ESC dead band    zero throttle below min + w; once off, on again only above min + w + h (hysteresis)
     battery sag      polarisation V_p' = (R_p I_batt - V_p) / tau_p subtracted from the source
     low-speed fric.  F_s exp(-(v / v_s)^2) added to the Coulomb force (Stribeck)
-    external load    F_ext x mask(t) added to the Coulomb force (the mask is the located span)
+    external load    F_ext x mask(t) added to the Coulomb force (the mask: a window t0..t1 with logistic
+                     edges when theta gives one, else load_mask)
 
 Parameters are rows of ``theta`` (shape (B, N_THETA)), columns named by the ``TH_*`` indices; the
 ``theta_from_params`` helper fills a row from DriveParams. ``latch="exact"`` latches the pulse at the
 ESC's frame times exactly as DrivePlant does (for the equivalence test); ``latch="box"`` latches the
-mean pulse over the last frame, which stands for a frame clock of unknown phase and makes the delay a
+mean pulse over the frame centred on the latch time, which stands for a frame clock of unknown phase (a
+change reaches the motor half a frame later on average, as with a uniform phase) and makes the delay a
 smooth parameter (what the fit uses).
 
 Shapes: pulse_us (T,) per 1 ms tick (the pulse the firmware drove during tick k); load_mask (T,);
@@ -56,7 +58,10 @@ TH_POL_TAU = 14  # polarisation time constant, s
 TH_STRIBECK_N = 15  # Stribeck excess friction at rest, N
 TH_STRIBECK_V = 16  # Stribeck speed, m/s
 TH_EXT_LOAD = 17  # external rope load over the mask, N
-N_THETA = 18
+TH_EXT_T0 = 18  # external load window start (replay grid time), s; used when TH_EXT_T1 > TH_EXT_T0
+TH_EXT_T1 = 19  # external load window end, s (else the load follows load_mask)
+N_THETA = 20
+EXT_EDGE_S = 0.03  # the window's logistic edge width, s (smooth in t0, t1 for the fit)
 
 # consts
 C_N = 0
@@ -146,7 +151,7 @@ def _cum_at(cum, t_us):
     return cum[k] + (cum[k + 1] - cum[k]) * (x - k)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v, out_meas, out_vb):
     n_b = theta.shape[0]
     n_ticks = pulse_us.shape[0]
@@ -170,7 +175,7 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
     sub_per_frame = int(frame_us // SUBSTEP_US)
     meas_tau = consts[C_MEAS_TAU]
     meas_decay = math.exp(-h / meas_tau) if meas_tau > 0.0 else 0.0
-    for bi in range(n_b):
+    for bi in numba.prange(n_b):  # rows are independent: one thread each (NUMBA_NUM_THREADS)
         kt = theta[bi, TH_KT]
         r_circ = theta[bi, TH_R_CIRCUIT]
         coul_n = theta[bi, TH_COULOMB_N]
@@ -189,6 +194,10 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
         strib_n = theta[bi, TH_STRIBECK_N]
         strib_v = theta[bi, TH_STRIBECK_V]
         ext_n = theta[bi, TH_EXT_LOAD]
+        ext_t0 = theta[bi, TH_EXT_T0]
+        ext_t1 = theta[bi, TH_EXT_T1]
+        windowed = ext_t1 > ext_t0
+        ext_w = 0.0
         zero_top = p_min + dead
         span = p_max - zero_top
         lag_decay = math.exp(-h / lag) if lag > 0.0 else 0.0
@@ -230,7 +239,10 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
                 # ESC frame: latch the pulse (exact, or the frame-mean for an unknown frame phase)
                 p_now = _pulse_at(pulse_us, t_us - delay_us)
                 if box:
-                    p_lat = (_cum_at(cum, t_us - delay_us + h_us) - _cum_at(cum, t_us - delay_us + h_us - frame_us)) / frame_us
+                    # the mean over a frame centred on the latch: with the hold to the next frame, a change
+                    # reaches the motor half a frame later on average, as with a frame phase unknown (uniform)
+                    p_lat = (_cum_at(cum, t_us - delay_us + 0.5 * frame_us)
+                             - _cum_at(cum, t_us - delay_us - 0.5 * frame_us)) / frame_us
                     if p_now < p_invalid:
                         p_lat = p_now
                 else:
@@ -307,7 +319,15 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
                         b = 0.0
             v0 = r * omega
             abs_v0 = abs(v0)
-            static_n = coul_n + ext_n * load_mask[tick]
+            if windowed:
+                if s % sub_per_tick == 0 and ext_n != 0.0:
+                    tt = tick * 1e-3
+                    a0 = (tt - ext_t0) / EXT_EDGE_S
+                    a1 = (ext_t1 - tt) / EXT_EDGE_S
+                    ext_w = 0.0 if (a0 < -30.0 or a1 < -30.0) else 1.0 / ((1.0 + math.exp(-a0)) * (1.0 + math.exp(-a1)))
+                static_n = coul_n + ext_n * ext_w
+            else:
+                static_n = coul_n + ext_n * load_mask[tick]
             if strib_n > 0.0:
                 static_n += strib_n * math.exp(-(abs_v0 / strib_v) ** 2)
             static_nm = r * static_n

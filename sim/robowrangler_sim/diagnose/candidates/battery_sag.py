@@ -21,7 +21,7 @@ class BatterySag(Candidate):
     neutral = {db.TH_POL_R: 0.0, db.TH_POL_TAU: 1.0}
     needs_regimes = ("motion:accelerating",)
     separating_measurement = "battery current (a shunt) with the voltage during a load step"
-    confused_with = ("battery_internal_resistance_ohm",)
+    confused_with = ("battery_internal_resistance_ohm", "battery_open_circuit_v")
 
     def start_points(self, theta: np.ndarray) -> np.ndarray:
         return np.array(list(itertools.product((0.01, 0.03, 0.08), (0.1, 0.5, 2.0, 8.0))))

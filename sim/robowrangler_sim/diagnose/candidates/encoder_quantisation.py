@@ -12,6 +12,11 @@ class EncoderQuantisation(Candidate):
     separating_measurement = "the raw encoder edge count and period per tick (the recordings' 1 kHz bursts)"
 
     def identifiable(self, data) -> Identifiability:
+        if data.speed_source == "encoder":
+            return Identifiability(False, "the diagnosis compares the rope's travel between recorded edge times, which "
+                                   "has no quantisation beyond the 1 us edge clock; a wrong counts-per-revolution "
+                                   "scales every speed like the motor's kv and is absorbed by the refit",
+                                   "a rope-side distance (a marked rope over a known length) against the edge count")
         return Identifiability(False, "the firmware's M/T estimate times whole edges and is low-pass filtered "
-                               "before telemetry; the edge granularity is not in the 50 Hz channels",
+                               "before telemetry; the edge granularity is not in the telemetry channels",
                                self.separating_measurement)

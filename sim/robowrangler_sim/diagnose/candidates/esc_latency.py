@@ -22,8 +22,8 @@ class EscLatency(Candidate):
 
     def start_grid(self, theta: np.ndarray) -> tuple[list[int], np.ndarray]:
         # delay and the ESC's duty lag trade against each other at telemetry rate: search them together
-        lags = theta[db.TH_ESC_LAG] * np.array([0.35, 0.6, 1.0, 1.4, 1.9])
-        grid = np.array([[d, lag] for d in np.arange(0.0, 0.0405, 0.001) for lag in lags])
+        lags = theta[db.TH_ESC_LAG] * np.array([0.5, 1.0, 1.8])
+        grid = np.array([[d, lag] for d in np.arange(0.0, 0.0405, 0.002) for lag in lags])
         return [db.TH_LATENCY, db.TH_ESC_LAG], grid
 
     def start_points(self, theta: np.ndarray) -> np.ndarray:

@@ -1,24 +1,46 @@
-"""external_rope_load: a force on the rope over the located spans (a snag, a hand, an object), F_ext there."""
+"""external_rope_load: a force on the rope over one stretch of the run (a snag, a hand, an object), F_ext there.
+
+The stretch is fitted with the force: a window t0..t1 with logistic edges (drive_batch EXT_EDGE_S), started from a
+coarse grid of windows over the recording, so a load is found where it acts even when the residual alone does
+not flag it (a speed loop that pushes against the load hides most of the speed dip).
+"""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
-from robowrangler_sim.diagnose.candidates.base import Candidate
+from robowrangler_sim.diagnose.candidates.base import Candidate, Identifiability
 from robowrangler_sim.diagnose.parameters import ParamSpec
 from robowrangler_sim.plants import drive_batch as db
 
 
 class ExternalRopeLoad(Candidate):
     effect_id = "external_rope_load"
-    law = "F_ext constant over the located spans, 0 elsewhere"
+    law = "F_ext over t0..t1 (logistic edges of 30 ms), 0 elsewhere"
     channels = ("rope_speed_mps", "motor_rpm", "battery_v")
-    regime = "the located spans only (loaded)"
-    params = (ParamSpec("external_load_n", db.TH_EXT_LOAD, "N", 0.0, 5.0, 0.3),)
-    neutral = {db.TH_EXT_LOAD: 0.0}
+    regime = "one stretch of the run (loaded)"
+    params = (ParamSpec("external_load_n", db.TH_EXT_LOAD, "N", 0.0, 5.0, 0.3),
+              ParamSpec("load_start_s", db.TH_EXT_T0, "s", 0.0, 1.0, 1.0),
+              ParamSpec("load_end_s", db.TH_EXT_T1, "s", 0.0, 1.0, 1.0))
+    neutral = {db.TH_EXT_LOAD: 0.0, db.TH_EXT_T0: 0.0, db.TH_EXT_T1: 0.0}
     separating_measurement = "rope tension at the guide (spindle load) or a camera on the rope during the span"
     confused_with = ("coulomb_friction_n",)
-    uses_located_spans = True
+    time_params = ("load_start_s", "load_end_s")
+    """Parameters on the replay's time grid (the report shifts them onto the recording's clock)."""
 
-    def start_points(self, theta: np.ndarray) -> np.ndarray:
-        return np.array([[0.05], [0.2], [0.5], [1.0]])
+    def identifiable(self, data) -> Identifiability:
+        # the window's bounds are the replay grid of this recording
+        self._grid_s = data.pulse_us.size * 1e-3
+        pre = data.preroll_ticks * 1e-3
+        self.params = (self.params[0],
+                       ParamSpec("load_start_s", db.TH_EXT_T0, "s", pre, self._grid_s, 1.0),
+                       ParamSpec("load_end_s", db.TH_EXT_T1, "s", pre, self._grid_s, 1.0))
+        return Identifiability(True)
+
+    def start_grid(self, theta: np.ndarray) -> tuple[list[int], np.ndarray]:
+        lo, hi = self.params[1].lo, self.params[1].hi
+        rows = [[f, t0, min(hi, t0 + length)] for f, t0, length in
+                itertools.product((0.15, 0.4), np.arange(lo + 0.5, hi - 0.5, 1.0), (1.0, 2.0, 3.5))]
+        return [db.TH_EXT_LOAD, db.TH_EXT_T0, db.TH_EXT_T1], np.asarray(rows)

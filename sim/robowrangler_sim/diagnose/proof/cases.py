@@ -2,7 +2,7 @@
 
 Concealments (the issue's three):
   under_noise  the effect's size a fraction of the plain one, near the raw noise floor;
-  one_regime   present in one regime only (a speed band or one stretch of the run);
+  one_regime   present in one regime only (above 5 m/s, or only in the spin-down for the low-speed effects);
   confounded   a form a nominal parameter can mostly mimic (a delay about the ESC lag, a drag with exponent 2,
                a dead band without hysteresis, a sag faster than the samples, a Stribeck speed spanning the
                range, a load over the whole run).
@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robowrangler_sim.diagnose.proof.generator import excite_edges_s
 from robowrangler_sim.diagnose.proof.truth_effects import (DeadbandTruth, DragTruth, FrictionTruth, LatencyTruth,
                                                           LoadTruth, SagTruth, TruthEffect)
 
@@ -42,8 +43,10 @@ class ProofCase:
         c = self.concealment
         dur = self.duration_s
         fast = (lambda t, v: v > 5.0)
-        half = (0.3 * dur, 0.75 * dur)
-        in_half = (lambda t, v: half[0] <= t <= half[1])
+        # low speeds come twice in an excite run (spin-up and spin-down): "one regime" is the spin-down only
+        down = float(excite_edges_s(dur)[-1])
+        spin_down = (down, down + 1.0)
+        in_down = (lambda t, v: t >= spin_down[0])
         gate = {"one_regime": fast}.get(c)
         spans: tuple[tuple[float, float], ...] = ()
         e = self.effect_id
@@ -63,7 +66,7 @@ class ProofCase:
                     "confounded": (rng.uniform(20, 30), 0.0)}[c]
             eff = DeadbandTruth(e, {"deadband_us": w, "hysteresis_us": h}, width_us=w, hysteresis_us=h)
             if c == "one_regime":
-                gate, spans = in_half, (half,)
+                gate, spans = in_down, (spin_down,)
         elif e == "battery_sag":
             r1, r2 = rng.uniform(0.1, 0.2), rng.uniform(0.05, 0.1)
             tau1 = 0.02 if c == "confounded" else rng.uniform(0.3, 0.6)
@@ -76,7 +79,7 @@ class ProofCase:
             vs = 3.0 if c == "confounded" else rng.uniform(0.4, 0.8)
             eff = FrictionTruth(e, {"stribeck_force_n": fs, "stribeck_speed_mps": vs}, fs_n=fs, vs_mps=vs)
             if c == "one_regime":
-                gate, spans = in_half, (half,)
+                gate, spans = in_down, (spin_down,)
         elif e == "external_rope_load":
             load = rng.uniform(0.3, 0.6) * (0.1 if c == "under_noise" else 1.0)
             if c == "confounded":
@@ -95,7 +98,7 @@ class ProofCase:
         return eff, spans
 
 
-def proof_cases(*, seeds: list[int], clean_seeds: list[int], duration_s: float = 10.0,
+def proof_cases(*, seeds: list[int], clean_seeds: list[int], duration_s: float = 12.0,
                 effects: tuple[str, ...] = EFFECTS, concealments: tuple[str, ...] = CONCEALMENTS) -> list[ProofCase]:
     """Every effect x concealment for each seed, plus one effect-free case per clean seed."""
     cases = [ProofCase(f"{e}/{c}/{s}", s * 100 + i * 10 + j, e, c, duration_s)

@@ -1,13 +1,16 @@
 """Recordings from a truth model for the diagnose proof: the per-tick DrivePlant with base parameters
-perturbed from nominal as real hardware is, one truth effect switched on (or none), an open-loop excitation
-program of ESC pulses (steps across the speed range, rests, slow ramps: what `wrangler excite` runs), and the
-board's measurement chain: M/T speed estimate on the encoder's edges with the firmware's low-pass, telemetry at
-50 Hz rounded to mm/s and whole rpm, the battery ADC's noise and step.
+perturbed from nominal as real hardware is, one truth effect switched on (or none), driven as a user records it
+with `wrangler excite --profile drive` (the firmware's speed loop following the profile's steps, ramps and chirp,
+compressed to the recording's length; 1 kHz bursts at the spin-up, a step up, a step down and the spin-down),
+and the board's measurement chain: M/T speed estimate on the encoder's edges with the firmware's low-pass,
+telemetry at 100 Hz (or 50 Hz) rounded to mm/s and whole rpm with the pulse at 1/3 us, the encoder's count and
+latest edge time, the battery ADC's noise and step.
 
-Writes the documented schema (/device/telemetry, /device/params, /sim/plant_truth for scoring only).
+Writes the documented schema (/device/telemetry, /device/burst, /device/params; /sim/plant_truth for scoring
+only: diagnose never reads it).
 
     case = generate_recording("r.mcap", effect=LatencyTruth("esc_latency", {"delay_s": 0.008}, delay_s=0.008),
-                              seed=3, duration_s=8.0)
+                              seed=3, duration_s=12.0)
 """
 
 from __future__ import annotations
@@ -23,7 +26,6 @@ from robowrangler.recorder import RecordingWriter
 from robowrangler_sim.plants import DriveParams, DrivePlant
 from robowrangler_sim.diagnose.proof.truth_effects import TruthEffect
 
-TELEMETRY_PERIOD_TICKS = 20
 SPEED_FILTER_TAU_S = 0.01
 TOV_MPS = 2.6
 # class estimates a real unit differs on (the nominal refit's business, not missing physics)
@@ -60,15 +62,16 @@ def perturbed_params(rng: np.random.Generator, *, low: float = 0.03, high: float
 
 
 def excitation_program(rng: np.random.Generator, duration_s: float) -> np.ndarray:
-    """Pulse per 1 ms tick: 0.4 s arming at 1000 us, then holds of 0.25-0.7 s at random levels across the speed
-    range (1015-1450 us), rests at 1000 us and slow ramps; changes only at telemetry ticks."""
+    """Open-loop pulse per 1 ms tick (the older generator's program, kept for tests that need a plain pulse
+    record): 0.4 s arming at 1000 us, then holds of 0.25-0.7 s at random levels across the speed range
+    (1015-1450 us), rests at 1000 us and slow ramps; changes only every 20 ticks."""
     n = int(round(duration_s * 1000))
     pulse = np.full(n, 1000.0)
     k = 400
     levels = []
     while k < n:
         kind = rng.random()
-        hold = int(rng.uniform(0.25, 0.7) * 1000) // TELEMETRY_PERIOD_TICKS * TELEMETRY_PERIOD_TICKS
+        hold = int(rng.uniform(0.25, 0.7) * 1000) // 20 * 20
         if kind < 0.12:
             level = 1000.0
         elif kind < 0.35:
@@ -76,14 +79,92 @@ def excitation_program(rng: np.random.Generator, duration_s: float) -> np.ndarra
         else:
             level = float(rng.integers(1080, 1450))
         if rng.random() < 0.15 and levels:
-            ramp = np.linspace(levels[-1], level, hold // TELEMETRY_PERIOD_TICKS)
-            seg = np.repeat(np.round(ramp), TELEMETRY_PERIOD_TICKS)
+            ramp = np.linspace(levels[-1], level, hold // 20)
+            seg = np.repeat(np.round(ramp), 20)
             pulse[k:k + seg.size] = seg[: max(0, min(seg.size, n - k))]
         else:
             pulse[k:k + hold] = level
         levels.append(level)
         k += hold
     return pulse
+
+
+@dataclass(frozen=True)
+class ExciteProgram:
+    """A compressed `wrangler excite --profile drive` run (host/robowrangler/excite/profiles/drive.toml): speed
+    targets per 1 ms tick for the firmware's speed loop (NaN: ARMED, pulse at the minimum; 0 after spindown_s:
+    landing), and the ticks where a 1 kHz burst starts (spin-up, a step up, a step down, the spin-down)."""
+
+    target_mps: np.ndarray
+    burst_starts: tuple[int, ...]
+    burst_samples: int
+    spindown_s: float
+
+
+EXCITE_EDGES_S = (0.5, 2.0, 3.5, 5.0, 6.0, 7.0, 9.5)
+"""On a 12 s program: spin-up, step up, ramp start, ramp end, step down, chirp, spindown (scaled to the length)."""
+
+
+def excite_edges_s(duration_s: float) -> np.ndarray:
+    """The excite program's segment starts (EXCITE_EDGES_S scaled to duration_s), s."""
+    return np.asarray(EXCITE_EDGES_S) * duration_s / 12.0
+
+
+def excite_program(rng: np.random.Generator, duration_s: float) -> ExciteProgram:
+    """The drive profile's shape on duration_s (>= 6 s): arming; spin-up to v1 (3.2-4.5 m/s) with a burst;
+    a step up to v2 (5.5-7.5) with a burst; a ramp to v3 (9-12) and a hold; a step down to v4 (6-8) with a
+    burst; a chirp around v4 (+-1 m/s, 0.5 -> 4 Hz, setpoints at 50 Hz); SPINDOWN with a burst; rest."""
+    if duration_s < 6.0:
+        raise ValueError(f"duration_s: expected >= 6 s for the excite program, got {duration_s}")
+    n = int(round(duration_s * 1000))
+    t = np.arange(n) * 1e-3
+    v1, v2 = rng.uniform(3.2, 4.5), rng.uniform(5.5, 7.5)
+    v3, v4 = rng.uniform(9.0, 12.0), rng.uniform(6.0, 8.0)
+    edges = excite_edges_s(duration_s)
+    tgt = np.full(n, np.nan)
+    tgt[t >= edges[0]] = v1
+    tgt[t >= edges[1]] = v2
+    ramp = (t >= edges[2]) & (t < edges[3])
+    tgt[ramp] = v2 + (v3 - v2) * np.floor((t[ramp] - edges[2]) * 20.0) / 20.0 / (edges[3] - edges[2])
+    tgt[(t >= edges[3]) & (t < edges[4])] = v3
+    tgt[(t >= edges[4]) & (t < edges[5])] = v4
+    ch = (t >= edges[5]) & (t < edges[6])
+    tc = np.floor((t[ch] - edges[5]) * 50.0) / 50.0
+    f0, f1, dur = 0.5, 4.0, edges[6] - edges[5]
+    tgt[ch] = v4 + 1.0 * np.sin(2 * np.pi * (f0 * tc + 0.5 * (f1 - f0) / dur * tc * tc))
+    tgt[t >= edges[6]] = 0.0
+    bursts = tuple(int(round(e * 1000)) for e in (edges[0], edges[1], edges[4], edges[6]))
+    return ExciteProgram(target_mps=tgt, burst_starts=bursts, burst_samples=1000, spindown_s=float(edges[6]))
+
+
+class _SpeedLoop:
+    """The firmware's rope speed loop (firmware/core/rw_speed_loop.c, in floats): setpoint ramp (20 m/s^2 up,
+    10 down), feed-forward throttle from kv and the battery volts, PI (kp 0.04 / (m/s), ki 0.4 / (m/s s)) with
+    the integrator clamped so the throttle stays in 0..1, pulse at the PWM timer's 1/3 us."""
+
+    def __init__(self, params: DriveParams) -> None:
+        self.kv = params.motor_kv_rpm_per_v
+        self.r = params.wheel_radius_m
+        self.setpoint = 0.0
+        self.integ = 0.0
+
+    def step(self, target_mps: float, measured_mps: float, battery_v: float, dt_s: float) -> float:
+        if not np.isfinite(target_mps):
+            self.setpoint, self.integ = measured_mps, 0.0
+            return 1000.0
+        d = target_mps - self.setpoint
+        self.setpoint += min(d, 20.0 * dt_s) if d > 0 else max(d, -10.0 * dt_s)
+        if target_mps == 0.0 and self.setpoint <= 0.0:
+            self.integ = 0.0
+            return 1000.0
+        ff = self.setpoint / (2.0 * math.pi * self.r * self.kv * battery_v / 60.0)
+        e = self.setpoint - measured_mps
+        self.integ += 0.4 * e * dt_s
+        u = ff + 0.04 * e + self.integ
+        if u > 1.0 or u < 0.0:
+            u = min(max(u, 0.0), 1.0)
+            self.integ = u - ff - 0.04 * e
+        return round((1000.0 + 1000.0 * u) * 3.0) / 3.0
 
 
 class _MtEstimator:
@@ -112,43 +193,73 @@ class _MtEstimator:
         return self.out
 
 
-def _telemetry(t_s: float, seq: int, state: str, pulse_us: int, speed_mps: float, battery_v: float,
-               counters: int, encoder_counts: int, encoder_edge_us: int) -> dict:
+def _telemetry(t_s: float, seq: int, state: str, pulse_us: float, speed_mps: float, battery_v: float,
+               counters: int, encoder_counts: int, encoder_edge_us: int, *, fine_pulse: bool, target_mps: float,
+               setpoint_mps: float) -> dict:
     rpm = int(round(speed_mps / (2.0 * math.pi * DriveParams().wheel_radius_m) * 60.0))
-    return {"time_s": round(t_s, 3), "state": state, "fault_bits": [], "rope_speed_target_mps": 0.0,
-            "rope_speed_setpoint_mps": 0.0, "rope_speed_mps": round(speed_mps, 3), "motor_rpm": rpm,
-            "esc_pulse_us": int(pulse_us), "battery_v": round(battery_v, 3), "heartbeat_age_s": 0.02,
+    fine = round(pulse_us * 3.0) / 3.0 if fine_pulse else float(int(round(pulse_us)))
+    return {"time_s": round(t_s, 3), "state": state, "fault_bits": [], "rope_speed_target_mps": round(target_mps, 3),
+            "rope_speed_setpoint_mps": round(setpoint_mps, 3), "rope_speed_mps": round(speed_mps, 3), "motor_rpm": rpm,
+            "esc_pulse_us": int(round(pulse_us)), "battery_v": round(battery_v, 3), "heartbeat_age_s": 0.02,
             "rx_ok": counters % 65536, "rx_bad": 0, "rx_duplicates": 0, "nacks": 0, "events": 0, "tick_overruns": 0,
             "guide_position_m": 0.0, "guide_target_m": 0.0, "spindle_load_permille": 0, "spindle_flags": ["HOMED"],
             "spindle_rejected": 0, "rx_auth_failed": 0, "rx_replayed": 0, "tx_dropped": 0, "seq": seq % 65536,
-            "esc_pulse_fine_us": float(pulse_us), "spindle_moving_speed_raw": 0,
+            "esc_pulse_fine_us": fine, "spindle_moving_speed_raw": 0,
             "encoder_counts": encoder_counts % 2 ** 32, "encoder_edge_us": encoder_edge_us % 2 ** 32}
 
 
-def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: int, duration_s: float = 10.0,
-                       params: DriveParams | None = None, pulse_us: np.ndarray | None = None,
-                       truth_spans_s: tuple[tuple[float, float], ...] = ()) -> TruthCase:
-    """Run the truth plant over an excitation program and write the recording; returns its TruthCase.
+def _burst_frames(burst_id: int, start_tick: int, samples: list[tuple[int, int, float, float]], seq0: int) -> list[dict]:
+    """/device/burst records (BURST_DATA frames of 6 samples) of one burst taken from start_tick."""
+    out = []
+    for k in range(0, len(samples), 6):
+        chunk = samples[k:k + 6]
+        out.append({"burst_id": burst_id % 65536, "start_time_s": round(start_tick * 1e-3, 3),
+                    "start_time_us": (start_tick * 1000) % 2 ** 32, "tick_us": 1000, "sample_count": len(samples),
+                    "first_sample": k, "encoder_counts": [c % 65536 for c, _, _, _ in chunk],
+                    "encoder_edge_us": [e % 65536 for _, e, _, _ in chunk],
+                    "esc_pulse_fine_us": [round(p * 3.0) / 3.0 for _, _, p, _ in chunk],
+                    "battery_v": [round(b, 3) for _, _, _, b in chunk], "seq": (seq0 + len(out)) % 65536})
+    return out
 
+
+def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: int, duration_s: float = 12.0,
+                       params: DriveParams | None = None, pulse_us: np.ndarray | None = None,
+                       truth_spans_s: tuple[tuple[float, float], ...] = (), telemetry_hz: float = 100.0,
+                       fine_pulse: bool = True, bursts: bool = True) -> TruthCase:
+    """Run the truth plant and write the recording; returns its TruthCase.
+
+    By default the run is what a user records with `wrangler excite --profile drive` (compressed to
+    duration_s): the firmware's speed loop (emulated, _SpeedLoop) follows excite_program's targets, telemetry
+    at telemetry_hz with the pulse at 1/3 us (fine_pulse=False: whole us, as older firmware sent it) and 1 kHz
+    bursts at the steps (bursts=False: none, as a plain `wrangler record` of an older board).
     params: the truth's base parameters (None: perturbed 3-10 % from nominal with this seed).
-    pulse_us: the pulse program per 1 ms tick (None: excitation_program with this seed).
+    pulse_us: an open-loop pulse program per 1 ms tick instead (no speed loop, no bursts).
     truth_spans_s: where the effect acts, for scoring the located spans (regime-limited cases).
     """
     path = Path(path)
+    if telemetry_hz not in (50.0, 100.0):
+        raise ValueError(f"telemetry_hz: expected 50 or 100 (the firmware's rates), got {telemetry_hz}")
+    period = int(round(1000.0 / telemetry_hz))
     rng = np.random.default_rng([seed, 0xD1A6])
     if params is None:
         params = perturbed_params(rng)
+    program = None
     if pulse_us is None:
-        pulse_us = excitation_program(rng, duration_s)
+        program = excite_program(rng, duration_s)
+        n_ticks = program.target_mps.size
+    else:
+        n_ticks = pulse_us.size
     plant = DrivePlant(params, seed=seed)
     if effect is not None:
         effect.reset(np.random.default_rng([seed, 0x7E]))
         if effect.replaces_drag:
             plant.rope_exposed_length_m = 0.0
     mt = _MtEstimator(params.encoder_counts_per_rev, params.wheel_radius_m, SPEED_FILTER_TAU_S)
+    loop = _SpeedLoop(DriveParams())  # the firmware's configured kv and wheel (class values, not the truth's)
     device_params = {"speed_filter_tau_s": str(SPEED_FILTER_TAU_S), "wheel_radius_m": "0.015",
                      "encoder_counts_per_rev": "64", "motor_kv_rpm_per_v": "1250", "esc_min_us": "1000",
-                     "tov_mps": str(TOV_MPS), "telemetry_rate_hz": "50"}
+                     "tov_mps": str(TOV_MPS), "telemetry_rate_hz": str(int(telemetry_hz))}
+    burst_at = {} if program is None or not bursts else {b: i for i, b in enumerate(program.burst_starts)}
     sag_v = 0.0
     base_aux = plant.battery_aux_current_a
     with RecordingWriter(path, source="simulator", seed=seed, time_base="simulation",
@@ -158,20 +269,39 @@ def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: in
         w.add_metadata("/device/params", device_params)
         seq = 0
         meas = 0.0
-        for k in range(pulse_us.size):
+        burst: tuple[int, int, list] | None = None
+        for k in range(n_ticks):
             t_s = plant.time_us * 1e-6
             meas = mt.step(plant.encoder_counts, plant.encoder_last_edge_us, plant.time_us, 1e-3 if k else 0.0)
-            if k % TELEMETRY_PERIOD_TICKS == 0:
+            if program is None:
+                cmd = float(pulse_us[k])
+                target = setpoint = 0.0
+            else:
+                target = float(program.target_mps[k])
+                cmd = loop.step(target, meas, plant.battery_adc_v, 1e-3)
+                setpoint = loop.setpoint if np.isfinite(target) else 0.0
+                target = target if np.isfinite(target) else 0.0
+            if k in burst_at and burst is None:
+                burst = (burst_at[k], k, [])
+            if burst is not None:
+                burst[2].append((abs(plant.encoder_counts), plant.encoder_last_edge_us, cmd, plant.battery_adc_v))
+                if len(burst[2]) == program.burst_samples or k == n_ticks - 1:
+                    for rec in _burst_frames(burst[0], burst[1], burst[2], seq):
+                        w.write("/device/burst", rec)
+                        seq += 1
+                    burst = None
+            if k % period == 0:
                 v = abs(plant.rope_speed_mps)
                 state = "ARMED" if v < 0.05 else ("AIRBORNE" if v > TOV_MPS else "SPINUP")
-                w.write("/device/telemetry", _telemetry(t_s, seq, state, int(pulse_us[k]), meas,
-                                                        plant.battery_adc_v, k // TELEMETRY_PERIOD_TICKS,
-                                                        abs(plant.encoder_counts), plant.encoder_last_edge_us))
+                w.write("/device/telemetry", _telemetry(t_s, seq, state, cmd, meas, plant.battery_adc_v, k // period,
+                                                        abs(plant.encoder_counts), plant.encoder_last_edge_us,
+                                                        fine_pulse=fine_pulse, target_mps=target,
+                                                        setpoint_mps=setpoint))
                 w.write("/sim/plant_truth", {"time_s": round(t_s, 3), "rope_speed_mps": plant.rope_speed_mps,
                                              "battery_v": plant.battery_v,
                                              "external_rope_load_n": plant.external_rope_load_n})
                 seq += 1
-            applied = float(pulse_us[k])
+            applied = cmd
             if effect is not None:
                 applied = effect.pulse(applied, t_s, plant)
                 v = plant.rope_speed_mps
