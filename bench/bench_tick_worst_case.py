@@ -102,6 +102,20 @@ DATAGRAM_BYTES = 93  # RW_MAX_FRAME_LEN: the longest frame
 USB_PASS_CYCLES = 64 * 90 + 2000 + 63 * 4  # 64 bytes through Serial.read + the deframer, one encode, one packet
 
 
+# PARAM_SET of a parameter of each group (rw_params_modules): the group and the parameter sent (its default).
+PARAM_SET_GROUPS = {
+    "speed loop gains": "speed_kp",
+    "setpoint ramp": "ramp_up_mps2",
+    "speed filter": "speed_filter_tau_s",
+    "ToV guard": "tov_mps",
+    "spindle": "spindle_kp_per_s",
+    "load monitor": "load_loss_drop_n",
+    "throttle map + load monitor": "motor_kv_rpm_per_v",
+    "telemetry": "telemetry_rate_hz",
+}
+PARAM_SET_FOLLOW_TICKS = 4  # a staged module is converted at the end of the first tick without a datagram
+
+
 def us(cycles: float) -> float:
     return cycles / CPU_HZ * 1e6
 
@@ -158,15 +172,27 @@ def emulate_paths() -> list[PathCost]:
         keep("periodic (no datagram)", profile, esc_at)
         if "mac finish+send" in label:
             keep("telemetry frame leaving", profile, esc_at)
-    kp = proto.PARAMS_BY_NAME["speed_kp"]
-    for _ in range(bti.PHASES):
-        sent, profile, esc_at = counted(sc.frame(proto.SetRopeSpeed(rope_speed_mmps=bti.TARGET_MMPS)))
-        assert sent and isinstance(sent[0], proto.Ack), sent
-        keep("command arriving (SET_ROPE_SPEED)", profile, esc_at)
-    for _ in range(bti.PHASES):
-        sent, profile, esc_at = counted(sc.frame(proto.ParamSet(param_id=kp.id, value=kp.default)))
-        assert sent and isinstance(sent[0], proto.Ack), sent
-        keep("command arriving (PARAM_SET)", profile, esc_at)
+    commands = (
+        ("SET_ROPE_SPEED", lambda: proto.SetRopeSpeed(rope_speed_mmps=bti.TARGET_MMPS)),
+        ("SET_LOOP", lambda: proto.SetLoop(guide_position_um=bti.LOOP_TARGET_UM)),
+        ("PARAM_GET", lambda: proto.ParamGet(param_id=proto.PARAMS_BY_NAME["speed_kp"].id)),
+    )
+    for name, make in commands:
+        for _ in range(bti.PHASES):
+            sent, profile, esc_at = counted(sc.frame(make()))
+            assert sent and isinstance(sent[0], proto.Ack), sent
+            keep(f"command arriving ({name})", profile, esc_at)
+    # PARAM_SET of each parameter group: the tick that takes it (checked, stored, ACK signed, PARAM_CHANGED and
+    # PARAM_VALUE queued) and the ticks after it, one of which converts its staged modules at its end
+    for name in PARAM_SET_GROUPS.values():
+        spec = proto.PARAMS_BY_NAME[name]
+        for _ in range(bti.PHASES):
+            sent, profile, esc_at = counted(sc.frame(proto.ParamSet(param_id=spec.id, value=spec.default)))
+            assert sent and isinstance(sent[0], proto.Ack), sent
+            keep(f"command arriving (PARAM_SET {name})", profile, esc_at)
+            for _ in range(PARAM_SET_FOLLOW_TICKS):
+                _, profile, esc_at = counted()
+                keep(f"ticks after PARAM_SET {name}", profile, esc_at)
     sc.run_quiet(40)
     emu.write_u32("harness_spindle_silent", 1)  # the servo stops answering: every spindle step times out
     for _ in range(bti.SCHEDULE_TICKS):

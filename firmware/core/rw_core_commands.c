@@ -260,6 +260,8 @@ static verdict cmd_release(rw_core *core, const rw_hal *hal)
 
 static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
 {
+    /* the modules the commands check against (the guard, the spindle's limits) hold every staged change */
+    rw_core_params_settle(core, RW_PARAM_MODULE_TOV_GUARD | RW_PARAM_MODULE_SPINDLE);
     switch (frame->msg_id) {
     case RW_MSG_ID_ARM:
         return cmd_arm(core);
@@ -481,6 +483,7 @@ bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link)
     if (n == 0u) {
         return false;
     }
+    core->state.took_datagram = true;
     rw_frame frame;
     /* A datagram longer than buf arrives truncated to sizeof buf, which is longer than any frame: the
      * decoder refuses it exactly as it refuses the whole datagram (trailing bytes: BAD_LENGTH; a declared
