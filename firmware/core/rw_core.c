@@ -163,7 +163,8 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     }
 
     /* 2. at most one received datagram per link (USB serial first: it is where provisioning happens) */
-    bool sent = hal->serial != NULL && rw_core_handle_datagram(core, hal, RW_LINK_SERIAL);
+    bool sent = rw_core_provision_poll(core, hal); /* a PROVISION_COMMIT's write done: its answer, on serial */
+    sent = (!sent && hal->serial != NULL && rw_core_handle_datagram(core, hal, RW_LINK_SERIAL)) || sent;
     sent = rw_core_handle_datagram(core, hal, RW_LINK_WIFI) || sent;
 
     /* 3. supervision; the periodic jobs only on other ticks, one job a tick */

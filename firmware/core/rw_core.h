@@ -123,6 +123,12 @@ typedef struct rw_core {
         rw_core_counters counters;
         rw_config config;         /* the stored record (RAM copy): key, WiFi, boot counter; staged changes */
         bool config_dirty;        /* provisioning changed it since the last PROVISION_COMMIT */
+        bool commit_pending;      /* a PROVISION_COMMIT's record is being written outside the tick; answered when done */
+        uint8_t commit_link;      /* rw_link_id, msg_id, seq and checksum of that command (its answer, the duplicate cache) */
+        uint8_t commit_msg_id;
+        uint16_t commit_seq;
+        uint16_t commit_checksum;
+        rw_config commit_record;  /* the record being written: the RAM record once the store says it is written */
         bool key_staged;          /* PROVISION_SET_KEY received; active from the next commit */
         uint8_t staged_key[RW_KEY_LEN];
         uint32_t session_id;      /* this session: epoch + boot counter at boot, a new epoch at PROVISION_COMMIT */

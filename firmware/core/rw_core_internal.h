@@ -58,6 +58,10 @@ void rw_core_load_loss_step(rw_core *core);
 /* ---- rw_core_commands.c ---- */
 /* Receive at most one datagram on a link, answer it; returns true when a datagram was sent this tick. */
 bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link);
+/* A PROVISION_COMMIT whose record the store was writing: once save_status says DONE (or FAILED), the new
+ * record (session, key) takes effect and the command is answered ACK (NACK STORE_FAILED); returns true when
+ * that answer went out (on the serial link: that link takes no datagram this tick). */
+bool rw_core_provision_poll(rw_core *core, const rw_hal *hal);
 
 /* ---- rw_core_telemetry.c ---- */
 /* Pack a TELEMETRY frame into the outbox (a full outbox drops it, counted). */

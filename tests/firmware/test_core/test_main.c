@@ -149,7 +149,42 @@ static bool config_save(void *ctx, const void *buf, size_t len)
     return true;
 }
 
-static const rw_hal_config_store hal_config = { NULL, config_load, config_save };
+/* A PROVISION_COMMIT's write: at once (flash_hold == false), or held BUSY until the test lets it finish. */
+static bool flash_hold;
+static bool flash_fail;
+static uint8_t flash_status;
+static rw_config flash_pending;
+
+static bool config_request_save(void *ctx, const void *buf, size_t len)
+{
+    if (flash_status == RW_CONFIG_SAVE_BUSY) {
+        return false;
+    }
+    TEST_ASSERT_EQUAL_UINT(sizeof flash_pending, len);
+    memcpy(&flash_pending, buf, len);
+    flash_status = RW_CONFIG_SAVE_BUSY;
+    if (!flash_hold) {
+        flash_status = !flash_fail && config_save(ctx, &flash_pending, len) ? RW_CONFIG_SAVE_DONE : RW_CONFIG_SAVE_FAILED;
+    }
+    return true;
+}
+
+static uint8_t config_save_status(void *ctx)
+{
+    (void)ctx;
+    return flash_status;
+}
+
+/* The held write finishes (the board's background loop wrote the flash). */
+static void flash_release(void)
+{
+    flash_hold = false;
+    flash_status = !flash_fail && config_save(NULL, &flash_pending, sizeof flash_pending) ? RW_CONFIG_SAVE_DONE
+                                                                                         : RW_CONFIG_SAVE_FAILED;
+}
+
+static const rw_hal_config_store hal_config = { NULL, config_load, config_save, config_request_save,
+                                                config_save_status };
 static const rw_hal_esc_output hal_esc = { NULL, esc_write_pulse_us, NULL };
 static const rw_hal_encoder hal_encoder = { NULL, encoder_read };
 static const rw_hal_battery hal_battery = { NULL, battery_read_mv };
@@ -460,6 +495,9 @@ void setUp(void)
     rw_config_defaults(&flash);
     rw_config_set_key(&flash, test_key);
     flash_saves = 0u;
+    flash_hold = false;
+    flash_fail = false;
+    flash_status = RW_CONFIG_SAVE_IDLE;
     rw_core_init(&core);
 }
 
