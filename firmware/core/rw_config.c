@@ -86,3 +86,21 @@ void rw_config_clear_key(rw_config *c)
     c->key_set = 0u;
     rw_config_seal(c);
 }
+
+bool rw_config_commit(rw_config *c, uint32_t session_epoch, const float values[RW_PARAM_COUNT],
+                      const uint8_t key[RW_KEY_LEN])
+{
+    if (session_epoch >= RW_CONFIG_EPOCH_LIMIT) {
+        return false;
+    }
+    c->session_epoch = session_epoch;
+    c->boot_counter = 0u;
+    c->commits += 1u;
+    memcpy(c->params, values, sizeof c->params);
+    if (key != NULL) {
+        memcpy(c->key, key, RW_KEY_LEN);
+        c->key_set = 1u;
+    }
+    rw_config_seal(c);
+    return true;
+}

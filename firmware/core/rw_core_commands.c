@@ -427,12 +427,9 @@ static verdict commit(rw_core *core, const rw_hal *hal, rw_link_id link, const r
     }
     rw_config *next = &core->state.commit_record;
     *next = *c;
-    if (!rw_config_new_epoch(next, msg.session_epoch)) {
+    if (!rw_config_commit(next, msg.session_epoch, core->params.value,
+                          core->state.key_staged ? core->state.staged_key : NULL)) {
         return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)(RW_CONFIG_EPOCH_LIMIT - 1u));
-    }
-    rw_config_set_params(next, core->params.value);
-    if (core->state.key_staged) {
-        rw_config_set_key(next, core->state.staged_key);
     }
     if (!hal->config->request_save(hal->config->ctx, next, sizeof *next)) {
         return refuse(RW_NACK_REASON_STORE_FAILED, 2); /* the store is still busy with another write */
