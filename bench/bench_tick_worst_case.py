@@ -77,7 +77,7 @@ SYSTICK_ISR_CYCLES = 45  # equal priority to the tick: a running one finishes fi
 # Longest sections that keep the tick out.
 USB_RX_CHUNK_MASKED_CYCLES = 1 * 12 + 30  # DoubleBufferedEPOutHandler::recv of the one byte Serial.read() takes, PRIMASK set
 STATS_COPY_MASKED_CYCLES = 40  # rw_arduino_scheduler_stats: TC3 disabled in the NVIC for four loads
-CONFIG_COPY_MASKED_CYCLES = 350  # a PROVISION_COMMIT's record copy (272 bytes): DISARMED only, not in flight
+CONFIG_COPY_MASKED_CYCLES = 350  # main.cpp's copy of a committed record (272 bytes): DISARMED only, not in flight
 
 # ---- buses (background loop) ----
 DXL_BIT_US = 1.0  # 1 Mbps
@@ -207,6 +207,16 @@ def emulate_paths() -> list[PathCost]:
     return list(worst.values())
 
 
+def commit_crc_cycles() -> int:
+    """Emulated cycles of the CRC-32 a PROVISION_COMMIT's tick computes over the configuration record (the one
+    float-free but long piece of work left in that tick; the flash write itself runs in the background loop)."""
+    emu = ah.HarnessEmulator(ah.build_arm())
+    emu.reset()
+    record = emu.symbols["harness_flash"]
+    _, profile = emu.call("rw_crc32", record.address, record.size - 4, count=True)  # all but the CRC field
+    return profile.cycles
+
+
 def interrupt_load(window_us: float, *, uart_active: bool) -> float:
     """Cycles (zero wait states) the interrupts above the tick can take within a window: encoder edges at
     TOP_RPM and, during a spindle transaction, one UART byte every 10 us."""
@@ -301,9 +311,14 @@ def main() -> None:
     print(f"Entry delay, worst: {latency_worst:.1f} us = the longest section keeping the tick out "
           f"(USB receive of one byte {USB_RX_CHUNK_MASKED_CYCLES} cycles; SysTick {SYSTICK_ISR_CYCLES}) + encoder and UART "
           "interrupts arriving meanwhile.")
-    print(f"Not in flight: a PROVISION_COMMIT (DISARMED only) copies the record with the tick masked "
-          f"({us(CONFIG_COPY_MASKED_CYCLES * FLASH_FACTOR):.1f} us) and its flash save runs inside the tick (erase + "
-          "write, up to ~25 ms: counted as overruns, the PWM runs on in hardware).")
+    crc_cycles = commit_crc_cycles()
+    print(f"Not in flight: a PROVISION_COMMIT (DISARMED only) seals its record in the tick (CRC-32 of the record: "
+          f"{crc_cycles:,} cycles, {us(crc_cycles * FLASH_FACTOR):.0f} us with the wait state, on top of a command "
+          "tick) and hands a copy to the store; the flash erase + write runs in the background loop and the "
+          "command is ACKed when it is done (up to ~25 ms with the CPU stalled on flash: ticks in that window "
+          "start late, counted in tick_overruns, the PWM runs on in hardware; ARM is refused until then). The "
+          f"background loop copies the committed record with the tick masked "
+          f"({us(CONFIG_COPY_MASKED_CYCLES * FLASH_FACTOR):.1f} us).")
     print()
     # UART receiver deadline: a byte every 10 us, the SERCOM holds 2 (one in the shift register)
     uart_deadline_us = 2 * DXL_BYTE_US
