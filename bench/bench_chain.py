@@ -2,8 +2,11 @@
 
 Prints (never asserts):
   * for N = 20 / 40 / 80, free air (airborne, no contact) and contact (loop fallen on the floor,
-    20-40 chain-floor contacts): real-time factor of (a) bare mj_step on the plant's model and
-    (b) ChainPlant.step (the per-step Python work: lift, phi, targets, gains, divergence check);
+    20-40 chain-floor contacts): real-time factor of (a) bare mj_step on the plant's model (column
+    "mj_step RTF", the README's chain figure), (b) ChainPlant.step (column "plant RTF": the per-step
+    Python work: lift, phi, targets, gains, divergence check) and (c) ChainPlant.update(inputs, h), one
+    step through the plant contract with its PlantOutputs (column "update RTF": what the SIL's chain
+    bridge runs per chain step);
   * mujoco.rollout on 2 threads: rollouts per second (1 s each, open-loop drive targets) and the
     speed-up over 1 thread.
 The full SIL figure (firmware + plant, lockstep) belongs to the SIL bridge and is not measured here.
@@ -63,6 +66,17 @@ def _rtf_plant(plant: ChainPlant, inputs: PlantInputs, wall_s: float) -> tuple[f
     return n * plant.params.timestep_s / el, el / n * 1e6
 
 
+def _rtf_update(plant: ChainPlant, inputs: PlantInputs, wall_s: float) -> tuple[float, float]:
+    h_s = plant.params.timestep_s
+    n, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < wall_s:
+        for _ in range(200):
+            plant.update(inputs, h_s)
+        n += 200
+    el = time.perf_counter() - t0
+    return n * h_s / el, el / n * 1e6
+
+
 def _rollouts_per_s(n_links: int, *, nbatch: int, nthread: int, horizon_s: float = 1.0) -> float:
     plant, _ = _plant(n_links, contact=False)
     m = plant.model
@@ -89,15 +103,16 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} cores, MuJoCo {mujoco.__version__}, timestep "
           f"{ChainParams().timestep_s * 1e3:.0f} ms, implicitfast")
     print(f"{'N':>3} {'case':>8} {'mj_step us':>11} {'mj_step RTF':>12} {'plant us':>9} {'plant RTF':>10} "
-          f"{'contacts':>8}")
+          f"{'update us':>9} {'update RTF':>10} {'contacts':>8}")
     for n in (20, 40, 80):
         for contact in (False, True):
             plant, inputs = _plant(n, contact=contact)
             ncon = plant.data.ncon
             rtf_p, us_p = _rtf_plant(plant, inputs, wall)
+            rtf_u, us_u = _rtf_update(plant, inputs, wall)
             rtf_m, us_m = _rtf_mj_step(plant, wall)
             print(f"{n:>3} {'contact' if contact else 'free':>8} {us_m:>11.1f} {rtf_m:>11.0f}x {us_p:>9.1f} "
-                  f"{rtf_p:>9.0f}x {ncon:>8}")
+                  f"{rtf_p:>9.0f}x {us_u:>9.1f} {rtf_u:>9.0f}x {ncon:>8}")
     nbatch = 32 if args.quick else 128
     for n in (20, 40):
         r1 = _rollouts_per_s(n, nbatch=nbatch, nthread=1)

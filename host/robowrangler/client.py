@@ -53,6 +53,7 @@ RECV_POLL_S = 0.05  # receiver thread wakes this often to notice close()
 TELEMETRY_QUEUE_LEN = 4096  # per telemetry() iterator; the oldest sample is dropped when full (~80 s at 50 Hz)
 EVENT_HISTORY_LEN = 10000
 NOT_READY_RETRY_S = 0.05  # pause between ARM attempts while the device reports NOT_READY
+KEYLESS_POLL_S = 0.02  # a keyless connect looks this often whether the device's SESSION_INFO says it signs
 _CLOSED = object()
 # NACK reasons that mean "the frame arrived damaged": our frames are well-formed, so the link corrupted
 # it (or, if it keeps happening, host and firmware disagree on the protocol). UNKNOWN_MESSAGE is not here:
@@ -168,6 +169,7 @@ class Client:
         self._link: LinkSession | None = None  # made by connect() when there is a key
         self._hello_nonce: int | None = None
         self._session_info: gen.Message | None = None
+        self._session_info_signed = False
         self._session_event = threading.Event()
         self._transport = transport
         self._lock = threading.Lock()  # guards waiters, subscribers, stats, events
@@ -203,6 +205,7 @@ class Client:
         self._first_telemetry.clear()
         self._session_event.clear()
         self._session_info = None
+        self._session_info_signed = False
         self._device_heartbeat_s = None
         if self._key is not None:  # a new connection learns the session afresh (the counter keeps growing)
             self._link = LinkSession(self._key, clock_us=lambda: time.time_ns() // 1000)
@@ -216,12 +219,10 @@ class Client:
             if self._key is not None:
                 self._establish_session()
             heartbeat.start()
-            if not self._first_telemetry.wait(self.connect_timeout_s):
+            if not self._wait_first_telemetry():
                 info = self._session_info
-                if self._key is None and info is not None and info.key_set:
-                    raise AuthenticationError(
-                        f"{self.url} requires signed frames (its SESSION_INFO says a key is provisioned) and no "
-                        "link key was given: pass key=... (wrangler --key-file)", url=self.url)
+                if self._key is None and info is not None and info.key_set:  # silent to a keyless host all along
+                    raise self._needs_key_error()
                 raise LinkTimeout(f"no TELEMETRY from {self.url} within {self.connect_timeout_s:g} s: is the device "
                                   "(or the SIL firmware) running and listening at that address?",
                                   url=self.url, waited_s=self.connect_timeout_s)
@@ -229,6 +230,31 @@ class Client:
             self.close()
             raise
         return self
+
+    def _wait_first_telemetry(self) -> bool:
+        """Wait up to connect_timeout_s for the first TELEMETRY; without a key, stop as soon as the device's
+        SESSION_INFO comes signed with a key set (it will stay silent to this host: no need to wait)."""
+        deadline = time.monotonic() + self.connect_timeout_s
+        while True:
+            remaining_s = deadline - time.monotonic()
+            if self._first_telemetry.wait(max(0.0, min(KEYLESS_POLL_S, remaining_s))):
+                return True
+            if self._keyless_but_device_signs():
+                raise self._needs_key_error()
+            if remaining_s <= 0:
+                return False
+
+    def _keyless_but_device_signs(self) -> bool:
+        """No key here, and the device answered HELLO with a signed SESSION_INFO saying a key is provisioned:
+        it takes only signed frames on this link (over USB serial the same device answers unsigned and takes
+        unsigned frames)."""
+        info = self._session_info
+        return self._key is None and info is not None and bool(info.key_set) and self._session_info_signed
+
+    def _needs_key_error(self) -> AuthenticationError:
+        return AuthenticationError(f"{self.url} requires signed frames (its SESSION_INFO is signed: a key is "
+                                   "provisioned) and no link key was given: pass key=... (wrangler --key-file)",
+                                   url=self.url, needs_key=True)
 
     def _hello(self) -> None:
         hello = gen.Hello(secrets.randbelow(2**32)) if self._link is None else self._link.hello()
@@ -838,6 +864,7 @@ class Client:
         verified = self._link is not None and frame.signed  # the link session checked the tag and took the session
         if verified or self.session_id is None:  # an unverified answer never replaces a verified one
             self._session_info = msg
+            self._session_info_signed = bool(frame.signed)
         self._session_event.set()
 
     def _count_decode_error(self, reason: str) -> None:

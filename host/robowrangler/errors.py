@@ -67,11 +67,13 @@ class LinkError(RoboWranglerError, OSError):
 
 class AuthenticationError(RoboWranglerError):
     """The link key and the device do not agree: no key given where the device requires signed frames,
-    a wrong key (the device's SESSION_INFO does not verify), or a device without a provisioned key."""
+    a wrong key (the device's SESSION_INFO does not verify), or a device without a provisioned key.
+    ``needs_key``: the first case (this host has no key; the device signs)."""
 
-    def __init__(self, message: str, *, url: str) -> None:
+    def __init__(self, message: str, *, url: str, needs_key: bool = False) -> None:
         super().__init__(message)
         self.url = url
+        self.needs_key = needs_key
 
 
 class StateTimeout(RoboWranglerError, TimeoutError):

@@ -267,7 +267,8 @@ def test_signed_link_from_a_key_file(core_lib, tmp_path) -> None:
         assert via_env.status == ExitStatus.OK
         keyless = wrangler("--url", device.url, "--timeout", "0.3", "--json", "status")
         assert keyless.status == ExitStatus.AUTH and keyless.json["error"] == "AuthenticationError"
-        assert "no link key was given: pass --key-file PATH or set ROBOWRANGLER_KEY_FILE" in keyless.stderr
+        assert "no link key was given: wrangler reads the key from --key-file PATH, else from the file " \
+               "$ROBOWRANGLER_KEY_FILE names" in keyless.stderr
         assert "key=" not in keyless.stderr  # the Python API's wording stays out of the CLI
     assert key.hex() not in run.stdout + run.stderr + keyless.stdout + keyless.stderr
 

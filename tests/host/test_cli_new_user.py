@@ -3,12 +3,17 @@
 
 from __future__ import annotations
 
+import threading
+import time
+
 import pytest
 
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.protocol.generated import PARAMS
 from core_device import CoreDevice
-from core_harness import FakeSpindle
+from core_harness import FakeSpindle, TEST_KEY
+from host_settings import QUICK_ARM
+from robowrangler.protocol.generated import MsgId, decode_frame
 from test_cli import FAST_SPINDLE, wrangler
 
 @pytest.fixture
@@ -180,3 +185,52 @@ def test_param_names_are_case_insensitive_with_did_you_mean(device: CoreDevice) 
     assert wrangler("--url", device.url, "param", "get", "TOV_MPS").stdout == "tov_mps = 2.6 m/s\n"
     typo = wrangler("--url", device.url, "param", "get", "Tov_Mrgin")
     assert typo.status == ExitStatus.USAGE and "did you mean tov_margin" in typo.stderr
+
+
+def test_no_key_at_all_fails_at_the_devices_first_answer_not_after_the_connect_timeout(core_lib) -> None:
+    # a keyed device over WiFi answers the keyless HELLO with a signed SESSION_INFO and then stays silent: the
+    # CLI must say so at that answer, with where it looked for a key and how to get one, not after --timeout
+    timeout_s = 600.0
+    runs: list = []
+    with CoreDevice(core_lib, params=QUICK_ARM, boot_s=0.25) as dev:  # its flash holds TEST_KEY
+        start_s = time.monotonic()
+        cli = threading.Thread(target=lambda: runs.append(wrangler("--url", dev.url, "--timeout", str(timeout_s),
+                                                                   "--json", "arm")), daemon=True)
+        cli.start()
+        cli.join(timeout_s / 5)
+        waited_s = time.monotonic() - start_s
+        assert not cli.is_alive(), "a keyless command waited for its connect timeout"
+        sent = [decode_frame(frame).msg_id for frame in dev.host_frames]
+        assert dev.executed_names() == []
+    (run,) = runs
+    assert waited_s < timeout_s  # the answer ended it, not the timeout
+    assert run.status == ExitStatus.AUTH == 5 and run.json["needs_key"] is True
+    message = run.stderr
+    for hint in ("--key-file PATH", "$ROBOWRANGLER_KEY_FILE", "neither was set", "wrangler keygen PATH",
+                 "wrangler provision --port /dev/ttyACM0 set --link-key-file PATH"):
+        assert hint in message, (hint, message)
+    assert message.count("\n") == 1 and "key=" not in message and TEST_KEY.hex() not in message
+    assert MsgId.HELLO in sent
+
+
+@pytest.mark.parametrize(("argv", "refused"), [
+    (["loop", "-5"], "guide position -5 mm"),
+    (["spin", "-1", "--hold", "1"], "rope speed -1 m/s"),
+    (["param", "set", "guide_min_mm", "-3"], "guide_min_mm = -3"),
+])
+def test_a_negative_number_reaches_the_device_instead_of_being_taken_for_an_option(device: CoreDevice, argv: list[str],
+                                                                                     refused: str) -> None:
+    # click read `-5` as an unknown option ("No such option '-5'"): the user never learnt the device's limit
+    assert wrangler("--url", device.url, "arm").status == ExitStatus.OK
+    if argv[0] == "loop":
+        assert wrangler("--url", device.url, "home").status == ExitStatus.OK
+    run = wrangler("--url", device.url, *argv)
+    assert run.status == ExitStatus.NACK, run.stderr
+    assert "OUT_OF_RANGE" in run.stderr and refused in run.stderr and "No such option" not in run.stderr
+
+
+def test_a_word_that_is_no_number_is_still_an_unknown_option() -> None:
+    run = wrangler("--url", "udp://127.0.0.1:9", "spin", "-x")
+    assert run.status == ExitStatus.USAGE and "No such option '-x'" in run.stderr
+    inf = wrangler("--url", "udp://127.0.0.1:9", "loop", "-inf")
+    assert inf.status == ExitStatus.USAGE and "expected a finite number, got -inf" in inf.stderr

@@ -87,12 +87,31 @@ def test_bridge_steps_the_chain_with_the_plants_and_loads_the_drive_with_rope_fr
     from robowrangler_sim.sil import SilSession
     from robowrangler_sim.sil.scripted_host import ScriptedHost
 
+    class ContractOnly(ChainPlant):
+        """Counts the contract's updates; a step outside update() fails the test."""
+
+        updates: list = []
+        in_update = False
+
+        def update(self, inputs, dt_s):
+            self.in_update = True
+            try:
+                out = super().update(inputs, dt_s)
+            finally:
+                self.in_update = False
+            self.updates.append((inputs, dt_s, out))
+            return out
+
+        def step(self, inputs=None):
+            assert self.in_update, "the bridge stepped the chain outside the plant contract"
+            super().step(inputs)
+
     params = ChainParams(n_links=10)
     quat = pitch_quat_wxyz(0.0, roll_rad=np.pi / 2)  # loop plane horizontal, exit 3 cm above the floor
     sil = SilSession(speedup=None, trace_every=0, seed=5)
-    chain = ChainPlant(table=default_or_synthetic_table(), params=params, floor_height_m=0.0, airborne=False,
-                       initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=40.0, base_pos_m=(0, 0, 0.03),
-                                           base_quat_wxyz=quat))
+    chain = ContractOnly(table=default_or_synthetic_table(), params=params, floor_height_m=0.0, airborne=False,
+                         initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=40.0, base_pos_m=(0, 0, 0.03),
+                                             base_quat_wxyz=quat))
     bridge = ChainBridge(sil, chain, BaseTrajectory(start_pos_m=(0, 0, 0.03), quat_wxyz=quat)).install()
     with sil:
         host = ScriptedHost(sil)
@@ -101,6 +120,13 @@ def test_bridge_steps_the_chain_with_the_plants_and_loads_the_drive_with_rope_fr
         # lockstep: one 5 ms chain step per five 1 ms ticks, on the same clock
         assert chain.time_s == pytest.approx(sil.time_s, abs=params.timestep_s)
         assert bridge.chain_steps == round(sil.time_s / params.timestep_s)
+        # composed through the contract: one update(inputs, h) per chain step, the loads from its outputs
+        assert len(chain.updates) == bridge.chain_steps
+        assert {dt for _, dt, _ in chain.updates} == {params.timestep_s}
+        last = chain.updates[-1][2]
+        assert bridge.outputs is last and last.time_s == chain.time_s
+        assert sil.loads.external_rope_load_n == 0.3 * (sum(last.chain_object_force_n.values())
+                                                        + last.chain_floor_force_n)
         # the loop follows the spindle's guide (40 mm at power-up: 80 mm of rope inside)
         assert chain.loop_length_m() == pytest.approx(params.loop_length_m(sil.spindle_out.guide_position_mm),
                                                       abs=1e-9)

@@ -152,11 +152,13 @@ def main(argv: Sequence[str] | None = None, env: Environment | None = None) -> E
         return _fail(env, json_mode, ExitStatus.LINK_TIMEOUT, err, str(err), url=err.url, waited_s=err.waited_s)
     except AuthenticationError as err:
         message = str(err)
-        if "--key-file" not in argv and not env.environ.get(KEY_FILE_ENV_VAR):  # the only cause without a key
-            message = (f"{err.url} requires signed frames and no link key was given: pass --key-file PATH or set "
-                       f"{KEY_FILE_ENV_VAR} (`wrangler keygen PATH` makes a key; provision the device with it "
-                       "over USB)")
-        return _fail(env, json_mode, ExitStatus.AUTH, err, message, url=err.url)
+        if err.needs_key:  # this wrangler has no key: say where it looked and how to get one
+            message = (f"{err.url} requires signed frames and no link key was given: wrangler reads the key from "
+                       f"--key-file PATH, else from the file ${KEY_FILE_ENV_VAR} names (neither was set). Make a key "
+                       "with `wrangler keygen PATH` and provision the device with it over USB (`wrangler provision "
+                       "--port /dev/ttyACM0 set --link-key-file PATH`); a `wrangler sil` prints the key file it "
+                       f"provisioned (export {KEY_FILE_ENV_VAR}=...)")
+        return _fail(env, json_mode, ExitStatus.AUTH, err, message, url=err.url, needs_key=err.needs_key)
     except RoboWranglerError as err:
         return _fail(env, json_mode, ExitStatus.ERROR, err, str(err))
     except OSError as err:

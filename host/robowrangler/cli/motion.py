@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from robowrangler import units
+from robowrangler.cli.negative_numbers import NumberArgsCommand
 from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.stream import stream_telemetry
 from robowrangler.errors import RoboWranglerError
@@ -38,7 +39,7 @@ def disarm(ctx: CliContext) -> None:
         _done(ctx, "disarm", rw.disarm(), "disarmed")
 
 
-@click.command()
+@click.command(cls=NumberArgsCommand)
 @click.argument("mps", type=float, metavar="MPS")
 @click.option("--hold", "hold_s", type=Seconds(), default=None, metavar="SECONDS",
               help="Keep the link alive and stream telemetry this long, then spin down and wait for ARMED.")

@@ -7,6 +7,7 @@ import math
 import click
 
 from robowrangler import units
+from robowrangler.cli.negative_numbers import NumberArgsCommand
 from robowrangler.cli.context import CliContext, pass_context
 from robowrangler.client import param_spec
 from robowrangler.errors import InvalidArgument
@@ -59,7 +60,7 @@ def get(ctx: CliContext, name: str) -> None:
     ctx.result({"command": "param get", **_describe(spec, value)}, f"{name} = {value:g} {spec.units}")
 
 
-@param.command("set")
+@param.command("set", cls=NumberArgsCommand)
 @click.argument("name")
 @click.argument("value", type=float)
 @pass_context

@@ -17,6 +17,7 @@ import time
 import click
 
 from robowrangler import units
+from robowrangler.cli.negative_numbers import NumberArgsCommand
 from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.progress import Progress
 from robowrangler.errors import InvalidArgument, RoboWranglerError, StateTimeout
@@ -90,7 +91,7 @@ def home(ctx: CliContext, within_s: float) -> None:
                f"homed (guide at {_guide_mm(done):g} mm, state {done.state.name})")
 
 
-@click.command()
+@click.command(cls=NumberArgsCommand)
 @click.argument("guide_mm", type=float, metavar="GUIDE_MM")
 @click.option("--within", "within_s", default=30.0, help="Wait this long for the guide to get there.", **_WITHIN)
 @click.option("--no-wait", is_flag=True,

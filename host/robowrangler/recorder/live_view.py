@@ -66,6 +66,12 @@ class FoxgloveLiveView:
         self._mono0_ns = time.monotonic_ns()
 
     @property
+    def context(self):
+        """The foxglove.Context this server serves: more channels on it (e.g. a SceneUpdateChannel) reach the
+        same clients."""
+        return self._context
+
+    @property
     def url(self) -> str:
         return f"ws://127.0.0.1:{self.port}"
 

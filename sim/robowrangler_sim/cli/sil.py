@@ -14,6 +14,7 @@ from pathlib import Path
 import click
 
 from robowrangler.cli.context import CliContext, pass_context
+from robowrangler.cli.signals import sigterm_as_interrupt
 from robowrangler.errors import RoboWranglerError
 
 
@@ -89,13 +90,19 @@ def _sil_modules():
 @click.option("--viewer", is_flag=True,
               help="With --scenario: watch the run in MuJoCo's interactive viewer, paced by --speedup (--unpaced: as "
                    "fast as it goes). Needs a display (DISPLAY or WAYLAND_DISPLAY) and MUJOCO_GL unset or glfw.")
+@click.option("--foxglove", "foxglove_port", type=click.IntRange(0, 65535), is_flag=False, flag_value=8765,
+              default=None, metavar="[PORT]",
+              help="With --scenario: serve the run live to Foxglove (ws://127.0.0.1:PORT, default 8765; foxglove-sdk): "
+                   "the loop's contour (/loop/observation) and 3D scene (/loop/scene) at 30 Hz, the firmware's "
+                   "telemetry, events and commands; paced by --speedup (--unpaced: as fast as it goes).")
 @click.option("--shape-table", "shape_table", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="With --scenario: the rope chain's shape table (JSON, e.g. from `wrangler identify`) instead of "
                    "the shipped default.")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
                 duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
-                render_dir: str | None, viewer: bool, shape_table: str | None, model_file: str | None = None) -> None:
+                render_dir: str | None, viewer: bool, shape_table: str | None, model_file: str | None = None,
+                foxglove_port: int | None = None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
@@ -106,8 +113,13 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     rope chain, shows progress on stderr and prints the simulation's verdict (secured / slipped; held / lost
     for the door handle). Exit status 1 if the chain simulation diverged or the firmware stopped the script.
     With --viewer as well, MuJoCo's interactive viewer shows the rope chain while the firmware runs (exit status 1,
-    naming MUJOCO_GL and DISPLAY, where no display can show it).
+    naming MUJOCO_GL and DISPLAY, where no display can show it). With --foxglove, Foxglove shows it live
+    (open ws://127.0.0.1:8765): the loop's contour and 3D scene beside the telemetry, events and commands.
     """
+    if foxglove_port is not None and scenario is None:
+        raise click.UsageError("--foxglove needs --scenario (only a scenario simulates the loop; for a plain SIL "
+                               "device's stream run `wrangler proxy --foxglove` or `wrangler watch --foxglove` "
+                               "against it)")
     if viewer and scenario is None:
         raise click.UsageError("--viewer needs --scenario")
     if viewer and render_dir is not None:
@@ -121,7 +133,7 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
         table = _load_shape_table(shape_table)
     if scenario is not None:
         _run_scenario(ctx, scenario, seed=seed, n_links=n_links, render_dir=render_dir, viewer=viewer,
-                      viewer_speedup=None if unpaced else speedup, table=table)
+                      viewer_speedup=None if unpaced else speedup, table=table, foxglove_port=foxglove_port)
         return
     if render_dir is not None:
         raise click.UsageError("--render needs --scenario")
@@ -140,18 +152,22 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
             f.write(session.key.hex() + "\n")
         key_note = f"a new key in {key_path} (export ROBOWRANGLER_KEY_FILE={key_path})"
     try:
-        session.run_in_background()
-        if ctx.json_mode:
-            ctx.json_line({"type": "ready", "url": session.cmd_url, "serial": session.serial_path,
-                           "key": key_note, "speedup": None if unpaced else speedup})
-        else:
-            pace = "unpaced" if unpaced else f"speed-up {speedup:g}x"
-            ctx.note(f"SIL device on {session.cmd_url} ({pace}), USB serial {session.serial_path}, "
-                     f"provisioned with {key_note}; Ctrl-C to stop")
-        while duration_s is None or session.time_s < duration_s:
+        # `kill %1` (SIGTERM; a background job ignores Ctrl-C's SIGINT) stops it as Ctrl-C does: firmware stopped,
+        # temporary flash removed, exit 130
+        with sigterm_as_interrupt():
+            session.run_in_background()
+            if ctx.json_mode:
+                ctx.json_line({"type": "ready", "url": session.cmd_url, "serial": session.serial_path,
+                               "key": key_note, "speedup": None if unpaced else speedup,
+                               "firmware_pid": session.firmware_pid})
+            else:
+                pace = "unpaced" if unpaced else f"speed-up {speedup:g}x"
+                ctx.note(f"SIL device on {session.cmd_url} ({pace}), USB serial {session.serial_path}, "
+                         f"provisioned with {key_note}; Ctrl-C (or SIGTERM) to stop")
+            while duration_s is None or session.time_s < duration_s:
+                session.check()
+                time.sleep(0.05)
             session.check()
-            time.sleep(0.05)
-        session.check()
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(f"the SIL stopped: {exc}") from exc
     finally:
@@ -172,7 +188,8 @@ def _load_shape_table(path: str):
 
 
 def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render_dir: str | None,
-                  viewer: bool = False, viewer_speedup: float | None = 1.0, table=None) -> None:
+                  viewer: bool = False, viewer_speedup: float | None = 1.0, table=None,
+                  foxglove_port: int | None = None) -> None:
     watch = None
     if viewer:  # before anything runs (or imports MuJoCo's viewer): say what is missing
         from robowrangler_sim.scenarios.viewer import HEADLESS_HINT, ScenarioViewer, display_problem, glfw_problem
@@ -190,9 +207,19 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
 
     from robowrangler_sim.scenarios.runner import ScenarioInterrupted
 
+    server = live = None
+    if foxglove_port is not None:
+        from robowrangler.recorder.live_view import FoxgloveLiveView
+        from robowrangler_sim.scenarios.live_loop import ScenarioLiveView
+
+        server = FoxgloveLiveView(port=foxglove_port)
+        live = ScenarioLiveView(server, speedup=viewer_speedup)
+        pace = "as fast as it goes" if viewer_speedup is None else f"paced at {viewer_speedup:g}x"
+        ctx.note(f"live in Foxglove at {server.url} (the loop on /loop/observation and /loop/scene, {pace})")
     try:
-        outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
-                               watch=watch, table=table)
+        with sigterm_as_interrupt():  # SIGTERM ends a scenario as Ctrl-C does: it says what it left
+            outcome = run_scenario(name, seed=seed, n_links=n_links, progress=ctx.note, render_dir=render_dir,
+                                   watch=watch, table=table, live=live)
     except ScenarioInterrupted as stop:
         ctx.note(_what_was_left(name, stop, render_dir))
         raise KeyboardInterrupt from None
@@ -203,6 +230,12 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
     finally:
         if watch is not None:
             watch.close()
+        if live is not None:
+            live.close()
+            server.close()
+    if live is not None:
+        ctx.note(f"Foxglove: {live.contours} loop contours, {live.recorder.telemetry_count} telemetry, "
+                 f"{live.recorder.event_count} events, {live.recorder.command_count} commands served")
     if watch is not None:
         ctx.note(f"viewer: {watch.synced} updates" + (" (window closed before the end)" if watch.closed_by_user else ""))
     data = {"command": "sil", "scenario": name, "verdict": outcome.verdict, "secured": outcome.secured,
@@ -217,6 +250,7 @@ def _run_scenario(ctx: CliContext, name: str, *, seed: int, n_links: int, render
             "diverged": outcome.diverged, "simulated_s": round(outcome.simulated_s, 3),
             "wall_s": round(outcome.wall_s, 2), "seed": seed, "links": n_links, "files": outcome.frames_written,
             "viewer_updates": None if watch is None else watch.synced,
+            "foxglove_contours": None if live is None else live.contours,
             "shape_table": outcome.shape_table_source}
     files = f"; {len(outcome.frames_written)} files in {render_dir}" if outcome.frames_written else ""
     path = outcome.firmware_path

@@ -4,7 +4,11 @@ Installed as a SilSession tick hook (``ChainBridge(sil, chain, trajectory).insta
 the drive and spindle plants have stepped each 1 ms control tick. Whenever the SIL clock has reached the
 end of the chain's next MuJoCo step (chain timestep h = ChainParams.timestep_s, 5 ms by default), the
 chain integrates [t_c, t_c + h) with the values sampled at that tick (sample and hold, as the firmware's
-own sensors are):
+own sensors are). It composes the chain as the session composes the drive and the spindle, through the
+plant contract only (plants/contract.py): ``outputs = chain.update(PlantInputs(...), h)``, one call per
+chain step (the base pose is sampled at each step's start, so the module's motion is as fine as the chain's
+own step), and the coupling below reads the PlantOutputs of the last step, the contacts as they are at the
+end of that step:
 
 Plant -> chain (SI):
   * rope speed (m/s)          = drive plant rope_speed_mps; above ToV the loop is lifted (lift.py);
@@ -42,7 +46,7 @@ import math
 
 import numpy as np
 
-from robowrangler_sim.chain.plant import ChainPlant, PlantInputs
+from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, PlantOutputs
 from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory
 
 DEFAULT_ROPE_AXIAL_FRICTION = 0.3
@@ -59,8 +63,8 @@ class ChainBridge:
         trajectory: the module's pose over simulated time.
         rope_axial_friction: friction coefficient for the drive's rope load (dimensionless, >= 0).
 
-    After each chain step: ``guide_load_n``, ``drive_load_n`` (N), ``chain_steps``; ``peak_guide_load_n``
-    is the largest guide load so far.
+    After each chain step: ``outputs`` (the chain's PlantOutputs, None before the first step), ``guide_load_n``,
+    ``drive_load_n`` (N), ``chain_steps``; ``peak_guide_load_n`` is the largest guide load so far.
     """
 
     def __init__(self, sil, chain: ChainPlant, trajectory: BaseTrajectory, *,
@@ -75,6 +79,7 @@ class ChainBridge:
         self.drive_load_n = 0.0
         self.peak_guide_load_n = 0.0
         self.chain_steps = 0
+        self.outputs: PlantOutputs | None = None
         self._h_s = chain.params.timestep_s
         self._stroke_mm = chain.params.guide_stroke_mm
         sil.loads.guide_load_n = 0.0  # the chain pulls on the guide from now on, not the stand-in object
@@ -92,23 +97,23 @@ class ChainBridge:
     def __call__(self, sil) -> None:
         t_s = sil.time_s
         chain = self.chain
-        stepped = False
+        outputs = None
         while chain.time_s + self._h_s <= t_s + 1e-9:
-            chain.step(self.inputs_at(chain.time_s))  # ChainDivergenceError propagates: the run is over
+            # one chain step through the contract; ChainDivergenceError propagates: the run is over
+            outputs = chain.update(self.inputs_at(chain.time_s), self._h_s)
             self.chain_steps += 1
-            stepped = True
-        if stepped:
-            self._couple()
+        if outputs is not None:
+            self.outputs = outputs
+            self._couple(outputs)
 
-    def _couple(self) -> None:
-        contacts = self.chain.contact_summary()  # one pass over the contacts
+    def _couple(self, outputs: PlantOutputs) -> None:
         total = np.zeros(3)
-        for f in contacts.chain_net_on_object_n.values():
+        for f in outputs.chain_object_net_force_n.values():
             total += f
         self.guide_load_n = float(np.linalg.norm(total))
         self.peak_guide_load_n = max(self.peak_guide_load_n, self.guide_load_n)
-        self.drive_load_n = self.rope_axial_friction * (sum(contacts.chain_on_object_n.values())
-                                                        + contacts.chain_on_floor_n)
+        self.drive_load_n = self.rope_axial_friction * (sum(outputs.chain_object_force_n.values())
+                                                        + outputs.chain_floor_force_n)
         self.sil.loads.guide_load_n = self.guide_load_n
         self.sil.loads.external_rope_load_n = self.drive_load_n
 

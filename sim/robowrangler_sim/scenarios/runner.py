@@ -58,8 +58,10 @@ from robowrangler_sim.chain.params import ChainParams
 from robowrangler_sim.chain.plant import ChainPlant, PlantInputs, pitch_quat_wxyz
 from robowrangler_sim.chain.secured import SecuredMonitor
 from robowrangler_sim.scenarios.base_trajectory import BaseTrajectory
+from robowrangler_sim.scenarios.caption import VERDICT_HOLD_S, captioned, frame_caption, verdict_caption
 from robowrangler_sim.scenarios.catalogue import ScenarioError, ScenarioSpec, get_scenario
 from robowrangler_sim.scenarios.chain_bridge import ChainBridge
+from robowrangler_sim.sil.recording_host import RecordingHost
 from robowrangler_sim.sil.scripted_host import ScriptedHost
 from robowrangler_sim.shape_table import ShapeTable
 from robowrangler_sim.sil.session import SilSession
@@ -73,6 +75,7 @@ CLOSE_IN_S = 0.5            # hinged door: the flying loop moves up to the leaf 
 SETTLE_S = 0.5              # after positioning
 HOMING_TIMEOUT_S = 30.0
 GRASP_TIMEOUT_S = 30.0
+SCENARIO_PLANT_TIMEOUT_S = 60  # how long the SIL firmware waits for the plant's next tick before it gives up
 
 
 @dataclass
@@ -96,7 +99,9 @@ class ScenarioOutcome:
         trace: per-sample rows (time_s, phase, state, rope_speed_mps, guide_mm, guide_load_n,
             spindle_load_permille (the firmware's last reported AX-12A load), base_pos_m, object_com_m,
             chain_force_n, loop_tip_pos_m, door_opening_deg (nan but for a hinged door)).
-        frames_written: PNG/MP4 paths written with render_dir.
+        frames_written: PNG/MP4 paths written with render_dir (the last PNG, NAME_verdict.png, is the run's last
+            frame captioned with the verdict; the MP4 ends on it).
+        frame_captions: {PNG path: its caption} (caption.py: time, firmware state, rope speed, guide, phase).
         shape_table_source: the ``source`` of the shape table the chain ran on.
     """
 
@@ -122,6 +127,7 @@ class ScenarioOutcome:
     wall_s: float = 0.0
     trace: list = field(default_factory=list)
     frames_written: list = field(default_factory=list)
+    frame_captions: dict = field(default_factory=dict)
     shape_table_source: str = ""
 
 
@@ -167,8 +173,10 @@ class _Run:
         self._next_report_s = 0.0
         self._renderer = None
         self._frames: list = []
+        self._last_frame: tuple | None = None  # (raw RGB, caption) of the latest rendered frame
         self._sample_index = 0
         self.watch: Callable[[ChainPlant], None] | None = None
+        self.live = None  # a live_loop.ScenarioLiveView: the host's frames and the loop to Foxglove
 
     # --- scene -------------------------------------------------------------------------------
     def build(self) -> None:
@@ -185,7 +193,9 @@ class _Run:
             placement, start = self._door_geometry(obj)
         self.trajectory = BaseTrajectory(start_pos_m=start, quat_wxyz=quat)
         self.placement = placement
-        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0)
+        # the plant's side does slow work between ticks (MuJoCo contacts, an OSMesa frame, the viewer): on a busy
+        # machine the first rendered frame alone took over the firmware's default 10 s wait for its sensors
+        self.sil = SilSession(speedup=None, seed=self.seed, trace_every=0, plant_timeout_s=SCENARIO_PLANT_TIMEOUT_S)
         guide = min(max(self.sil.spindle_out.guide_position_mm, 0.0), self.params.guide_stroke_mm)
         self.chain = ChainPlant(table=self.table, params=self.params, objects=(placement,), floor_height_m=0.0,
                                 initial=PlantInputs(rope_speed_mps=0.0, guide_position_mm=guide,
@@ -230,6 +240,8 @@ class _Run:
         self.host.tick()
         if self.watch is not None:
             self.watch(self.chain)
+        if self.live is not None:
+            self.live.on_tick(self.chain, outputs=self.bridge.outputs, rope_speed_mps=self.sil.drive_out.rope_speed_mps)
         t_us = self.sil.drive_out.time_us
         if t_us >= self._next_sample_us:
             self._next_sample_us += self.sample_us
@@ -298,27 +310,40 @@ class _Run:
         if self._renderer is None:
             self._renderer = ChainRenderer(self.chain, width_px=640, height_px=360, azimuth_deg=70.0,
                                            elevation_deg=-20.0, distance_m=1.6)
-        frame = self._renderer.frame()
+        row = self.outcome.trace[-1]
+        text = frame_caption(time_s=row["time_s"], state=None if row["state"] is None else gen.State(row["state"]).name,
+                             rope_speed_mps=row["rope_speed_mps"], guide_mm=row["guide_mm"], phase=self.phase)
+        self._last_frame = (self._renderer.frame(), text)
+        frame = captioned(*self._last_frame)
         self._frames.append(frame)
         if (len(self._frames) - 1) % self.render_every == 0:
             path = self.render_dir / f"{self.spec.name}_{self._sample_index:04d}_{self.phase}.png"
             self.outcome.frames_written.append(str(write_png(path, frame)))
+            self.outcome.frame_captions[str(path)] = text
 
     def finish_render(self) -> None:
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
         if self._frames:
-            from robowrangler_sim.chain.render import write_mp4
+            from robowrangler_sim.chain.render import write_mp4, write_png
 
-            mp4 = write_mp4(self.render_dir / f"{self.spec.name}.mp4", self._frames,
-                            fps=1e6 / (self.sample_us * self.frame_stride))
+            fps = 1e6 / (self.sample_us * self.frame_stride)
+            raw, text = self._last_frame
+            text = f"{text}\n{self.spec.name}: {verdict_caption(self.outcome)}"
+            last = captioned(raw, text)
+            path = write_png(self.render_dir / f"{self.spec.name}_verdict.png", last)
+            self.outcome.frames_written.append(str(path))
+            self.outcome.frame_captions[str(path)] = text
+            mp4 = write_mp4(self.render_dir / f"{self.spec.name}.mp4",
+                            self._frames + [last] * max(1, round(VERDICT_HOLD_S * fps)), fps=fps)
             self.outcome.frames_written.append(str(mp4))
 
     # --- the script ----------------------------------------------------------------------------
     def script_run(self) -> None:
         script, spec = self.script, self.spec
-        self.host = ScriptedHost(self.sil)
+        # with a live view, a host whose every frame also goes there (stamped with simulated time)
+        self.host = ScriptedHost(self.sil) if self.live is None else RecordingHost(self.sil, self.live)
         self.run_for(BOOT_S)
         for pname, value in self.firmware_params.items():
             self.command(gen.ParamSet(P[pname].id, float(value)))
@@ -398,7 +423,7 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
                  firmware_params: dict[str, float] | None = None,
                  chain_noise_rad: float = 0.0,
                  watch: Callable[[ChainPlant], None] | None = None,
-                 table: ShapeTable | None = None) -> ScenarioOutcome:
+                 table: ShapeTable | None = None, live=None) -> ScenarioOutcome:
     """Run scenario ``name`` with the firmware in the loop and judge it (see module doc).
 
     Args:
@@ -419,6 +444,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
             only read the plant (the outcome is then the same as without it).
         table: the chain's shape table (e.g. one made by `wrangler identify` from photos); default: the shipped
             default (chain/default_table.py).
+        live: a live_loop.ScenarioLiveView: the run live in Foxglove (the loop's contour and scene, the host's
+            telemetry, events and commands), paced to its speedup; it only reads (the outcome is the same).
     Returns:
         ScenarioOutcome. The firmware process is stopped before returning, also on errors.
     """
@@ -437,6 +464,10 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
         raise ScenarioError(f"table: expected a ShapeTable (ShapeTable.load(path)), got {type(table).__name__}")
     if watch is not None and not callable(watch):
         raise ScenarioError(f"watch: expected a callable(chain_plant) or None, got {type(watch).__name__}")
+    if live is not None and not all(callable(getattr(live, m, None)) for m in ("tap_sent", "tap_received", "on_tick",
+                                                                             "finish")):
+        raise ScenarioError(f"live: expected a ScenarioLiveView (tap_sent, tap_received, on_tick, finish) or None, "
+                            f"got {type(live).__name__}")
     overrides = dict(firmware_params or {})
     for pname, value in overrides.items():
         if pname not in P:
@@ -451,6 +482,7 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
                render_every=render_png_every, render_fps=render_fps, chain_noise_rad=chain_noise_rad, table=table)
     run.firmware_params.update(overrides)
     run.watch = watch
+    run.live = live
     wall0 = time.perf_counter()
     run.build()
     interrupted = False
@@ -475,6 +507,8 @@ def run_scenario(name: str, *, seed: int = 0, n_links: int = 20, sample_s: float
                 run.host.close()
             run.outcome.peak_guide_load_n = run.bridge.peak_guide_load_n
             run.outcome.simulated_s = run.sil.time_s
+            if live is not None:
+                live.finish(run.sil.time_s)
             if out_dir is not None:
                 run.finish_render()
     finally:
