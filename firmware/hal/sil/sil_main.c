@@ -10,7 +10,7 @@
  * boot counter = session id); without it nothing persists and nothing can be committed.
  * --spindle-bus-us is the bus time of one spindle transaction (sil_spindle_bus.h, default 350). A
  * PROVISION_COMMIT's write to the state file is done between ticks, SIL_CONFIG_STORE_DEFAULT_SAVE_TICKS after
- * its request (sil_config_store.h: the board's flash time). On exit it prints the spindle bus counters
+ * its request (sil_config_store.h). On exit it prints the spindle bus counters
  * ("rw_sil spindle_bus requests=N ...") and the flash counters ("rw_sil flash requests=N ...") on stderr. Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
  * for --plant-timeout-s (never hangs), 2 on bad arguments or sockets. */
 #include <errno.h>
