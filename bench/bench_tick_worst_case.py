@@ -77,7 +77,7 @@ SYSTICK_ISR_CYCLES = 45  # equal priority to the tick: a running one finishes fi
 # Longest sections that keep the tick out.
 USB_RX_CHUNK_MASKED_CYCLES = 1 * 12 + 30  # DoubleBufferedEPOutHandler::recv of the one byte Serial.read() takes, PRIMASK set
 STATS_COPY_MASKED_CYCLES = 40  # rw_arduino_scheduler_stats: TC3 disabled in the NVIC for four loads
-CONFIG_COPY_MASKED_CYCLES = 350  # a PROVISION_COMMIT's record copy (272 bytes): DISARMED only, not in flight
+CONFIG_COPY_MASKED_CYCLES = 350  # main.cpp's copy of a committed record (272 bytes): DISARMED only, not in flight
 
 # ---- buses (background loop) ----
 DXL_BIT_US = 1.0  # 1 Mbps
@@ -100,6 +100,20 @@ NINA_TX_CALLS = (("startClient", 20, 8), ("insertDataBuf", 12, 8), ("sendUdpData
 NINA_POLL_CALLS = (("getConnectionStatus", 8, 8),)
 DATAGRAM_BYTES = 93  # RW_MAX_FRAME_LEN: the longest frame
 USB_PASS_CYCLES = 64 * 90 + 2000 + 63 * 4  # 64 bytes through Serial.read + the deframer, one encode, one packet
+
+
+# PARAM_SET of a parameter of each group (rw_params_modules): the group and the parameter sent (its default).
+PARAM_SET_GROUPS = {
+    "speed loop gains": "speed_kp",
+    "setpoint ramp": "ramp_up_mps2",
+    "speed filter": "speed_filter_tau_s",
+    "ToV guard": "tov_mps",
+    "spindle": "spindle_kp_per_s",
+    "load monitor": "load_loss_drop_n",
+    "throttle map + load monitor": "motor_kv_rpm_per_v",
+    "telemetry": "telemetry_rate_hz",
+}
+PARAM_SET_FOLLOW_TICKS = 4  # a staged module is converted at the end of the first tick without a datagram
 
 
 def us(cycles: float) -> float:
@@ -158,15 +172,27 @@ def emulate_paths() -> list[PathCost]:
         keep("periodic (no datagram)", profile, esc_at)
         if "mac finish+send" in label:
             keep("telemetry frame leaving", profile, esc_at)
-    kp = proto.PARAMS_BY_NAME["speed_kp"]
-    for _ in range(bti.PHASES):
-        sent, profile, esc_at = counted(sc.frame(proto.SetRopeSpeed(rope_speed_mmps=bti.TARGET_MMPS)))
-        assert sent and isinstance(sent[0], proto.Ack), sent
-        keep("command arriving (SET_ROPE_SPEED)", profile, esc_at)
-    for _ in range(bti.PHASES):
-        sent, profile, esc_at = counted(sc.frame(proto.ParamSet(param_id=kp.id, value=kp.default)))
-        assert sent and isinstance(sent[0], proto.Ack), sent
-        keep("command arriving (PARAM_SET)", profile, esc_at)
+    commands = (
+        ("SET_ROPE_SPEED", lambda: proto.SetRopeSpeed(rope_speed_mmps=bti.TARGET_MMPS)),
+        ("SET_LOOP", lambda: proto.SetLoop(guide_position_um=bti.LOOP_TARGET_UM)),
+        ("PARAM_GET", lambda: proto.ParamGet(param_id=proto.PARAMS_BY_NAME["speed_kp"].id)),
+    )
+    for name, make in commands:
+        for _ in range(bti.PHASES):
+            sent, profile, esc_at = counted(sc.frame(make()))
+            assert sent and isinstance(sent[0], proto.Ack), sent
+            keep(f"command arriving ({name})", profile, esc_at)
+    # PARAM_SET of each parameter group: the tick that takes it (checked, stored, ACK signed, PARAM_CHANGED and
+    # PARAM_VALUE queued) and the ticks after it, one of which converts its staged modules at its end
+    for name in PARAM_SET_GROUPS.values():
+        spec = proto.PARAMS_BY_NAME[name]
+        for _ in range(bti.PHASES):
+            sent, profile, esc_at = counted(sc.frame(proto.ParamSet(param_id=spec.id, value=spec.default)))
+            assert sent and isinstance(sent[0], proto.Ack), sent
+            keep(f"command arriving (PARAM_SET {name})", profile, esc_at)
+            for _ in range(PARAM_SET_FOLLOW_TICKS):
+                _, profile, esc_at = counted()
+                keep(f"ticks after PARAM_SET {name}", profile, esc_at)
     sc.run_quiet(40)
     emu.write_u32("harness_spindle_silent", 1)  # the servo stops answering: every spindle step times out
     for _ in range(bti.SCHEDULE_TICKS):
@@ -179,6 +205,16 @@ def emulate_paths() -> list[PathCost]:
         keep("WiFi reconnect (background)", profile, esc_at)
     assert emu.state() == proto.State.AIRBORNE, "the rope must stay airborne through every path"
     return list(worst.values())
+
+
+def commit_crc_cycles() -> int:
+    """Emulated cycles of the CRC-32 a PROVISION_COMMIT's tick computes over the configuration record (the one
+    float-free but long piece of work left in that tick; the flash write itself runs in the background loop)."""
+    emu = ah.HarnessEmulator(ah.build_arm())
+    emu.reset()
+    record = emu.symbols["harness_flash"]
+    _, profile = emu.call("rw_crc32", record.address, record.size - 4, count=True)  # all but the CRC field
+    return profile.cycles
 
 
 def interrupt_load(window_us: float, *, uart_active: bool) -> float:
@@ -275,9 +311,14 @@ def main() -> None:
     print(f"Entry delay, worst: {latency_worst:.1f} us = the longest section keeping the tick out "
           f"(USB receive of one byte {USB_RX_CHUNK_MASKED_CYCLES} cycles; SysTick {SYSTICK_ISR_CYCLES}) + encoder and UART "
           "interrupts arriving meanwhile.")
-    print(f"Not in flight: a PROVISION_COMMIT (DISARMED only) copies the record with the tick masked "
-          f"({us(CONFIG_COPY_MASKED_CYCLES * FLASH_FACTOR):.1f} us) and its flash save runs inside the tick (erase + "
-          "write, up to ~25 ms: counted as overruns, the PWM runs on in hardware).")
+    crc_cycles = commit_crc_cycles()
+    print(f"Not in flight: a PROVISION_COMMIT (DISARMED only) seals its record in the tick (CRC-32 of the record: "
+          f"{crc_cycles:,} cycles, {us(crc_cycles * FLASH_FACTOR):.0f} us with the wait state, on top of a command "
+          "tick) and hands a copy to the store; the flash erase + write runs in the background loop and the "
+          "command is ACKed when it is done (up to ~25 ms with the CPU stalled on flash: ticks in that window "
+          "start late, counted in tick_overruns, the PWM runs on in hardware; ARM is refused until then). The "
+          f"background loop copies the committed record with the tick masked "
+          f"({us(CONFIG_COPY_MASKED_CYCLES * FLASH_FACTOR):.1f} us).")
     print()
     # UART receiver deadline: a byte every 10 us, the SERCOM holds 2 (one in the shift register)
     uart_deadline_us = 2 * DXL_BYTE_US

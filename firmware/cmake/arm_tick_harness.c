@@ -197,7 +197,22 @@ static const rw_hal_battery harness_battery = { NULL, fake_battery_read_mv };
 static const rw_hal_link harness_link = { NULL, fake_link_recv, fake_link_reply, fake_link_accept_peer, fake_link_send };
 static const rw_hal_scheduler harness_scheduler = { NULL, fake_tick_overruns };
 static const rw_hal_spindle harness_spindle = { NULL, fake_spindle_read, fake_spindle_write };
-static const rw_hal_config_store harness_config = { NULL, fake_config_load, fake_config_save };
+/* A PROVISION_COMMIT's write, done at once (a RAM store). */
+static uint8_t harness_flash_status;
+static bool fake_config_request_save(void *ctx, const void *buf, size_t len)
+{
+    harness_flash_status = fake_config_save(ctx, buf, len) ? RW_CONFIG_SAVE_DONE : RW_CONFIG_SAVE_FAILED;
+    return true;
+}
+
+static uint8_t fake_config_save_status(void *ctx)
+{
+    (void)ctx;
+    return harness_flash_status;
+}
+
+static const rw_hal_config_store harness_config = { NULL, fake_config_load, fake_config_save, fake_config_request_save,
+                                                    fake_config_save_status };
 const rw_hal harness_hal = {
     .esc = &harness_esc,
     .encoder = &harness_encoder,
@@ -230,6 +245,7 @@ void harness_init(void)
     rw_config_defaults(&harness_flash);
     rw_config_set_key(&harness_flash, harness_test_key);
     harness_flash_saves = 0u;
+    harness_flash_status = RW_CONFIG_SAVE_IDLE;
     rw_core_init(&harness_core);
 }
 

@@ -3,15 +3,21 @@
 #include <stddef.h>
 #include <string.h>
 
+/* The reflected CRC-32 of each 4-bit value (polynomial 0xEDB88320): two lookups a byte instead of eight
+ * shift-and-xor steps (the record's CRC in a PROVISION_COMMIT's tick: ~22k Cortex-M0+ cycles bit by bit). */
+static const uint32_t CRC32_NIBBLE[16] = {
+    0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu, 0x76DC4190u, 0x6B6B51F4u, 0x4DB26158u, 0x5005713Cu,
+    0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu, 0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu,
+};
+
 uint32_t rw_crc32(const void *data, uint32_t len)
 {
     const uint8_t *p = data;
     uint32_t crc = 0xFFFFFFFFu;
     for (uint32_t i = 0; i < len; ++i) {
         crc ^= p[i];
-        for (int bit = 0; bit < 8; ++bit) {
-            crc = (crc & 1u) != 0u ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
-        }
+        crc = (crc >> 4) ^ CRC32_NIBBLE[crc & 0x0Fu];
+        crc = (crc >> 4) ^ CRC32_NIBBLE[crc & 0x0Fu];
     }
     return ~crc;
 }
@@ -85,4 +91,22 @@ void rw_config_clear_key(rw_config *c)
     memset(c->key, 0, RW_KEY_LEN);
     c->key_set = 0u;
     rw_config_seal(c);
+}
+
+bool rw_config_commit(rw_config *c, uint32_t session_epoch, const float values[RW_PARAM_COUNT],
+                      const uint8_t key[RW_KEY_LEN])
+{
+    if (session_epoch >= RW_CONFIG_EPOCH_LIMIT) {
+        return false;
+    }
+    c->session_epoch = session_epoch;
+    c->boot_counter = 0u;
+    c->commits += 1u;
+    memcpy(c->params, values, sizeof c->params);
+    if (key != NULL) {
+        memcpy(c->key, key, RW_KEY_LEN);
+        c->key_set = 1u;
+    }
+    rw_config_seal(c);
+    return true;
 }

@@ -71,6 +71,11 @@ bool rw_config_next_boot(rw_config *c);
 /* A provisioning commit: a new epoch (< RW_CONFIG_EPOCH_LIMIT, else false and nothing changed), the boot
  * counter back to 0, commits + 1, resealed. */
 bool rw_config_new_epoch(rw_config *c, uint32_t session_epoch);
+/* A provisioning commit in one piece: rw_config_new_epoch, rw_config_set_params and (key != NULL)
+ * rw_config_set_key with one CRC (the bitwise CRC-32 of the record is ~10k Cortex-M0+ cycles: once, not
+ * three times, in the tick that takes PROVISION_COMMIT). false, nothing changed, for an epoch out of range. */
+bool rw_config_commit(rw_config *c, uint32_t session_epoch, const float values[RW_PARAM_COUNT],
+                      const uint8_t key[RW_KEY_LEN]);
 /* Forget the link key (zeroed, key_set = 0) and reseal. */
 void rw_config_clear_key(rw_config *c);
 /* CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF). */

@@ -1,5 +1,4 @@
-/* The core's top level: initialisation, parameters (every controller prepared once when they change) and
- * the tick with its schedule (rw_core.h). The concepts the tick calls live in their own files
+/* The core's top level: initialisation and the tick with its schedule (rw_core.h). The concepts the tick calls live in their own files
  * (rw_core_internal.h lists them). */
 #include "rw_core.h"
 
@@ -27,52 +26,6 @@ static float capped_dt_s(uint32_t dt_us, uint32_t nominal_us, float nominal_s)
     }
     const float dt_s = (float)dt_us * 1.0e-6f;
     return dt_s > RW_CORE_MAX_CONTROL_DT_S ? RW_CORE_MAX_CONTROL_DT_S : dt_s;
-}
-
-void rw_core_apply_params(rw_core *core)
-{
-    const rw_params *p = &core->params;
-    rw_speed_loop *loop = &core->state.loop;
-    const rw_mt_speed_estimator_config est = {
-        .counts_per_rev = (uint32_t)rw_params_get(p, RW_PARAM_ENCODER_COUNTS_PER_REV),
-        .timeout_us = (uint32_t)(rw_params_get(p, RW_PARAM_ENCODER_TIMEOUT_S) * 1.0e6f),
-        .wheel_radius_m = rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M),
-        .filter_tau_s = rw_params_get(p, RW_PARAM_SPEED_FILTER_TAU_S),
-    };
-    loop->estimator.cfg = est;
-    loop->pi.cfg.kp = rw_params_get(p, RW_PARAM_SPEED_KP);
-    loop->pi.cfg.ki_per_s = rw_params_get(p, RW_PARAM_SPEED_KI);
-    loop->pi.cfg.out_min = 0.0f;
-    loop->pi.cfg.out_max = 1.0f;
-    loop->ramp.cfg.rate_up_per_s = rw_params_get(p, RW_PARAM_RAMP_UP_MPS2);
-    loop->ramp.cfg.rate_down_per_s = rw_params_get(p, RW_PARAM_RAMP_DOWN_MPS2);
-    loop->throttle.cfg.kv_rpm_per_v = rw_params_get(p, RW_PARAM_MOTOR_KV_RPM_PER_V);
-    loop->throttle.cfg.wheel_radius_m = rw_params_get(p, RW_PARAM_WHEEL_RADIUS_M);
-    loop->throttle.cfg.pulse_min_us = (uint16_t)rw_params_get(p, RW_PARAM_ESC_MIN_US);
-    loop->throttle.cfg.pulse_max_us = (uint16_t)RW_ESC_PULSE_MAX_US;
-    rw_tov_guard *guard = &core->state.guard;
-    guard->cfg.tov_mps = rw_params_get(p, RW_PARAM_TOV_MPS);
-    guard->cfg.margin = rw_params_get(p, RW_PARAM_TOV_MARGIN);
-    guard->cfg.collapse_time_s = rw_params_get(p, RW_PARAM_COLLAPSE_TIME_S);
-    rw_tov_guard_prepare(guard);
-    loop->cfg.guard_mps = rw_tov_guard_min_airborne_mps(guard);
-    rw_speed_loop_prepare(loop, RW_CORE_SPEED_DT_S);
-    rw_spindle_config *sp = &core->state.spindle.cfg;
-    sp->lead_mm_per_rev = rw_params_get(p, RW_PARAM_LEAD_MM_PER_REV);
-    sp->guide_min_mm = rw_params_get(p, RW_PARAM_GUIDE_MIN_MM);
-    sp->guide_max_mm = rw_params_get(p, RW_PARAM_GUIDE_MAX_MM);
-    sp->kp_per_s = rw_params_get(p, RW_PARAM_SPINDLE_KP_PER_S);
-    sp->max_speed_mmps = rw_params_get(p, RW_PARAM_SPINDLE_MAX_SPEED_MMPS);
-    sp->tolerance_mm = rw_params_get(p, RW_PARAM_SPINDLE_TOLERANCE_MM);
-    sp->homing_speed_mmps = rw_params_get(p, RW_PARAM_HOMING_SPEED_MMPS);
-    sp->homing_load_pct = rw_params_get(p, RW_PARAM_HOMING_LOAD_PCT);
-    sp->stall_load_pct = rw_params_get(p, RW_PARAM_SPINDLE_STALL_LOAD_PCT);
-    sp->stall_time_s = rw_params_get(p, RW_PARAM_SPINDLE_STALL_TIME_S);
-    sp->secure_load_pct = rw_params_get(p, RW_PARAM_GRASP_SECURE_LOAD_PCT);
-    sp->retract_speed_mmps = rw_params_get(p, RW_PARAM_RETRACT_SPEED_MMPS);
-    sp->timeout_s = rw_params_get(p, RW_PARAM_SPINDLE_TIMEOUT_S);
-    rw_core_load_loss_apply_params(core);
-    core->state.telemetry_period_ms = rw_core_telemetry_period_ms(core);
 }
 
 void rw_core_init(rw_core *core)
@@ -110,18 +63,6 @@ bool rw_core_tx_idle(const rw_core *core)
 size_t rw_core_sizeof(void)
 {
     return sizeof(rw_core);
-}
-
-int rw_core_set_param(rw_core *core, uint8_t param_id, float value)
-{
-    int result = rw_params_set(&core->params, param_id, value, core->state.state == RW_STATE_DISARMED);
-    if (result == RW_DECODE_OK) {
-        rw_core_apply_params(core);
-        if (param_id == RW_PARAM_TELEMETRY_RATE_HZ) {
-            core->state.telemetry_due_ms = core->state.uptime_ms; /* the new period starts now */
-        }
-    }
-    return result;
 }
 
 void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, int32_t arg)
@@ -222,7 +163,8 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
     }
 
     /* 2. at most one received datagram per link (USB serial first: it is where provisioning happens) */
-    bool sent = hal->serial != NULL && rw_core_handle_datagram(core, hal, RW_LINK_SERIAL);
+    bool sent = rw_core_provision_poll(core, hal); /* a PROVISION_COMMIT's write done: its answer, on serial */
+    sent = (!sent && hal->serial != NULL && rw_core_handle_datagram(core, hal, RW_LINK_SERIAL)) || sent;
     sent = rw_core_handle_datagram(core, hal, RW_LINK_WIFI) || sent;
 
     /* 3. supervision; the periodic jobs only on other ticks, one job a tick */
@@ -297,4 +239,6 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
                             the battery division beside it */
     }
     rw_core_send_queued(core, hal, sent, mac_budget);
+    /* 6. a staged parameter change: one module's conversion, at the tick boundary (rw_core_params.c) */
+    rw_core_params_tick_end(core);
 }

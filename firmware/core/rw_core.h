@@ -21,6 +21,8 @@
  *      a state that stops driving the rope (ESTOP, FAULT, ARMED, ...) sets the minimum pulse in the same tick
  *   5. telemetry at telemetry_rate_hz; one queued frame to the peer (over a keyed WiFi link: signed over idle
  *      ticks first, see below)
+ *   6. a parameter change staged by PARAM_SET: one module converted, on a tick that took no datagram
+ *      (rw_core_params.c), so its new values are in force from the next tick on, whole
  *   burst (BURST_START, rw_burst.h): while capturing, every tick stores its sample (encoder, the pulse it wrote,
  *      battery) after step 4; once captured, an idle tick with an empty outbox and nothing being signed packs
  *      one BURST_DATA frame instead of signing (its pack costs what a telemetry pack does)
@@ -121,6 +123,12 @@ typedef struct rw_core {
         rw_core_counters counters;
         rw_config config;         /* the stored record (RAM copy): key, WiFi, boot counter; staged changes */
         bool config_dirty;        /* provisioning changed it since the last PROVISION_COMMIT */
+        bool commit_pending;      /* a PROVISION_COMMIT's record is being written outside the tick; answered when done */
+        uint8_t commit_link;      /* rw_link_id, msg_id, seq and checksum of that command (its answer, the duplicate cache) */
+        uint8_t commit_msg_id;
+        uint16_t commit_seq;
+        uint16_t commit_checksum;
+        rw_config commit_record;  /* the record being written: the RAM record once the store says it is written */
         bool key_staged;          /* PROVISION_SET_KEY received; active from the next commit */
         uint8_t staged_key[RW_KEY_LEN];
         uint32_t session_id;      /* this session: epoch + boot counter at boot, a new epoch at PROVISION_COMMIT */
@@ -149,6 +157,9 @@ typedef struct rw_core {
         uint32_t telemetry_period_ms; /* round(1000 / telemetry_rate_hz) (rw_core_apply_params) */
         uint16_t tx_seq[2];       /* next seq per link: [0] WiFi, [1] USB serial (rw_core_take_seq) */
         uint16_t last_cmd_seq;
+        uint16_t params_pending;  /* RW_PARAM_MODULE_* bits changed by PARAM_SET, not yet prepared (rw_core_params.c) */
+        uint8_t params_pending_ticks; /* ticks with a datagram the lowest pending module has waited */
+        bool took_datagram;       /* this tick received a datagram on a link (cleared at the tick's end) */
 
         float target_mps;         /* commanded rope speed */
         float measured_mps;
@@ -176,8 +187,17 @@ void rw_core_init(rw_core *core);
  * session epoch + boot counter). */
 void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us);
 
-/* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. */
+/* Set a parameter as PARAM_SET would (same checks); returns RW_DECODE_OK or the NACK reason. The value is
+ * stored at once (rw_params_get, PARAM_VALUE, the commands' checks see it); the controllers it feeds are
+ * converted at the end of a later tick, one module a tick (rw_core_params.c), or by the first tick's load of
+ * the stored record, or rw_core_params_settle_all. */
 int rw_core_set_param(rw_core *core, uint8_t param_id, float value);
+
+/* Convert every staged parameter change now (for bindings and tests; the tick does it by itself). */
+void rw_core_params_settle_all(rw_core *core);
+
+/* The RW_PARAM_MODULE_* bits of staged changes not yet converted (0: the controllers hold every value). */
+uint16_t rw_core_params_pending(const rw_core *core);
 
 /* True when nothing waits to be sent: the outbox is empty and no frame is being signed. */
 bool rw_core_tx_idle(const rw_core *core);

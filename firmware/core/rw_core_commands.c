@@ -12,13 +12,15 @@
 typedef struct verdict {
     uint8_t reason; /* 0 = ACK */
     int32_t detail;
+    bool later;     /* no answer now: a PROVISION_COMMIT being written (rw_core_provision_poll answers it) */
 } verdict;
 
-static const verdict ACCEPT = { 0u, 0 };
+static const verdict ACCEPT = { 0u, 0, false };
+static const verdict LATER = { 0u, 0, true };
 
 static verdict refuse(uint8_t reason, int32_t detail)
 {
-    verdict v = { reason, detail };
+    verdict v = { reason, detail, false };
     return v;
 }
 
@@ -36,6 +38,9 @@ static verdict cmd_arm(rw_core *core)
         if (!core->state.arming_hold_done) {
             return refuse(RW_NACK_REASON_NOT_READY,
                           (int32_t)(rw_params_get(&core->params, RW_PARAM_ARM_HOLD_S) * 1000.0f));
+        }
+        if (core->state.commit_pending) { /* the rope stays down while the flash is written (it stalls the CPU) */
+            return refuse(RW_NACK_REASON_NOT_READY, 0);
         }
         rw_core_set_state(core, RW_STATE_ARMED, RW_CAUSE_COMMAND);
         return ACCEPT;
@@ -260,6 +265,8 @@ static verdict cmd_release(rw_core *core, const rw_hal *hal)
 
 static verdict execute(rw_core *core, const rw_hal *hal, const rw_frame *frame)
 {
+    /* the modules the commands check against (the guard, the spindle's limits) hold every staged change */
+    rw_core_params_settle(core, RW_PARAM_MODULE_TOV_GUARD | RW_PARAM_MODULE_SPINDLE);
     switch (frame->msg_id) {
     case RW_MSG_ID_ARM:
         return cmd_arm(core);
@@ -362,9 +369,83 @@ static void queue_provision_status(rw_core *core)
     rw_outbox_push(&core->state.outbox, RW_OUTBOX_REPLY, out, len);
 }
 
-/* PROVISION_* (USB serial only; the caller checked the link). Changes are staged in the RAM record and
- * written by PROVISION_COMMIT; the key takes effect at the commit. */
-static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame)
+/* The committed record takes effect: a new session at once (epoch + 0), so no frame signed for an earlier
+ * session or provisioning counts; the staged key is forgotten (it is in the record now). */
+static void commit_done(rw_core *core)
+{
+    const rw_config *next = &core->state.commit_record;
+    if (core->state.key_staged) {
+        core->state.key_staged = false;
+        memset(core->state.staged_key, 0, RW_KEY_LEN);
+    }
+    core->state.session_id = rw_config_session_id(next);
+    core->state.host_counter = 0u;
+    if (rw_signer_busy(&core->state.signer)) { /* signed for the old session (and key): it would be refused */
+        rw_signer_reset(&core->state.signer);
+        rw_outbox_count_drop(&core->state.outbox);
+    }
+    core->state.config = *next;
+    core->state.config_dirty = false;
+}
+
+bool rw_core_provision_poll(rw_core *core, const rw_hal *hal)
+{
+    if (!core->state.commit_pending) {
+        return false;
+    }
+    const uint8_t status = hal->config->save_status(hal->config->ctx);
+    if (status == RW_CONFIG_SAVE_BUSY) {
+        return false;
+    }
+    core->state.commit_pending = false;
+    verdict v = ACCEPT;
+    if (status == RW_CONFIG_SAVE_DONE) {
+        commit_done(core);
+    } else {
+        v = refuse(RW_NACK_REASON_STORE_FAILED, 1); /* nothing changed */
+    }
+    rw_duplicate_cache_store(&core->state.duplicates, core->state.commit_msg_id, core->state.commit_seq,
+                             core->state.commit_checksum, v.reason, v.detail, core->state.uptime_ms);
+    send_verdict(core, hal, (rw_link_id)core->state.commit_link, core->state.commit_msg_id, core->state.commit_seq, v);
+    return true;
+}
+
+/* PROVISION_COMMIT: the new record (a fresh epoch, the parameters, the staged key) is handed to the store,
+ * which writes it outside the tick; the command is answered when the store says it is written
+ * (rw_core_provision_poll), in this tick already if the store wrote it at once. */
+static verdict commit(rw_core *core, const rw_hal *hal, rw_link_id link, const rw_frame *frame)
+{
+    const rw_config *c = &core->state.config;
+    if (hal->config == NULL || hal->config->request_save == NULL || hal->config->save_status == NULL) {
+        return refuse(RW_NACK_REASON_STORE_FAILED, 0);
+    }
+    rw_msg_provision_commit msg;
+    rw_msg_provision_commit_unpack(&msg, frame->payload);
+    if (c->commits != 0u && msg.session_epoch == c->session_epoch) {
+        /* the same epoch again would restart the same session ids, whose frames could then be replayed */
+        return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)msg.session_epoch);
+    }
+    rw_config *next = &core->state.commit_record;
+    *next = *c;
+    if (!rw_config_commit(next, msg.session_epoch, core->params.value,
+                          core->state.key_staged ? core->state.staged_key : NULL)) {
+        return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)(RW_CONFIG_EPOCH_LIMIT - 1u));
+    }
+    if (!hal->config->request_save(hal->config->ctx, next, sizeof *next)) {
+        return refuse(RW_NACK_REASON_STORE_FAILED, 2); /* the store is still busy with another write */
+    }
+    core->state.commit_pending = true;
+    core->state.commit_link = (uint8_t)link;
+    core->state.commit_msg_id = frame->msg_id;
+    core->state.commit_seq = frame->seq;
+    core->state.commit_checksum = frame->checksum;
+    return LATER;
+}
+
+/* PROVISION_* (USB serial only; the caller checked the link; DISARMED only: the rope is down). Changes are
+ * staged in the RAM record and written by PROVISION_COMMIT; the key takes effect at the commit. While a
+ * commit is being written, everything but PROVISION_GET is refused NOT_READY (and ARM: cmd_arm). */
+static verdict provision(rw_core *core, const rw_hal *hal, rw_link_id link, const rw_frame *frame)
 {
     rw_config *c = &core->state.config;
     if (frame->msg_id == RW_MSG_ID_PROVISION_GET) {
@@ -372,6 +453,9 @@ static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame
     }
     if (core->state.state != RW_STATE_DISARMED) {
         return refuse(RW_NACK_REASON_BAD_STATE, 0);
+    }
+    if (core->state.commit_pending) {
+        return refuse(RW_NACK_REASON_NOT_READY, 0);
     }
     switch (frame->msg_id) {
     case RW_MSG_ID_PROVISION_SET_WIFI_SSID: {
@@ -398,42 +482,8 @@ static verdict provision(rw_core *core, const rw_hal *hal, const rw_frame *frame
         core->state.key_staged = true;
         break;
     }
-    case RW_MSG_ID_PROVISION_COMMIT: {
-        if (hal->config == NULL) {
-            return refuse(RW_NACK_REASON_STORE_FAILED, 0);
-        }
-        rw_msg_provision_commit msg;
-        rw_msg_provision_commit_unpack(&msg, frame->payload);
-        rw_config next = *c;
-        if (c->commits != 0u && msg.session_epoch == c->session_epoch) {
-            /* the same epoch again would restart the same session ids, whose frames could then be replayed */
-            return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)msg.session_epoch);
-        }
-        if (!rw_config_new_epoch(&next, msg.session_epoch)) {
-            return refuse(RW_NACK_REASON_OUT_OF_RANGE, (int32_t)(RW_CONFIG_EPOCH_LIMIT - 1u));
-        }
-        rw_config_set_params(&next, core->params.value);
-        if (core->state.key_staged) {
-            rw_config_set_key(&next, core->state.staged_key);
-        }
-        if (!hal->config->save(hal->config->ctx, &next, sizeof next)) {
-            return refuse(RW_NACK_REASON_STORE_FAILED, 1);
-        }
-        if (core->state.key_staged) {
-            core->state.key_staged = false;
-            memset(core->state.staged_key, 0, RW_KEY_LEN);
-        }
-        /* a new session at once (epoch + 0): no frame signed for an earlier session or provisioning counts */
-        core->state.session_id = rw_config_session_id(&next);
-        core->state.host_counter = 0u;
-        if (rw_signer_busy(&core->state.signer)) { /* signed for the old session (and key): it would be refused */
-            rw_signer_reset(&core->state.signer);
-            rw_outbox_count_drop(&core->state.outbox);
-        }
-        *c = next;
-        core->state.config_dirty = false;
-        return ACCEPT;
-    }
+    case RW_MSG_ID_PROVISION_COMMIT:
+        return commit(core, hal, link, frame);
     default:
         return refuse(RW_NACK_REASON_NOT_A_COMMAND, 0);
     }
@@ -481,6 +531,7 @@ bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link)
     if (n == 0u) {
         return false;
     }
+    core->state.took_datagram = true;
     rw_frame frame;
     /* A datagram longer than buf arrives truncated to sizeof buf, which is longer than any frame: the
      * decoder refuses it exactly as it refuses the whole datagram (trailing bytes: BAD_LENGTH; a declared
@@ -529,11 +580,18 @@ bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link)
     if (dup != NULL) {
         ++core->state.counters.rx_duplicates;
         v = refuse(dup->nack_reason, dup->nack_detail);
+    } else if (core->state.commit_pending && frame.msg_id == core->state.commit_msg_id &&
+               frame.seq == core->state.commit_seq && frame.checksum == core->state.commit_checksum) {
+        ++core->state.counters.rx_duplicates; /* the commit being written, again: its answer comes when it is */
+        return false;
     } else {
-        v = info->kind == RW_MSG_KIND_PROVISION ? provision(core, hal, &frame) : execute(core, hal, &frame);
+        v = info->kind == RW_MSG_KIND_PROVISION ? provision(core, hal, link, &frame) : execute(core, hal, &frame);
+        core->state.last_cmd_seq = frame.seq;
+        if (v.later) { /* a commit handed to the store: answered when written, in this tick if it already is */
+            return rw_core_provision_poll(core, hal);
+        }
         rw_duplicate_cache_store(&core->state.duplicates, frame.msg_id, frame.seq, frame.checksum, v.reason,
                                  v.detail, core->state.uptime_ms);
-        core->state.last_cmd_seq = frame.seq;
     }
     send_verdict(core, hal, link, frame.msg_id, frame.seq, v);
     if (v.reason == 0u && (frame.msg_id == RW_MSG_ID_PARAM_GET || frame.msg_id == RW_MSG_ID_PARAM_SET)) {

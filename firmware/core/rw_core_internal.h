@@ -1,6 +1,7 @@
 /* Shared between the core's translation units; not for HAL or board code. The core is split by concept:
- *   rw_core.c             init, parameters (rw_core_apply_params: every controller prepared once), the tick
- *                         and its schedule
+ *   rw_core.c             init, the tick and its schedule
+ *   rw_core_params.c      parameters into the controllers: every module at boot, a PARAM_SET's modules staged
+ *                         to a tick boundary
  *   rw_core_supervisor.c  the state machine and the safety checks (heartbeat, battery, encoder, ToV collapse)
  *   rw_core_commands.c    received frames: decode, authenticate, execute, ACK/NACK
  *   rw_core_spindle.c     the spindle slot: servo reading -> rw_spindle step -> events, state, servo write
@@ -14,9 +15,22 @@
 
 #include "rw_core.h"
 
-/* ---- rw_core.c ---- */
-/* Push the parameter values into the controllers' configs and prepare them (gains converted once). */
+/* ---- rw_core_params.c ---- */
+/* Push the parameter values into every controller's config and prepare them (gains converted once);
+ * nothing is left pending. */
 void rw_core_apply_params(rw_core *core);
+/* The same for the RW_PARAM_MODULE_* bits in modules only (each one in one piece); they are no longer
+ * pending. */
+void rw_core_prepare_modules(rw_core *core, uint16_t modules);
+/* Prepare now those of modules that are pending (before a command that reads them executes). */
+void rw_core_params_settle(rw_core *core, uint16_t modules);
+/* A module stays pending at most this many ticks that took a datagram; then it is prepared anyway. */
+#define RW_CORE_PARAM_APPLY_MAX_WAIT_TICKS 20u
+/* The tick's last step: on a tick that took no datagram (state.took_datagram, cleared here), or after
+ * RW_CORE_PARAM_APPLY_MAX_WAIT_TICKS ticks that all did, prepare the lowest pending module. */
+void rw_core_params_tick_end(rw_core *core);
+
+/* ---- rw_core.c ---- */
 void rw_core_emit_event(rw_core *core, uint8_t event, uint8_t from, uint8_t to, int32_t arg);
 
 /* ---- rw_core_supervisor.c ---- */
@@ -44,6 +58,10 @@ void rw_core_load_loss_step(rw_core *core);
 /* ---- rw_core_commands.c ---- */
 /* Receive at most one datagram on a link, answer it; returns true when a datagram was sent this tick. */
 bool rw_core_handle_datagram(rw_core *core, const rw_hal *hal, rw_link_id link);
+/* A PROVISION_COMMIT whose record the store was writing: once save_status says DONE (or FAILED), the new
+ * record (session, key) takes effect and the command is answered ACK (NACK STORE_FAILED); returns true when
+ * that answer went out (on the serial link: that link takes no datagram this tick). */
+bool rw_core_provision_poll(rw_core *core, const rw_hal *hal);
 
 /* ---- rw_core_telemetry.c ---- */
 /* Pack a TELEMETRY frame into the outbox (a full outbox drops it, counted). */

@@ -49,15 +49,41 @@ static uint64_t stale_bound_q16(const rw_mt_speed_estimator_config *enc)
     return (uint64_t)bound_q8 << 8;
 }
 
-void rw_speed_loop_prepare(rw_speed_loop *loop, float dt_s)
+void rw_speed_loop_prepare_estimator(rw_speed_loop *loop, float dt_s)
 {
     rw_mt_speed_estimator_prepare(&loop->estimator, dt_s);
-    rw_ramp_prepare(&loop->ramp, dt_s);
-    rw_pi_controller_prepare(&loop->pi, dt_s);
-    rw_throttle_map_prepare(&loop->throttle);
-    rw_throttle_map_prepare_battery(&loop->throttle, loop->state.battery_v);
-    loop->state.guard_q16 = rw_f32_to_q16(loop->cfg.guard_mps);
     loop->state.stale_bound_q16 = stale_bound_q16(&loop->estimator.cfg);
+}
+
+void rw_speed_loop_prepare_ramp(rw_speed_loop *loop, float dt_s)
+{
+    rw_ramp_prepare(&loop->ramp, dt_s);
+}
+
+void rw_speed_loop_prepare_pi(rw_speed_loop *loop, float dt_s)
+{
+    rw_pi_controller_prepare(&loop->pi, dt_s);
+}
+
+/* The throttle map keeps the battery voltage it was prepared for, which is always the loop's (both change
+ * only in rw_speed_loop_set_battery, or in the feed-forward when they differ): one division, not two. */
+void rw_speed_loop_prepare_throttle(rw_speed_loop *loop)
+{
+    rw_throttle_map_prepare(&loop->throttle);
+}
+
+void rw_speed_loop_prepare_guard(rw_speed_loop *loop)
+{
+    loop->state.guard_q16 = rw_f32_to_q16(loop->cfg.guard_mps);
+}
+
+void rw_speed_loop_prepare(rw_speed_loop *loop, float dt_s)
+{
+    rw_speed_loop_prepare_estimator(loop, dt_s);
+    rw_speed_loop_prepare_ramp(loop, dt_s);
+    rw_speed_loop_prepare_pi(loop, dt_s);
+    rw_speed_loop_prepare_throttle(loop);
+    rw_speed_loop_prepare_guard(loop);
 }
 
 void rw_speed_loop_set_battery(rw_speed_loop *loop, float battery_v)

@@ -77,6 +77,21 @@ void rw_speed_loop_init(rw_speed_loop *loop);
  *  kept for the battery voltage set last. Float arithmetic, once per change; a step of another dt_s still
  *  works (the parts convert for it, a few divisions). */
 void rw_speed_loop_prepare(rw_speed_loop *loop, float dt_s);
+/** The parts of rw_speed_loop_prepare, one each, for a change that touches one part (a PARAM_SET: the core
+ *  prepares only the modules a parameter feeds, rw_params_modules): each converts its part's config in one
+ *  piece, so a step sees a part's old or new values, never a mix.
+ *    estimator: the M/T estimator (and its filter) for steps of dt_s, and the stale-reading bound (it
+ *               depends on the wheel radius and the counts per turn): 1 float division (the filter's)
+ *    ramp:      the ramp's steps for dt_s (multiplications)
+ *    pi:        the PI's gains for dt_s (multiplications)
+ *    throttle:  the throttle map's range and feed-forward factor at the battery voltage set last
+ *               (1 float division)
+ *    guard:     cfg.guard_mps in Q16.16 */
+void rw_speed_loop_prepare_estimator(rw_speed_loop *loop, float dt_s);
+void rw_speed_loop_prepare_ramp(rw_speed_loop *loop, float dt_s);
+void rw_speed_loop_prepare_pi(rw_speed_loop *loop, float dt_s);
+void rw_speed_loop_prepare_throttle(rw_speed_loop *loop);
+void rw_speed_loop_prepare_guard(rw_speed_loop *loop);
 /** The battery voltage the feed-forward uses from now on (one float division: call it off the speed step,
  *  when the reading has changed). */
 void rw_speed_loop_set_battery(rw_speed_loop *loop, float battery_v);

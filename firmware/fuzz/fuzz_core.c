@@ -340,7 +340,21 @@ static const rw_hal_encoder ENCODER = { NULL, encoder_read };
 static const rw_hal_battery BATTERY = { NULL, battery_read };
 static const rw_hal_scheduler SCHEDULER = { NULL, overruns };
 static const rw_hal_spindle SPINDLE = { NULL, spindle_read, spindle_write };
-static const rw_hal_config_store STORE = { NULL, store_load, store_save };
+/* A PROVISION_COMMIT's write, done at once (a RAM store): the same checks and failure option as save. */
+static uint8_t store_status;
+static bool store_request_save(void *ctx, const void *buf, size_t len)
+{
+    store_status = store_save(ctx, buf, len) ? RW_CONFIG_SAVE_DONE : RW_CONFIG_SAVE_FAILED;
+    return true;
+}
+
+static uint8_t store_save_status(void *ctx)
+{
+    (void)ctx;
+    return store_status;
+}
+
+static const rw_hal_config_store STORE = { NULL, store_load, store_save, store_request_save, store_save_status };
 static rw_hal_link SERIAL_LINK = { &h.serial, link_recv, link_reply, link_accept, link_send };
 static rw_hal_link WIFI_LINK = { &h.wifi, link_recv, link_reply, link_accept, link_send };
 
@@ -471,6 +485,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     memset(&h, 0, sizeof h);
+    store_status = RW_CONFIG_SAVE_IDLE;
     h.serial.id = RW_LINK_SERIAL;
     h.wifi.id = RW_LINK_WIFI;
     h.now_us = START_US;

@@ -4,8 +4,9 @@
  *  - the control tick, in the TC3 interrupt every 1 ms: the ESC pulse staged by the previous tick is applied,
  *    the encoder latched, rw_core_tick run, the watchdog fed. It never waits on a bus: the core's link and
  *    spindle calls only move frames and readings through RAM (the HAL's queues and split transaction).
- *  - the background loop (loop()): the spindle's bus transactions, WiFiNINA, USB serial, the status LED and
- *    the USB status lines, each bounded; WiFi connection steps only while the rope is down.
+ *  - the background loop (loop()): the spindle's bus transactions, WiFiNINA, USB serial, a PROVISION_COMMIT's
+ *    flash write (the core answers the command once it is done), the status LED and the USB status lines, each
+ *    bounded; WiFi connection steps and the flash write only while the rope is down.
  *
  * setup: watchdog (long period while booting) -> core -> ESC PWM at the protocol's bottom pulse (the ESCs
  * start arming on it) -> encoder, battery, LED, USB serial, spindle -> HAL wired -> the core's first tick,
@@ -155,6 +156,7 @@ void loop()
     rw_arduino_spindle_service(&spindle, now_ms);
     rw_arduino_link_service(&link, now_ms, down);
     rw_arduino_serial_link_service(&serial_link);
+    rw_arduino_config_store_service(&config_store, down); /* a PROVISION_COMMIT's flash write, rope down only */
     if (down) {
         /* a PROVISION_COMMIT (DISARMED only): the committed record, copied with the tick kept out */
         rw_arduino_scheduler_mask_tick();

@@ -85,10 +85,13 @@ class _HalSpindle(ctypes.Structure):
 
 _ConfigLoad = CFUNCTYPE(c_bool, c_void_p, c_void_p, c_size_t)
 _ConfigSave = CFUNCTYPE(c_bool, c_void_p, c_void_p, c_size_t)
+_ConfigSaveStatus = CFUNCTYPE(ctypes.c_uint8, c_void_p)
+CONFIG_SAVE_BUSY, CONFIG_SAVE_DONE, CONFIG_SAVE_FAILED = 1, 2, 3  # rw_config_save_status (hal/rw_hal_config_store.h)
 
 
 class _HalConfigStore(ctypes.Structure):
-    _fields_ = [("ctx", c_void_p), ("load", _ConfigLoad), ("save", _ConfigSave)]
+    _fields_ = [("ctx", c_void_p), ("load", _ConfigLoad), ("save", _ConfigSave), ("request_save", _ConfigSave),
+                ("save_status", _ConfigSaveStatus)]
 
 
 class _Hal(ctypes.Structure):
@@ -274,12 +277,15 @@ class CoreHarness:
     battery_mv the battery reading; params {name: value} set through rw_core_set_param before the first
     tick (the checks are those of PARAM_SET, a refusal raises ValueError); serial=True fits a USB serial link
     (hal.serial_inbox in, Out.link == 'serial' out; trusted: unsigned frames and PROVISION_*); provisioned=False
-    boots from a flash record without a link key (the core then takes nothing over WiFi).
+    boots from a flash record without a link key (the core then takes nothing over WiFi); flash_save_ticks:
+    a PROVISION_COMMIT's write (request_save) is done that many ticks after the tick that asked for it, between
+    ticks as the board's background loop does it (0: at once, in the request).
     """
 
     def __init__(self, lib: ctypes.CDLL, *, clock_offset_us: int = 0, battery_mv: int = 14800,
                  params: dict[str, float] | None = None, spindle: FakeSpindle | None = None,
-                 encoder_count_offset: int = 0, serial: bool = False, provisioned: bool = True) -> None:
+                 encoder_count_offset: int = 0, serial: bool = False, provisioned: bool = True,
+                 flash_save_ticks: int = 1) -> None:
         self.lib = declare_core(lib)
         self.clock_offset_us = int(clock_offset_us)
         self.size = int(lib.rw_core_sizeof())
@@ -306,6 +312,12 @@ class CoreHarness:
         self.t_us = 0
         self.started = False
         self.seq = 0
+        self.flash_save_ticks = int(flash_save_ticks)
+        self.flash_save_requests = 0
+        self.flash_save_fails = False  # the background write fails (the read-back differs): status FAILED
+        self._save_pending: bytes | None = None
+        self._save_countdown = 0
+        self._save_status = 0
         self._build_hal()
         for name, value in (params or {}).items():
             self.set_param(name, value)
@@ -409,7 +421,21 @@ class CoreHarness:
             self.flash = ctypes.string_at(buf, length)
             return True
 
-        self._config_cbs = [_ConfigLoad(config_load), _ConfigSave(config_save)]
+        def request_save(_ctx, buf, length):
+            if self._save_status == CONFIG_SAVE_BUSY:
+                return False
+            self.flash_save_requests += 1
+            self._save_pending = ctypes.string_at(buf, length)
+            self._save_countdown = self.flash_save_ticks
+            self._save_status = CONFIG_SAVE_BUSY
+            self._service_save(in_request=True)
+            return True
+
+        def save_status(_ctx):
+            return self._save_status
+
+        self._config_cbs = [_ConfigLoad(config_load), _ConfigSave(config_save), _ConfigSave(request_save),
+                            _ConfigSaveStatus(save_status)]
         self._config = _HalConfigStore(None, *self._config_cbs)
         self._hal.config = ctypes.pointer(self._config)
         if self._serial:
@@ -471,9 +497,23 @@ class CoreHarness:
             self.hal.encoder_counts = (self.encoder_count_offset + self.encoder.counts) % U32
             self.hal.encoder_last_edge_us = (self.clock_offset_us + round(self.encoder.last_edge_t_us)) % U32
         self.lib.rw_core_tick(self.core, ctypes.byref(self._hal), self.now_us)
+        self._service_save(in_request=False)
         self._check_canary()
         if self._callback_errors:
             raise self._callback_errors.pop(0)
+
+    def _service_save(self, *, in_request: bool) -> None:
+        """The store's background side: a requested write is done flash_save_ticks ticks after its request."""
+        if self._save_status != CONFIG_SAVE_BUSY:
+            return
+        if not in_request:
+            self._save_countdown -= 1
+        if self._save_countdown <= 0:
+            if self.flash_save_fails:
+                self._save_status = CONFIG_SAVE_FAILED
+                return
+            self.flash = self._save_pending
+            self._save_status = CONFIG_SAVE_DONE
 
     def run_ms(self, ms: int) -> None:
         for _ in range(int(ms)):

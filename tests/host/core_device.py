@@ -104,6 +104,7 @@ class CoreDevice:
         self._peer: dict[str, object] = {"wifi": None, "serial": None}    # where the core's own frames go
         self._pty: _PtyEnd | None = None
         self._staged_key: bytes | None = None
+        self._last_commit: bytes | None = None  # the last PROVISION_COMMIT frame seen on serial
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self._sock.bind(("127.0.0.1", 0))
         self._sock.setblocking(False)
@@ -232,7 +233,10 @@ class CoreDevice:
         if self._sender["serial"] is not None:  # a cable has one far end
             self._peer["serial"] = self._sender["serial"]
         for out in h.hal.out[before_out:]:
-            self._emit(out.raw, self._sender[out.link] if out.channel == "reply" else self._peer[out.link])
+            to = self._sender[out.link] if out.channel == "reply" else self._peer[out.link]
+            if to is None and out.link == "serial":  # a later answer (PROVISION_COMMIT once written): the cable
+                to = self._peer["serial"]
+            self._emit(out.raw, to)
 
     def _watch_provisioning(self, data: bytes) -> None:
         """The harness checks the core's signed frames with the core's key: follow a key staged and committed over
@@ -243,6 +247,9 @@ class CoreDevice:
         if isinstance(d[1], gen.ProvisionSetKey):
             self._staged_key = bytes(d[1].key)
         elif isinstance(d[1], gen.ProvisionCommit):
+            if data == self._last_commit:  # a retransmission (the ACK comes once the flash is written): no new key
+                return
+            self._last_commit = bytes(data)
             self.harness.expect_commit(self._staged_key)
             if self._staged_key is not None and self.link == "wifi":
                 self.key = self._staged_key

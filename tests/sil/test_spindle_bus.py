@@ -8,7 +8,9 @@ SIL's spindle bus counters (printed by rw_sil on exit):
 - a servo that stops answering (a timeout at every read): SPINDLE_NO_ANSWER after spindle_timeout_s, the guide
   stops, the rope is untouched;
 - a bus slower than the tick (each transaction 1.5 ms, running on into the next tick): the reading still
-  arrives by the next spindle step, the guide reaches its target.
+  arrives by the next spindle step, the guide reaches its target;
+- servo timeouts in flight leave the speed loop alone: the ESC pulse tick by tick is the one of the same run
+  with the servo answering.
 """
 
 from __future__ import annotations
@@ -95,6 +97,36 @@ def test_a_servo_that_stops_answering_times_out_without_touching_the_rope(native
         sil.stop()
     counters = _bus_counters(sil)
     assert counters["reads_failed"] >= timeout_s / 0.01 - 2, counters
+
+
+def _pulses_airborne(*, servo_silent: bool) -> tuple[list[float], gen.Telemetry, dict[str, int]]:
+    """Airborne at 6 m/s with the guide at rest; for 0.6 s the ESC pulse the plant applied each tick, the servo
+    answering or not (every read timing out)."""
+    sil, host = _homed_host()
+    pulses: list[float] = []
+    try:
+        host.arm_and_spin(6000, settle_s=2.0)
+        sil.spindle.answering = not servo_silent
+        sil.tick_hooks.append(lambda s: pulses.append(s.last_esc_pulse_fine_us))
+        host.run_for(0.6)
+        t = host.last_telemetry
+    finally:
+        host.close()
+        sil.stop()
+    return pulses, t, _bus_counters(sil)
+
+
+def test_servo_timeouts_leave_the_esc_pulse_the_same_tick_by_tick(native_build_dir: Path) -> None:
+    """The speed loop never waits on the servo: with every read timing out (counted, SPINDLE_NO_ANSWER after
+    spindle_timeout_s), the ESC pulse is the one of the same run with the servo answering, tick by tick."""
+    answered, t_ok, c_ok = _pulses_airborne(servo_silent=False)
+    silent, t_silent, c_silent = _pulses_airborne(servo_silent=True)
+    assert len(answered) == len(silent) >= 590
+    assert len(set(answered)) > 1, "the pulse moved: the speed loop was working"
+    assert silent == answered, "a servo timeout changed an ESC pulse"
+    assert c_ok["reads_failed"] == 0 and c_silent["reads_failed"] >= 0.6 / 0.01 - 2, (c_ok, c_silent)
+    assert t_silent.fault_bits & gen.Fault.SPINDLE_NO_ANSWER and not t_ok.fault_bits & gen.Fault.SPINDLE_NO_ANSWER
+    assert t_silent.state == t_ok.state == gen.State.AIRBORNE and t_silent.tick_overruns == 0
 
 
 def test_a_bus_slower_than_the_tick_is_late_but_the_guide_arrives(native_build_dir: Path) -> None:

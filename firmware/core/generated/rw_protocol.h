@@ -59,7 +59,7 @@ typedef enum {
     RW_NACK_REASON_UNSUPPORTED_FLAGS = 8, /* Flags the receiver's version does not implement. */
     RW_NACK_REASON_OUT_OF_RANGE = 9, /* A field is outside its documented range; NACK.detail carries the limit that was crossed (wire units), or for PARAM_SET the parameter id (the limits are in the parameter table). */
     RW_NACK_REASON_BAD_STATE = 10, /* Command not valid in the current state (NACK.state tells which). */
-    RW_NACK_REASON_NOT_READY = 11, /* ESC arming hold after boot not finished; retry after it. */
+    RW_NACK_REASON_NOT_READY = 11, /* ESC arming hold after boot not finished, or a PROVISION_COMMIT's flash write still in progress (ARM, PROVISION_* but GET); retry after it. */
     RW_NACK_REASON_UNKNOWN_PARAM = 12, /* Parameter id not in the table. */
     RW_NACK_REASON_BELOW_TOV_GUARD = 13, /* Speed setpoint under ToV x margin while airborne; command SPINDOWN to land. NACK.detail = guard speed, mm/s. */
     RW_NACK_REASON_PARAM_LOCKED = 14, /* Parameter can only be set while DISARMED. */
@@ -508,7 +508,7 @@ void rw_msg_provision_set_wifi_password_pack(const rw_msg_provision_set_wifi_pas
 void rw_msg_provision_set_wifi_password_unpack(rw_msg_provision_set_wifi_password *msg, const uint8_t *payload);
 size_t rw_msg_provision_set_wifi_password_encode(const rw_msg_provision_set_wifi_password *msg, uint16_t seq, uint8_t *out, size_t out_cap);
 
-/* PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again). */
+/* PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again). DISARMED only (BAD_STATE). The flash is written outside the control tick (up to ~25 ms on the board) and the command is answered once it is: ACK when written, NACK STORE_FAILED (detail 1) when the write failed, nothing changed; meanwhile ARM and PROVISION_* but GET are refused NOT_READY and a retransmission waits for the same answer. */
 #define RW_MSG_PROVISION_COMMIT_LEN 4u
 #define RW_MSG_PROVISION_COMMIT_CRC_EXTRA 0x606Bu
 typedef struct {

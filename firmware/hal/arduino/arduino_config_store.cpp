@@ -3,6 +3,7 @@
  * translation unit), never through the array, whose initializer the compiler would otherwise fold. */
 #include "arduino_config_store.h"
 
+#include <Arduino.h>
 #include <FlashStorage.h>
 #include <string.h>
 
@@ -65,13 +66,57 @@ bool store_save(void *ctx, const void *buf, size_t len)
     return true;
 }
 
+/* From the tick (TC3 interrupt): a copy and a flag; the background loop writes while status is BUSY and
+ * never touches pending otherwise, the tick never while it is. */
+bool store_request_save(void *ctx, const void *buf, size_t len)
+{
+    rw_arduino_config_store *store = static_cast<rw_arduino_config_store *>(ctx);
+    if (store->status == RW_CONFIG_SAVE_BUSY || len != sizeof store->pending) {
+        ++store->refused_busy;
+        return false;
+    }
+    memcpy(&store->pending, buf, len);
+    ++store->requests;
+    __DMB(); /* the copy is complete before the background loop can see BUSY */
+    store->status = RW_CONFIG_SAVE_BUSY;
+    return true;
+}
+
+uint8_t store_save_status(void *ctx)
+{
+    const rw_arduino_config_store *store = static_cast<const rw_arduino_config_store *>(ctx);
+    return store->status;
+}
+
 } // namespace
 
 rw_hal_config_store rw_arduino_config_store_hal(rw_arduino_config_store *store)
 {
+    store->status = RW_CONFIG_SAVE_IDLE;
     rw_hal_config_store hal;
     hal.ctx = store;
     hal.load = store_load;
     hal.save = store_save;
+    hal.request_save = store_request_save;
+    hal.save_status = store_save_status;
     return hal;
+}
+
+void rw_arduino_config_store_service(rw_arduino_config_store *store, bool rope_down)
+{
+    if (store->status != RW_CONFIG_SAVE_BUSY) {
+        return;
+    }
+    if (!rope_down) { /* the core refuses ARM while a commit is BUSY: this is the second gate, never expected */
+        ++store->deferred_passes;
+        return;
+    }
+    const uint32_t start_us = micros();
+    const bool ok = store_save(store, &store->pending, sizeof store->pending);
+    const uint32_t took_us = micros() - start_us;
+    if (took_us > store->max_save_us) {
+        store->max_save_us = took_us;
+    }
+    __DMB();
+    store->status = ok ? RW_CONFIG_SAVE_DONE : RW_CONFIG_SAVE_FAILED;
 }

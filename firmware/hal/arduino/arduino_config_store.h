@@ -24,11 +24,25 @@ struct rw_arduino_config_store {
     uint32_t loads;         /* load calls that found a written record */
     uint32_t saves;         /* records written and verified */
     uint32_t save_failures; /* refused length, or the read-back differed from the record */
+    /* a PROVISION_COMMIT's write: requested by the tick (copy + status), done by the background loop */
+    rw_config pending;            /* the record to write (the tick copies it in while status is not BUSY) */
+    volatile uint8_t status;      /* rw_config_save_status: BUSY from the request until the loop wrote it */
+    uint32_t requests;            /* request_save calls taken */
+    uint32_t refused_busy;        /* request_save calls refused (a write BUSY, or a bad length) */
+    uint32_t deferred_passes;     /* background passes a BUSY write waited because the rope was up */
+    uint32_t max_save_us;         /* longest background write (erase + write + read-back), micros() */
 };
 
 /* load: len bytes of the area; false when len exceeds the area or the area is blank (all 0x00 as the
  * upload leaves it, or all 0xFF as an erase leaves it). save: erase the rows, write, read back and
- * compare; false on a length that is over the area or not a multiple of 4, or on a mismatch. */
+ * compare; false on a length that is over the area or not a multiple of 4, or on a mismatch (the boot-counter
+ * write of the core's first tick, in setup(), before the tick interrupt runs). request_save (from the tick):
+ * copies the record and marks it BUSY; false while BUSY or for a length other than sizeof(rw_config). */
 rw_hal_config_store rw_arduino_config_store_hal(rw_arduino_config_store *store);
+
+/* Background loop, every pass: a BUSY write is done here (save: erase, write, read back; the CPU stalls on the
+ * flash meanwhile, up to ~25 ms, the ESC PWM runs on in hardware), only while rope_down; else it waits,
+ * counted. One write per pass at most. */
+void rw_arduino_config_store_service(rw_arduino_config_store *store, bool rope_down);
 
 #endif /* RW_ARDUINO_CONFIG_STORE_H */

@@ -30,8 +30,48 @@ static bool save(void *ctx, const void *buf, size_t len)
     return ok && rename(tmp, s->path) == 0;
 }
 
+static bool request_save(void *ctx, const void *buf, size_t len)
+{
+    sil_config_store *s = ctx;
+    if (s->status == RW_CONFIG_SAVE_BUSY || len != sizeof s->pending) {
+        ++s->refused_busy;
+        return false;
+    }
+    memcpy(&s->pending, buf, len);
+    s->countdown = s->save_ticks;
+    s->status = RW_CONFIG_SAVE_BUSY;
+    ++s->requests;
+    return true;
+}
+
+static uint8_t save_status(void *ctx)
+{
+    const sil_config_store *s = ctx;
+    return s->status;
+}
+
+void sil_config_store_service(sil_config_store *s)
+{
+    if (s->status != RW_CONFIG_SAVE_BUSY) {
+        return;
+    }
+    if (s->countdown > 1u) {
+        --s->countdown;
+        return;
+    }
+    const bool ok = save(s, &s->pending, sizeof s->pending);
+    s->status = ok ? RW_CONFIG_SAVE_DONE : RW_CONFIG_SAVE_FAILED;
+    if (ok) {
+        ++s->writes_ok;
+    } else {
+        ++s->writes_failed;
+    }
+}
+
 rw_hal_config_store sil_config_store_hal(sil_config_store *s)
 {
-    rw_hal_config_store hal = { .ctx = s, .load = load, .save = save };
+    rw_hal_config_store hal = {
+        .ctx = s, .load = load, .save = save, .request_save = request_save, .save_status = save_status,
+    };
     return hal;
 }

@@ -8,8 +8,10 @@
  * "rw_sil ready cmd_port=N plant_port=N serial=PATH" on stdout, then runs one core tick per SIL_SENSORS
  * datagram from the plant. --state-file is the board's flash (configuration record: key, parameters,
  * boot counter = session id); without it nothing persists and nothing can be committed.
- * --spindle-bus-us is the bus time of one spindle transaction (sil_spindle_bus.h, default 350). On exit it
- * prints the spindle bus counters on stderr ("rw_sil spindle_bus requests=N ..."). Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
+ * --spindle-bus-us is the bus time of one spindle transaction (sil_spindle_bus.h, default 350). A
+ * PROVISION_COMMIT's write to the state file is done between ticks, SIL_CONFIG_STORE_DEFAULT_SAVE_TICKS after
+ * its request (sil_config_store.h). On exit it prints the spindle bus counters
+ * ("rw_sil spindle_bus requests=N ...") and the flash counters ("rw_sil flash requests=N ...") on stderr. Exits 0 on SIGINT/SIGTERM, 3 when the plant has been silent
  * for --plant-timeout-s (never hangs), 2 on bad arguments or sockets. */
 #include <errno.h>
 #include <signal.h>
@@ -79,7 +81,7 @@ int main(int argc, char **argv)
 {
     long cmd_port = 14550, plant_port = 14560, plant_timeout_s = 10, tick_us = 1000;
     long spindle_bus_us = SIL_SPINDLE_BUS_DEFAULT_TRANSACTION_US;
-    static sil_config_store store = { { 0 } };
+    static sil_config_store store = { .save_ticks = SIL_CONFIG_STORE_DEFAULT_SAVE_TICKS };
     for (int i = 1; i < argc; ++i) {
         long *target = NULL;
         long max = 65535;
@@ -179,6 +181,8 @@ int main(int argc, char **argv)
         rw_core_tick(&core, &hal, lockstep.sensors.time_us);
         /* the background loop between this tick and the next: the spindle's bus transactions */
         sil_spindle_bus_service(&spindle_bus, &lockstep.sensors);
+        /* and the flash: a PROVISION_COMMIT's write, save_ticks after its request */
+        sil_config_store_service(&store);
         lockstep.spindle_moving_speed_raw = spindle_bus.moving_speed_raw;
         sil_lockstep_send_actuators(&lockstep);
     }
@@ -188,6 +192,9 @@ int main(int argc, char **argv)
             "writes_failed=%u\n",
             (unsigned)sc->requests, (unsigned)sc->taken, (unsigned)sc->missing, (unsigned)sc->late,
             (unsigned)sc->reads_ok, (unsigned)sc->reads_failed, (unsigned)sc->writes_ok, (unsigned)sc->writes_failed);
+    fprintf(stderr, "rw_sil flash requests=%u refused_busy=%u writes_ok=%u writes_failed=%u\n",
+            (unsigned)store.requests, (unsigned)store.refused_busy, (unsigned)store.writes_ok,
+            (unsigned)store.writes_failed);
     sil_link_close(&link);
     sil_lockstep_close(&lockstep);
     sil_serial_close(&serial);

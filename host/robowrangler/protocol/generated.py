@@ -82,7 +82,7 @@ class NackReason(IntEnum):
     BAD_STATE = 10
     """Command not valid in the current state (NACK.state tells which)."""
     NOT_READY = 11
-    """ESC arming hold after boot not finished; retry after it."""
+    """ESC arming hold after boot not finished, or a PROVISION_COMMIT's flash write still in progress (ARM, PROVISION_* but GET); retry after it."""
     UNKNOWN_PARAM = 12
     """Parameter id not in the table."""
     BELOW_TOV_GUARD = 13
@@ -1009,7 +1009,7 @@ class ProvisionSetWifiPassword(Message):
 
 @dataclass(frozen=True)
 class ProvisionCommit(Message):
-    """PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again).
+    """PROVISION_COMMIT (id 33, provision): USB serial only: write the configuration (key, WiFi, parameters, a fresh session epoch) to flash as one versioned record with a CRC. Every commit starts a new session range at once: session id = session_epoch + boot counter, the boot counter restarting at 0 (hosts connected over WiFi say HELLO again). DISARMED only (BAD_STATE). The flash is written outside the control tick (up to ~25 ms on the board) and the command is answered once it is: ACK when written, NACK STORE_FAILED (detail 1) when the write failed, nothing changed; meanwhile ARM and PROVISION_* but GET are refused NOT_READY and a retransmission waits for the same answer.
 
     Fields:
         session_epoch: uint32 Random 31-bit number from the host's CSPRNG (0 <= epoch < 2^31, else OUT_OF_RANGE, detail = 2^31 - 1): the base of the session ids of this provisioning, so that a re-provisioned (flash-erased) device never reuses an earlier provisioning's session ids. The epoch of the stored record again is refused (OUT_OF_RANGE, detail = that epoch): it would restart the same session ids.

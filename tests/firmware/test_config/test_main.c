@@ -154,6 +154,33 @@ static void test_clear_key_forgets_the_key(void)
     TEST_ASSERT_EQUAL_UINT8_ARRAY(zero, cfg.key, RW_KEY_LEN);
 }
 
+/* A commit in one piece is the three steps it replaces, byte for byte (one CRC instead of three). */
+static void test_commit_in_one_piece_equals_the_three_steps(void)
+{
+    static const uint8_t key[RW_KEY_LEN] = { 9u, 8u, 7u, 6u, 5u, 4u, 3u, 2u, 1u, 0u, 1u, 2u, 3u, 4u, 5u, 6u };
+    float values[RW_PARAM_COUNT];
+    for (unsigned i = 0u; i < RW_PARAM_COUNT; ++i) {
+        values[i] = rw_param_table[i].default_value * 1.5f;
+    }
+    rw_config steps;
+    rw_config_defaults(&steps);
+    TEST_ASSERT_TRUE(rw_config_next_boot(&steps));
+    rw_config one = steps;
+    TEST_ASSERT_TRUE(rw_config_new_epoch(&steps, 12345u));
+    rw_config_set_params(&steps, values);
+    rw_config_set_key(&steps, key);
+    TEST_ASSERT_TRUE(rw_config_commit(&one, 12345u, values, key));
+    TEST_ASSERT_EQUAL_MEMORY(&steps, &one, sizeof one);
+    TEST_ASSERT_TRUE(rw_config_valid(&one));
+    rw_config no_key = one;
+    TEST_ASSERT_TRUE(rw_config_commit(&no_key, 777u, values, NULL));
+    TEST_ASSERT_EQUAL_MEMORY(one.key, no_key.key, RW_KEY_LEN);
+    TEST_ASSERT_EQUAL_UINT32(2u, no_key.commits);
+    const rw_config before = no_key;
+    TEST_ASSERT_FALSE(rw_config_commit(&no_key, RW_CONFIG_EPOCH_LIMIT, values, key));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &no_key, sizeof no_key);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -163,6 +190,7 @@ int main(void)
     RUN_TEST(test_other_magic_version_or_size_is_refused_even_when_sealed);
     RUN_TEST(test_set_key_stores_and_reseals);
     RUN_TEST(test_set_params_stores_and_reseals);
+    RUN_TEST(test_commit_in_one_piece_equals_the_three_steps);
     RUN_TEST(test_a_new_epoch_restarts_the_session_range);
     RUN_TEST(test_the_boot_counter_never_wraps_the_session_id);
     RUN_TEST(test_clear_key_forgets_the_key);

@@ -149,7 +149,42 @@ static bool config_save(void *ctx, const void *buf, size_t len)
     return true;
 }
 
-static const rw_hal_config_store hal_config = { NULL, config_load, config_save };
+/* A PROVISION_COMMIT's write: at once (flash_hold == false), or held BUSY until the test lets it finish. */
+static bool flash_hold;
+static bool flash_fail;
+static uint8_t flash_status;
+static rw_config flash_pending;
+
+static bool config_request_save(void *ctx, const void *buf, size_t len)
+{
+    if (flash_status == RW_CONFIG_SAVE_BUSY) {
+        return false;
+    }
+    TEST_ASSERT_EQUAL_UINT(sizeof flash_pending, len);
+    memcpy(&flash_pending, buf, len);
+    flash_status = RW_CONFIG_SAVE_BUSY;
+    if (!flash_hold) {
+        flash_status = !flash_fail && config_save(ctx, &flash_pending, len) ? RW_CONFIG_SAVE_DONE : RW_CONFIG_SAVE_FAILED;
+    }
+    return true;
+}
+
+static uint8_t config_save_status(void *ctx)
+{
+    (void)ctx;
+    return flash_status;
+}
+
+/* The held write finishes (the board's background loop wrote the flash). */
+static void flash_release(void)
+{
+    flash_hold = false;
+    flash_status = !flash_fail && config_save(NULL, &flash_pending, sizeof flash_pending) ? RW_CONFIG_SAVE_DONE
+                                                                                         : RW_CONFIG_SAVE_FAILED;
+}
+
+static const rw_hal_config_store hal_config = { NULL, config_load, config_save, config_request_save,
+                                                config_save_status };
 static const rw_hal_esc_output hal_esc = { NULL, esc_write_pulse_us, NULL };
 static const rw_hal_encoder hal_encoder = { NULL, encoder_read };
 static const rw_hal_battery hal_battery = { NULL, battery_read_mv };
@@ -188,6 +223,62 @@ static const rw_hal hal_no_spindle = {
 static const rw_hal hal_with_spindle = {
     .esc = &hal_esc, .encoder = &hal_encoder, .battery = &hal_battery, .link = &hal_link, .scheduler = &hal_scheduler,
     .spindle = &hal_spindle_fake, .config = &hal_config,
+};
+/* USB serial (trusted, provisioning): one datagram waiting at most; answers recorded with their kind. */
+static struct {
+    uint8_t in[128];
+    size_t in_len;
+    unsigned replies;
+    uint8_t last_msg_id;   /* of the last answer: ACK or NACK */
+    uint8_t last_cmd_msg_id;
+    uint8_t last_reason;   /* 0 for an ACK */
+    int32_t last_detail;
+} serial_fake;
+
+static size_t serial_recv(void *ctx, uint8_t *buf, size_t cap)
+{
+    (void)ctx;
+    size_t n = serial_fake.in_len;
+    if (n == 0u || n > cap) {
+        return 0u;
+    }
+    memcpy(buf, serial_fake.in, n);
+    serial_fake.in_len = 0u;
+    return n;
+}
+
+static void serial_out(void *ctx, const uint8_t *frame, size_t len)
+{
+    (void)ctx;
+    rw_frame f;
+    TEST_ASSERT_EQUAL_INT(RW_DECODE_OK, rw_frame_decode(frame, len, &f));
+    if (f.msg_id == RW_MSG_ID_ACK) {
+        rw_msg_ack a;
+        rw_msg_ack_unpack(&a, f.payload);
+        serial_fake.last_cmd_msg_id = a.cmd_msg_id;
+        serial_fake.last_reason = 0u;
+    } else if (f.msg_id == RW_MSG_ID_NACK) {
+        rw_msg_nack n;
+        rw_msg_nack_unpack(&n, f.payload);
+        serial_fake.last_cmd_msg_id = n.cmd_msg_id;
+        serial_fake.last_reason = n.reason;
+        serial_fake.last_detail = n.detail;
+    } else {
+        return;
+    }
+    serial_fake.last_msg_id = f.msg_id;
+    ++serial_fake.replies;
+}
+
+static void serial_accept(void *ctx)
+{
+    (void)ctx;
+}
+
+static const rw_hal_link hal_serial = { NULL, serial_recv, serial_out, serial_accept, serial_out };
+static const rw_hal hal_with_serial = {
+    .esc = &hal_esc, .encoder = &hal_encoder, .battery = &hal_battery, .link = &hal_link, .scheduler = &hal_scheduler,
+    .serial = &hal_serial, .config = &hal_config,
 };
 static const rw_hal *hal = &hal_no_spindle;
 
@@ -460,6 +551,10 @@ void setUp(void)
     rw_config_defaults(&flash);
     rw_config_set_key(&flash, test_key);
     flash_saves = 0u;
+    flash_hold = false;
+    flash_fail = false;
+    flash_status = RW_CONFIG_SAVE_IDLE;
+    memset(&serial_fake, 0, sizeof serial_fake);
     rw_core_init(&core);
 }
 
@@ -925,6 +1020,128 @@ static void test_without_a_key_nothing_but_hello_is_accepted_over_wifi(void)
     TEST_ASSERT_EQUAL_UINT8(0u, f.flags & RW_FRAME_FLAG_SIGNED);
 }
 
+/* ---- parameters staged to a tick boundary, the flash written outside the tick ------------------------ */
+
+/* A PARAM_SET is ACKed with the value stored, its module (the PI) converted at the end of the next tick that
+ * takes no datagram: the speed step of the PARAM_SET's own tick still runs the old gain, whole. */
+static void test_param_set_is_converted_at_the_next_quiet_tick(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    to_airborne(4000);
+    const int32_t kp_before = core.state.loop.pi.state.kp_q24;
+    TEST_ASSERT_TRUE(command(buf, frame_param_set(buf, ++host_seq, RW_PARAM_SPEED_KP, 0.08f)).ack);
+    TEST_ASSERT_EQUAL_FLOAT(0.08f, rw_params_get(&core.params, RW_PARAM_SPEED_KP));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_SPEED_PI, rw_core_params_pending(&core));
+    TEST_ASSERT_EQUAL_INT32(kp_before, core.state.loop.pi.state.kp_q24);
+    tick(); /* no datagram: the PI is converted at its end */
+    TEST_ASSERT_EQUAL_HEX16(0u, rw_core_params_pending(&core));
+    TEST_ASSERT_EQUAL_INT32((int32_t)(0.08f * 16777216.0f + 0.5f), core.state.loop.pi.state.kp_q24);
+    TEST_ASSERT_TRUE(kp_before != core.state.loop.pi.state.kp_q24);
+    TEST_ASSERT_EQUAL_UINT8(RW_STATE_AIRBORNE, rw_core_state(&core));
+}
+
+/* Datagrams in every tick: a staged module waits at most RW_CORE_PARAM_APPLY_MAX_WAIT_TICKS of them. */
+static void test_param_set_waits_a_bounded_time_under_a_datagram_every_tick(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    tick();
+    TEST_ASSERT_TRUE(command(buf, frame_param_set(buf, ++host_seq, RW_PARAM_RAMP_UP_MPS2, 40.0f)).ack);
+    unsigned ticks = 0u;
+    while (rw_core_params_pending(&core) != 0u && ticks < 100u) {
+        heartbeat();
+        tick();
+        ++ticks;
+    }
+    TEST_ASSERT_EQUAL_HEX16(0u, rw_core_params_pending(&core));
+    /* the PARAM_SET's tick and 19 heartbeat ticks waited (RW_CORE_PARAM_APPLY_MAX_WAIT_TICKS = 20), the 20th
+     * heartbeat tick converts it although it took a datagram */
+    TEST_ASSERT_EQUAL_UINT(20u, ticks);
+}
+
+/* SET_ROPE_SPEED right after a PARAM_SET that raised the guard is checked against the new guard. */
+static void test_a_command_after_a_guard_change_sees_the_new_guard(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    to_airborne(6000);
+    TEST_ASSERT_TRUE(command(buf, frame_param_set(buf, ++host_seq, RW_PARAM_TOV_MPS, 5.0f)).ack); /* guard 5.75 */
+    verdict v = command(buf, frame_speed(buf, ++host_seq, 5500));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_BELOW_TOV_GUARD, v.reason);
+    TEST_ASSERT_EQUAL_INT32(5750, v.detail);
+}
+
+static void serial_queue(const uint8_t *frame, size_t len)
+{
+    TEST_ASSERT_EQUAL_UINT(0u, serial_fake.in_len);
+    TEST_ASSERT_TRUE(len <= sizeof serial_fake.in);
+    memcpy(serial_fake.in, frame, len);
+    serial_fake.in_len = len;
+}
+
+static size_t frame_commit(uint8_t *buf, uint16_t seq, uint32_t epoch)
+{
+    rw_msg_provision_commit m = { .session_epoch = epoch };
+    return rw_msg_provision_commit_encode(&m, seq, buf, RW_MAX_FRAME_LEN);
+}
+
+/* PROVISION_COMMIT: answered only once the store wrote the record; ARM refused NOT_READY meanwhile; the new
+ * session in force from the answer on; a retransmission meanwhile is not executed again. */
+static void test_commit_is_answered_when_the_flash_is_written(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    hal = &hal_with_serial;
+    tick();
+    run_ms(600);
+    const unsigned saves_at_boot = flash_saves;
+    flash_hold = true;
+    size_t n = frame_commit(buf, 7u, 4242u);
+    serial_queue(buf, n);
+    tick();
+    TEST_ASSERT_EQUAL_UINT(0u, serial_fake.replies);
+    TEST_ASSERT_EQUAL_UINT(saves_at_boot, flash_saves);
+    verdict v = command(buf, frame_arm(buf, ++host_seq));
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_NOT_READY, v.reason);
+    n = frame_commit(buf, 7u, 4242u); /* the host retransmits */
+    serial_queue(buf, n);
+    tick();
+    TEST_ASSERT_EQUAL_UINT(0u, serial_fake.replies);
+    TEST_ASSERT_EQUAL_UINT16(1u, core.state.counters.rx_duplicates);
+    run_ms(20);
+    TEST_ASSERT_EQUAL_UINT(0u, serial_fake.replies);
+    flash_release();
+    tick();
+    TEST_ASSERT_EQUAL_UINT(1u, serial_fake.replies);
+    TEST_ASSERT_EQUAL_UINT8(RW_MSG_ID_ACK, serial_fake.last_msg_id);
+    TEST_ASSERT_EQUAL_UINT8(RW_MSG_ID_PROVISION_COMMIT, serial_fake.last_cmd_msg_id);
+    TEST_ASSERT_EQUAL_UINT(saves_at_boot + 1u, flash_saves);
+    TEST_ASSERT_EQUAL_UINT32(4242u, rw_core_session_id(&core));
+    TEST_ASSERT_EQUAL_UINT32(4242u, flash.session_epoch);
+    TEST_ASSERT_EQUAL_UINT32(1u, flash.commits);
+    /* the retransmission again: the cached ACK, no second write */
+    serial_queue(buf, n);
+    tick();
+    TEST_ASSERT_EQUAL_UINT(2u, serial_fake.replies);
+    TEST_ASSERT_EQUAL_UINT8(RW_MSG_ID_ACK, serial_fake.last_msg_id);
+    TEST_ASSERT_EQUAL_UINT(saves_at_boot + 1u, flash_saves);
+}
+
+/* A failed write: NACK STORE_FAILED (detail 1), session and record unchanged. */
+static void test_a_failed_commit_write_changes_nothing(void)
+{
+    uint8_t buf[RW_MAX_FRAME_LEN];
+    hal = &hal_with_serial;
+    tick();
+    const uint32_t session = rw_core_session_id(&core);
+    flash_fail = true;
+    serial_queue(buf, frame_commit(buf, 3u, 777u));
+    tick();
+    TEST_ASSERT_EQUAL_UINT(1u, serial_fake.replies);
+    TEST_ASSERT_EQUAL_UINT8(RW_MSG_ID_NACK, serial_fake.last_msg_id);
+    TEST_ASSERT_EQUAL_UINT8(RW_NACK_REASON_STORE_FAILED, serial_fake.last_reason);
+    TEST_ASSERT_EQUAL_INT32(1, serial_fake.last_detail);
+    TEST_ASSERT_EQUAL_UINT32(session, rw_core_session_id(&core));
+    TEST_ASSERT_EQUAL_UINT32(0u, core.state.config.commits);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -943,6 +1160,11 @@ int main(void)
     RUN_TEST(test_long_tick_gap_does_not_jump_the_esc_pulse);
     RUN_TEST(test_spindle_refusals);
     RUN_TEST(test_boot_counter_is_the_session_and_is_stored_at_once);
+    RUN_TEST(test_param_set_is_converted_at_the_next_quiet_tick);
+    RUN_TEST(test_param_set_waits_a_bounded_time_under_a_datagram_every_tick);
+    RUN_TEST(test_a_command_after_a_guard_change_sees_the_new_guard);
+    RUN_TEST(test_commit_is_answered_when_the_flash_is_written);
+    RUN_TEST(test_a_failed_commit_write_changes_nothing);
     RUN_TEST(test_unsigned_forged_and_replayed_frames_are_dropped_and_counted);
     RUN_TEST(test_without_a_key_nothing_but_hello_is_accepted_over_wifi);
     return UNITY_END();

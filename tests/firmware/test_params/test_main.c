@@ -156,6 +156,30 @@ static void test_named_ranges_of_the_speed_loop(void)
     TEST_ASSERT_EQUAL_FLOAT(100.0f, rw_params_get(&params, RW_PARAM_TELEMETRY_RATE_HZ));
 }
 
+/* Every parameter names the modules it feeds (what a PARAM_SET converts again); a parameter settable in flight
+ * feeds at most one of the speed loop's modules, so the speed step sees its old or its new gains, never a mix. */
+static void test_each_parameter_knows_its_modules(void)
+{
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_SPEED_PI, rw_params_modules(RW_PARAM_SPEED_KP));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_SPEED_PI, rw_params_modules(RW_PARAM_SPEED_KI));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_TOV_GUARD, rw_params_modules(RW_PARAM_TOV_MPS));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_SPINDLE, rw_params_modules(RW_PARAM_SPINDLE_KP_PER_S));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_LOAD_MONITOR, rw_params_modules(RW_PARAM_LOAD_LOSS_DROP_N));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_THROTTLE | RW_PARAM_MODULE_LOAD_MONITOR,
+                            rw_params_modules(RW_PARAM_MOTOR_KV_RPM_PER_V));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_NONE, rw_params_modules(RW_PARAM_HEARTBEAT_TIMEOUT_S));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_NONE, rw_params_modules((uint8_t)RW_PARAM_COUNT));
+    TEST_ASSERT_EQUAL_HEX16(RW_PARAM_MODULE_NONE, rw_params_modules(255u));
+    for (unsigned id = 0u; id < RW_PARAM_COUNT; ++id) {
+        const uint16_t modules = rw_params_modules((uint8_t)id);
+        TEST_ASSERT_EQUAL_HEX16(0u, modules & (uint16_t)~RW_PARAM_MODULE_ALL);
+        const unsigned speed = modules & RW_PARAM_MODULES_SPEED_LOOP;
+        const bool at_most_one = (speed & (speed - 1u)) == 0u;
+        TEST_ASSERT_TRUE_MESSAGE(at_most_one || (rw_param_table[id].flags & RW_PARAM_FLAG_LOCKED) != 0u,
+                                 rw_param_table[id].name);
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -167,6 +191,7 @@ int main(void)
     RUN_TEST(test_parameters_that_must_hold_together_are_checked_together);
     RUN_TEST(test_range_is_checked_before_the_lock);
     RUN_TEST(test_unknown_ids_are_refused);
+    RUN_TEST(test_each_parameter_knows_its_modules);
     RUN_TEST(test_named_ranges_of_the_speed_loop);
     return UNITY_END();
 }

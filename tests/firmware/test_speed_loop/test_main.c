@@ -162,6 +162,36 @@ static void test_prepared_and_per_step_conversion_agree(void)
     }
 }
 
+/* The prepare of each part, in any order, is the whole prepare: a PARAM_SET converts only its part. */
+static void test_prepare_by_part_is_the_whole_prepare(void)
+{
+    static rw_speed_loop whole;
+    static rw_speed_loop parts;
+    rw_speed_loop_init(&whole);
+    rw_speed_loop_set_battery(&whole, 14.8f);
+    whole.pi.cfg.kp = 0.07f;
+    whole.ramp.cfg.rate_up_per_s = 33.0f;
+    whole.estimator.cfg.filter_tau_s = 0.02f;
+    whole.throttle.cfg.kv_rpm_per_v = 900.0f;
+    whole.cfg.guard_mps = 3.5f;
+    parts = whole;
+    rw_speed_loop_prepare(&whole, 0.002f);
+    rw_speed_loop_prepare_guard(&parts);
+    rw_speed_loop_prepare_throttle(&parts);
+    rw_speed_loop_prepare_pi(&parts, 0.002f);
+    rw_speed_loop_prepare_ramp(&parts, 0.002f);
+    rw_speed_loop_prepare_estimator(&parts, 0.002f);
+    TEST_ASSERT_EQUAL_MEMORY(&whole, &parts, sizeof whole);
+    /* one part alone changes that part only */
+    parts.pi.cfg.kp = 0.01f;
+    const rw_speed_loop before = parts;
+    rw_speed_loop_prepare_pi(&parts, 0.002f);
+    TEST_ASSERT_EQUAL_MEMORY(&before.estimator, &parts.estimator, sizeof parts.estimator);
+    TEST_ASSERT_EQUAL_MEMORY(&before.ramp, &parts.ramp, sizeof parts.ramp);
+    TEST_ASSERT_EQUAL_MEMORY(&before.throttle, &parts.throttle, sizeof parts.throttle);
+    TEST_ASSERT_TRUE(before.pi.state.kp_q24 != parts.pi.state.kp_q24);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -171,5 +201,6 @@ int main(void)
     RUN_TEST(test_airborne_approaches_the_guard_gently_with_a_throttle_floor);
     RUN_TEST(test_a_silent_encoder_holds_the_pulse);
     RUN_TEST(test_prepared_and_per_step_conversion_agree);
+    RUN_TEST(test_prepare_by_part_is_the_whole_prepare);
     return UNITY_END();
 }
