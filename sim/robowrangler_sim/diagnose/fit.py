@@ -31,6 +31,73 @@ class FittedParam:
     start: float
 
 
+def batched_objective(simulate, hi: np.ndarray):
+    """fun(x): the residual vector at x (the last point cached: the solver asks twice); jac(x): forward
+    differences, all columns in one batched simulation (a step that would leave the upper bound goes down).
+    simulate maps (B, k) parameter rows to (B, n) residuals."""
+    cache: dict[bytes, np.ndarray] = {}
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        key = x.tobytes()
+        if key not in cache:
+            cache.clear()
+            cache[key] = simulate(x[None, :])[0]
+        return cache[key]
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        f0 = fun(x)
+        h = 1e-3 * np.maximum(np.abs(x), 1e-2)
+        xs = np.repeat(x[None, :], x.size, axis=0)
+        step = np.where(x + h <= hi, h, -h)
+        xs[np.arange(x.size), np.arange(x.size)] += step
+        return ((simulate(xs) - f0[None, :]) / step[:, None]).T
+
+    return fun, jac
+
+
+def best_start(simulate, x0: np.ndarray, starts: np.ndarray, idx: list[int], scales: np.ndarray, lo: np.ndarray,
+               hi: np.ndarray, huber_scale: float) -> np.ndarray:
+    """The best of x0 and the grid of start values `starts` (G, len(idx)) for the parameters at positions idx
+    (in the parameters' units; clipped to the bounds), judged in one batched simulation."""
+    grid = np.repeat(x0[None, :], len(starts), axis=0)
+    grid[:, idx] = np.clip(np.asarray(starts, dtype=float) / scales[idx], lo[idx], hi[idx])
+    grid = np.vstack([x0[None, :], grid])
+    costs = np.sum(huber(simulate(grid), huber_scale), axis=1)
+    return grid[int(np.argmin(costs))]
+
+
+@dataclass(frozen=True)
+class GaussNewtonSpread:
+    """Standard deviations at a solution (inf for a parameter the residual does not move), the robust residual
+    variance s2, the autocorrelation inflation, and the Jacobian's column norms."""
+
+    sd: np.ndarray
+    s2: float
+    inflation: float
+    col_norm: np.ndarray
+
+
+def gauss_newton_spread(r: np.ndarray, J: np.ndarray, huber_scale: float, inflation: float) -> GaussNewtonSpread:
+    """s^2 (J^T J)^-1 times `inflation` with Huber IRLS weights at the solution (outlying residuals count with
+    weight c/|r|). Parameters the residual does not move (a threshold never crossed, a term with no effect) are
+    not determined: their sd is inf and they leave the covariance of the others."""
+    n, p = r.size, J.shape[1]
+    wr = np.minimum(1.0, huber_scale / np.maximum(np.abs(r), 1e-12))
+    J = J * np.sqrt(wr)[:, None]
+    rw = r * np.sqrt(wr)
+    s2 = float(rw @ rw) / max(n - p, 1)
+    col = np.linalg.norm(J, axis=0)
+    live = col > 1e-9 * max(float(col.max()), 1e-300)
+    sd = np.full(p, np.inf)
+    if live.any():
+        try:
+            cov = np.linalg.inv(J[:, live].T @ J[:, live]) * s2 * inflation
+            sd[live] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        except np.linalg.LinAlgError:
+            pass
+    return GaussNewtonSpread(sd, s2, inflation, col)
+
+
 class ModelFitter:
     """Estimator. Constructor stores config; fit(replay, theta_base, ...) returns self.
 
@@ -91,29 +158,9 @@ class ModelFitter:
             own = np.asarray(starts, dtype=float)
             cols = list(start_columns) if start_columns is not None else [s.column for s in self.specs[-own.shape[1]:]]
             idx = [next(j for j, s in enumerate(self.specs) if s.column == c) for c in cols]
-            grid = np.repeat(x0[None, :], len(starts), axis=0)
-            grid[:, idx] = np.clip(own / scales[idx], lo[idx], hi[idx])
-            grid = np.vstack([x0[None, :], grid])
-            costs = np.sum(huber(simulate(grid), self.huber_scale), axis=1)
-            x0 = grid[int(np.argmin(costs))]
+            x0 = best_start(simulate, x0, own, idx, scales, lo, hi, self.huber_scale)
         x_start = x0.copy()
-        cache: dict[bytes, np.ndarray] = {}
-
-        def fun(x: np.ndarray) -> np.ndarray:
-            key = x.tobytes()
-            if key not in cache:
-                cache.clear()
-                cache[key] = simulate(x[None, :])[0]
-            return cache[key]
-
-        def jac(x: np.ndarray) -> np.ndarray:
-            f0 = fun(x)
-            h = 1e-3 * np.maximum(np.abs(x), 1e-2)
-            xs = np.repeat(x[None, :], x.size, axis=0)
-            step = np.where(x + h <= hi, h, -h)
-            xs[np.arange(x.size), np.arange(x.size)] += step
-            fs = simulate(xs)
-            return ((fs - f0[None, :]) / step[:, None]).T
+        fun, jac = batched_objective(simulate, hi)
 
         span = hi - lo
         x0 = np.clip(x0, lo + 1e-9 * span, hi - 1e-9 * span)
@@ -121,26 +168,11 @@ class ModelFitter:
                             x_scale="jac", loss="huber", f_scale=self.huber_scale)
         x = sol.x
         r = fun(x)
-        J = jac(x)
-        n, p = r.size, x.size
-        # Huber IRLS weights at the solution: outlying residuals count with weight c/|r|
+        n = r.size
         wr = np.minimum(1.0, self.huber_scale / np.maximum(np.abs(r), 1e-12))
-        J = J * np.sqrt(wr)[:, None]
-        r = r * np.sqrt(wr)
-        s2 = float(r @ r) / max(n - p, 1)
-        inflation = 1.0 / min(effective_fraction(r[: n // len(self.weights)]), 1.0)
-        # parameters the residual does not move (a threshold never crossed, a term with no effect) are not
-        # determined: their interval is the whole bound range, and they leave the covariance of the others
-        col = np.linalg.norm(J, axis=0)
-        live = col > 1e-9 * max(float(col.max()), 1e-300)
-        sd = np.full(p, np.inf)
-        if live.any():
-            try:
-                Jl = J[:, live]
-                cov = np.linalg.inv(Jl.T @ Jl) * s2 * inflation
-                sd[live] = np.sqrt(np.maximum(np.diag(cov), 0.0))
-            except np.linalg.LinAlgError:
-                pass
+        inflation = 1.0 / min(effective_fraction((r * np.sqrt(wr))[: n // len(self.weights)]), 1.0)
+        spread = gauss_newton_spread(r, jac(x), self.huber_scale, inflation)
+        sd, col = spread.sd, spread.col_norm
         self.jac_col_norm_ = col
         self.sd_ = sd
         self._ci_inputs = (replay, theta_base, fit_mask, load_mask, ref, lo, hi, scales)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
-from robowrangler_sim.diagnose.fit import FittedParam, huber
+from robowrangler_sim.diagnose.fit import FittedParam, batched_objective, best_start, gauss_newton_spread, huber
 from robowrangler_sim.diagnose.parameters import ParamSpec
 from robowrangler_sim.diagnose.residuals import effective_fraction
 
@@ -65,27 +65,8 @@ class SpindleFitter:
         if starts is not None and len(starts):
             cols = list(start_columns) if start_columns is not None else [s.column for s in self.specs]
             idx = [next(j for j, s in enumerate(self.specs) if s.column == c) for c in cols]
-            grid = np.repeat(x0[None, :], len(starts), axis=0)
-            grid[:, idx] = np.clip(np.asarray(starts, dtype=float) / scales[idx], lo[idx], hi[idx])
-            grid = np.vstack([x0[None, :], grid])
-            costs = np.sum(huber(simulate(grid), self.huber_scale), axis=1)
-            x0 = grid[int(np.argmin(costs))]
-        cache: dict[bytes, np.ndarray] = {}
-
-        def fun(x: np.ndarray) -> np.ndarray:
-            key = x.tobytes()
-            if key not in cache:
-                cache.clear()
-                cache[key] = simulate(x[None, :])[0]
-            return cache[key]
-
-        def jac(x: np.ndarray) -> np.ndarray:
-            f0 = fun(x)
-            h = 1e-3 * np.maximum(np.abs(x), 1e-2)
-            xs = np.repeat(x[None, :], x.size, axis=0)
-            step = np.where(x + h <= hi, h, -h)
-            xs[np.arange(x.size), np.arange(x.size)] += step
-            return ((simulate(xs) - f0[None, :]) / step[:, None]).T
+            x0 = best_start(simulate, x0, np.asarray(starts, dtype=float), idx, scales, lo, hi, self.huber_scale)
+        fun, jac = batched_objective(simulate, hi)
 
         span = hi - lo
         x_start = np.clip(x0, lo + 1e-9 * span, hi - 1e-9 * span)
@@ -118,22 +99,10 @@ class SpindleFitter:
             if c < best:
                 x, best = sol.x, c
         r = fun(x)
-        J = jac(x)
-        n, p = r.size, x.size
-        wr = np.minimum(1.0, self.huber_scale / np.maximum(np.abs(r), 1e-12))
-        J = J * np.sqrt(wr)[:, None]
-        rw = r * np.sqrt(wr)
-        s2 = float(rw @ rw) / max(n - p, 1)
+        p = x.size
         inflation = 1.0 / min(min(effective_fraction(part) for part in np.split(r, len(self.weights))), 1.0)
-        col = np.linalg.norm(J, axis=0)
-        live = col > 1e-9 * max(float(col.max()), 1e-300)
-        sd = np.full(p, np.inf)
-        if live.any():
-            try:
-                cov = np.linalg.inv(J[:, live].T @ J[:, live]) * s2 * inflation
-                sd[live] = np.sqrt(np.maximum(np.diag(cov), 0.0))
-            except np.linalg.LinAlgError:
-                pass
+        spread = gauss_newton_spread(r, jac(x), self.huber_scale, inflation)
+        sd, s2 = spread.sd, spread.s2
         ci = [[max(lo[j], x[j] - 1.96 * sd[j]), min(hi[j], x[j] + 1.96 * sd[j])] for j in range(p)]
         margin = CHI2_95_1DOF * s2 * inflation
         for j, s in enumerate(self.specs):
