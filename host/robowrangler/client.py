@@ -53,6 +53,7 @@ RECV_POLL_S = 0.05  # receiver thread wakes this often to notice close()
 TELEMETRY_QUEUE_LEN = 4096  # per telemetry() iterator; the oldest sample is dropped when full (~80 s at 50 Hz)
 EVENT_HISTORY_LEN = 10000
 NOT_READY_RETRY_S = 0.05  # pause between ARM attempts while the device reports NOT_READY
+NOT_READY_WALL_FACTOR = 4.0  # ARM's wall-time bound, in multiples of its timeout on the device's clock
 KEYLESS_POLL_S = 0.02  # a keyless connect looks this often whether the device's SESSION_INFO says it signs
 _CLOSED = object()
 # NACK reasons that mean "the frame arrived damaged": our frames are well-formed, so the link corrupted
@@ -347,16 +348,28 @@ class Client:
         """DISARMED -> ARMED; returns the state the ACK reports.
 
         While the device answers NOT_READY (ESC arming hold after boot) ARM is sent again, each time
-        with a new seq, until timeout_s (default connect_timeout_s) has passed; then the last
-        CommandRefused(NOT_READY) is raised. Any other NACK is raised at once.
+        with a new seq, until timeout_s (default connect_timeout_s) of the device's time has passed (the
+        hold runs on its clock: the TELEMETRY time_s; wall time until a sample has arrived), and at most
+        NOT_READY_WALL_FACTOR x timeout_s of wall time (a device whose clock a busy machine slows); then
+        the last CommandRefused(NOT_READY) is raised. Any other NACK is raised at once.
         """
         limit_s = self.connect_timeout_s if timeout_s is None else _check_positive("timeout_s", timeout_s)
-        deadline = time.monotonic() + limit_s
+        wall_start_s = time.monotonic()
+        first = self._latest  # the device's clock when the wait began on it
+        before_first_s = 0.0  # wall time waited before any sample had arrived
         while True:
             try:
                 return State(self._command(gen.Arm()).state)
             except CommandRefused as refused:
-                if refused.reason != NackReason.NOT_READY or time.monotonic() + NOT_READY_RETRY_S > deadline:
+                if refused.reason != NackReason.NOT_READY:
+                    raise
+                wall_s = time.monotonic() - wall_start_s
+                now = self._latest
+                if first is None and now is not None:
+                    first, before_first_s = now, wall_s
+                waited_s = before_first_s + now.time_s - first.time_s if first is not None else wall_s
+                if (waited_s + NOT_READY_RETRY_S > limit_s
+                        or wall_s + NOT_READY_RETRY_S > NOT_READY_WALL_FACTOR * limit_s):
                     raise
             time.sleep(NOT_READY_RETRY_S)
 

@@ -126,6 +126,19 @@ def test_arm_retries_not_ready_with_new_seqs_until_the_hold_ends(core_lib) -> No
     assert armed_count(device) == 1
 
 
+def test_arm_waits_out_the_hold_on_the_devices_clock_when_the_device_runs_slow(core_lib) -> None:
+    # a device at a quarter of real time (a SIL on a busy machine): its 0.4 s hold takes 1.6 s of wall time,
+    # longer than ARM's 1 s timeout, which counts the device's time
+    with CoreDevice(core_lib, speedup=0.25, params={"arm_hold_s": 0.4}) as device, client(device) as rw:
+        rw.wait_for(lambda s: True, timeout_s=10.0)  # the device's clock is known
+        start_s = time.monotonic()
+        assert rw.arm(timeout_s=1.0) == State.ARMED
+        waited_s = time.monotonic() - start_s
+        nacks = rw.stats.nacks
+    assert nacks >= 1 and len({f.seq for f in device.host_sent(MsgId.ARM)}) == nacks + 1  # refused, then ACKed
+    assert waited_s > 1.0  # lower bound: the wait outlasted the timeout in wall time, as the slow clock needs
+
+
 def test_arm_gives_up_on_not_ready_at_its_timeout(core_lib) -> None:
     with CoreDevice(core_lib, params={"arm_hold_s": 5.0}) as device, client(device) as rw:
         with pytest.raises(CommandRefused) as info:
