@@ -83,6 +83,16 @@ class FuzzRun:
     log: str
 
 
+def inherited_peak_rss_mb() -> int:
+    """The peak RSS a process started from this one begins with, in MB: Linux keeps the peak of the image an
+    exec replaces in the new program's rusage, and libFuzzer's -rss_limit_mb checks that peak. Started from a
+    test worker that has loaded MuJoCo and Numba (600-700 MB), a fuzz target would be out of memory before its
+    first input; its own limit is counted on top of this (-malloc_limit_mb, one allocation, is unaffected)."""
+    import resource
+
+    return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024) + 1
+
+
 def run(target: str, *, build_dir: Path = DEFAULT_BUILD_DIR, work_dir: Path, max_total_time_s: int,
         timeout_s: int = 2, rss_limit_mb: int = 512, seed: int = 1) -> FuzzRun:
     """Fuzz one target (TARGETS) from its seed corpus for max_total_time_s seconds."""
@@ -98,7 +108,8 @@ def run(target: str, *, build_dir: Path = DEFAULT_BUILD_DIR, work_dir: Path, max
     if symbolizer:
         env.setdefault("ASAN_SYMBOLIZER_PATH", symbolizer)
     command = [str(build_dir / f"fuzz_{target}"), f"-max_total_time={max_total_time_s}", f"-timeout={timeout_s}",
-               f"-rss_limit_mb={rss_limit_mb}", f"-malloc_limit_mb={rss_limit_mb}", f"-seed={seed}",
+               f"-rss_limit_mb={rss_limit_mb + inherited_peak_rss_mb()}", f"-malloc_limit_mb={rss_limit_mb}",
+               f"-seed={seed}",
                "-print_final_stats=1", f"-artifact_prefix={work_dir}/", str(new_corpus), str(CORPUS_DIR / target)]
     started = time.monotonic()
     result = subprocess.run(command, cwd=work_dir, capture_output=True, text=True, env=env,

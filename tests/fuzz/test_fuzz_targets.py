@@ -5,7 +5,7 @@ corpus (firmware/fuzz/corpus/<target>/) for a few seconds: the run must end by i
 with no crash, hang (-timeout), out-of-memory or oversized allocation (-rss_limit_mb/-malloc_limit_mb),
 sanitizer report or invariant trap (the targets' headers list their invariants), and must have run
 the target for real (executions, and coverage no lower than the seed corpus reaches by itself).
-Total fuzzing time here: 28 s; bench/bench_fuzz.py runs the long version.
+Total fuzzing time here: 30 s; bench/bench_fuzz.py runs the long version.
 """
 
 from __future__ import annotations
@@ -58,3 +58,20 @@ def test_replay_after_a_key_commit_stays_dropped(fuzz_build_dir: Path) -> None:
     crash = lf.FUZZ_SOURCE_DIR / "crashes" / "replay_after_key_commit"
     result = subprocess.run([str(fuzz_build_dir / "fuzz_core"), str(crash)], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr[-3000:]
+
+
+def test_a_fuzz_run_started_from_a_large_process_is_not_out_of_memory_at_once(fuzz_build_dir: Path,
+                                                                              tmp_path: Path) -> None:
+    """A test worker that has loaded MuJoCo and Numba is 600-700 MB; Linux hands that peak RSS to the program
+    it starts, and libFuzzer's -rss_limit_mb reads it: the run was out of memory before its first input (seen
+    in a fresh-machine run). The runner counts the limit on top of what the target inherits."""
+    script = (
+        "import sys; from pathlib import Path; sys.path.insert(0, sys.argv[1]); import libfuzzer_runner as lf\n"
+        "ballast = bytearray(700 * 1024 * 1024)\n"
+        "ballast[::4096] = b'x' * len(ballast[::4096])  # touched: resident\n"
+        "r = lf.run('cobs_decode', build_dir=Path(sys.argv[2]), work_dir=Path(sys.argv[3]), max_total_time_s=2)\n"
+        "print(len(r.artifacts), r.returncode)\n")
+    out = subprocess.run([sys.executable, "-c", script, str(Path(__file__).parent), str(fuzz_build_dir),
+                          str(tmp_path)], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert out.stdout.split() == ["0", "0"], out.stdout + out.stderr[-3000:]
