@@ -140,21 +140,28 @@ class DiagnosedModel:
         install_effects(session, self)
 
 
-def load_model(path: str | Path) -> DiagnosedModel:
-    """Read a model file; ModelMismatchError naming what is wrong."""
-    path = Path(path)
+def read_model_document(path: Path, *, what: str, fmt: str, version: int) -> dict:
+    """The JSON object of a model file whose format and format_version are fmt and version; ModelMismatchError
+    naming `what` (e.g. "model file") and the path otherwise."""
     try:
         doc = json.loads(path.read_text())
     except OSError as err:
-        raise ModelMismatchError(f"model file {path}: cannot read: {err}") from err
+        raise ModelMismatchError(f"{what} {path}: cannot read: {err}") from err
     except json.JSONDecodeError as err:
-        raise ModelMismatchError(f"model file {path}: not JSON: {err}") from err
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-        raise ModelMismatchError(f"model file {path}: expected format {FORMAT!r}, got "
+        raise ModelMismatchError(f"{what} {path}: not JSON: {err}") from err
+    if not isinstance(doc, dict) or doc.get("format") != fmt:
+        raise ModelMismatchError(f"{what} {path}: expected format {fmt!r}, got "
                                  f"{doc.get('format') if isinstance(doc, dict) else type(doc).__name__!r}")
-    if doc.get("format_version") != FORMAT_VERSION:
-        raise ModelMismatchError(f"model file {path}: expected format_version {FORMAT_VERSION}, "
+    if doc.get("format_version") != version:
+        raise ModelMismatchError(f"{what} {path}: expected format_version {version}, "
                                  f"got {doc.get('format_version')!r}")
+    return doc
+
+
+def load_model(path: str | Path) -> DiagnosedModel:
+    """Read a model file; ModelMismatchError naming what is wrong."""
+    path = Path(path)
+    doc = read_model_document(path, what="model file", fmt=FORMAT, version=FORMAT_VERSION)
     known = {f.name for f in dataclasses.fields(DriveParams)}
     dp = doc.get("drive_params", {})
     unknown = sorted(set(dp) - known)

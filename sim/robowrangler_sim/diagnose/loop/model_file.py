@@ -30,6 +30,7 @@ from robowrangler_sim.chain.default_table import load_default_shape_table
 from robowrangler_sim.chain.params import ChainParams
 from robowrangler_sim.diagnose.errors import ModelMismatchError
 from robowrangler_sim.diagnose.loop import shape_model as sm
+from robowrangler_sim.diagnose.model_file import read_model_document
 from robowrangler_sim.shape_table import ShapeTable
 
 FORMAT = "robowrangler.loop_model"
@@ -155,18 +156,7 @@ class LoopModel:
     def load(cls, path: str | Path) -> LoopModel:
         """Read a loop model file; ModelMismatchError naming what is wrong."""
         path = Path(path)
-        try:
-            doc = json.loads(path.read_text())
-        except OSError as err:
-            raise ModelMismatchError(f"loop model file {path}: cannot read: {err}") from err
-        except json.JSONDecodeError as err:
-            raise ModelMismatchError(f"loop model file {path}: not JSON: {err}") from err
-        if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-            raise ModelMismatchError(f"loop model file {path}: expected format {FORMAT!r}, got "
-                                     f"{doc.get('format') if isinstance(doc, dict) else type(doc).__name__!r}")
-        if doc.get("format_version") != FORMAT_VERSION:
-            raise ModelMismatchError(f"loop model file {path}: expected format_version {FORMAT_VERSION}, got "
-                                     f"{doc.get('format_version')!r}")
+        doc = read_model_document(path, what="loop model file", fmt=FORMAT, version=FORMAT_VERSION)
         chain_doc = doc.get("chain", {})
         bad = sorted(set(chain_doc) - set(_CHAIN_FIELDS))
         if bad:
