@@ -35,6 +35,8 @@ import numpy as np
 
 from robowrangler.recorder.link import LinkRecorder
 
+from robowrangler_sim.scenarios.wall_pacer import WallPacer
+
 CAMERA_ID = "sil-chain"
 CONTOUR_TOPIC = "/loop/observation"
 SCENE_TOPIC = "/loop/scene"
@@ -89,10 +91,8 @@ class ScenarioLiveView:
         self.speedup = speedup
         self.recorder = LinkRecorder(live)
         self._scene = foxglove.channels.SceneUpdateChannel(SCENE_TOPIC, context=live.context)
-        self._clock_s = clock_s
-        self._sleep_s = sleep_s
         self._next_s = -math.inf
-        self._origin: tuple[float, float] | None = None
+        self._pacer = WallPacer(speedup, clock_s=clock_s, sleep_s=sleep_s)
         self.contours = 0
         self.publish_wall_s = 0.0  # wall time spent publishing (what the live view costs the run)
 
@@ -114,7 +114,7 @@ class ScenarioLiveView:
         start_s = time.perf_counter()
         self.publish(chain, outputs=outputs, rope_speed_mps=rope_speed_mps)
         self.publish_wall_s += time.perf_counter() - start_s
-        self._pace(t_s)
+        self._pacer.pace(t_s)
 
     def publish(self, chain, *, outputs, rope_speed_mps: float) -> None:
         """One /loop/observation and one /loop/scene of the chain now (read only: the run does not change)."""
@@ -158,20 +158,6 @@ class ScenarioLiveView:
                 size=fm.Vector3(x=OBJECT_MARKER_M, y=OBJECT_MARKER_M, z=OBJECT_MARKER_M),
                 color=fm.Color(r=0.8, g=0.15, b=0.1, a=0.8))]))
         return fm.SceneUpdate(entities=entities)
-
-    def _pace(self, t_s: float) -> None:
-        if self.speedup is None:
-            return
-        now = self._clock_s()
-        if self._origin is None:
-            self._origin = (now, t_s)
-            return
-        wall0, sim0 = self._origin
-        ahead_s = (t_s - sim0) / self.speedup - (now - wall0)
-        if ahead_s > 0.0:
-            self._sleep_s(ahead_s)
-        elif ahead_s < -0.5:  # the machine fell behind: do not race to catch up
-            self._origin = (now, t_s)
 
     def finish(self, host_s: float) -> None:
         """End of the run: unanswered commands NO_REPLY (as a recording ends)."""

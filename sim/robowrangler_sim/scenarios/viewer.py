@@ -21,6 +21,8 @@ import threading
 import time
 from collections.abc import Callable, Mapping
 
+from robowrangler_sim.scenarios.wall_pacer import WallPacer
+
 HEADLESS_HINT = "on a machine without a display, record the run instead: --render DIR (MUJOCO_GL=osmesa)"
 
 
@@ -98,12 +100,10 @@ class ScenarioViewer:
         self.speedup = speedup
         self.sync_period_s = 1.0 / float(sync_hz)
         self._launch = launch if launch is not None else _launch_passive
-        self._clock_s = clock_s
-        self._sleep_s = sleep_s
         self._handle = None
         self._drawn = None  # (model, data) the window draws: kept alive until the window is gone
         self._next_sync_s = -math.inf
-        self._origin: tuple[float, float] | None = None  # (wall s, simulated s) at the first update
+        self._pacer = WallPacer(speedup, clock_s=clock_s, sleep_s=sleep_s)
         self.synced = 0
         self.closed_by_user = False
 
@@ -121,7 +121,7 @@ class ScenarioViewer:
         self._next_sync_s = t_s + self.sync_period_s
         self._handle.sync()
         self.synced += 1
-        self._pace(t_s)
+        self._pacer.pace(t_s)
 
     def _open(self, chain) -> None:
         try:
@@ -139,20 +139,6 @@ class ScenarioViewer:
             cam.distance = max(1.0, 0.9 * chain.loop_length_m())
             cam.azimuth = 70.0
             cam.elevation = -20.0
-
-    def _pace(self, t_s: float) -> None:
-        if self.speedup is None:
-            return
-        now = self._clock_s()
-        if self._origin is None:
-            self._origin = (now, t_s)
-            return
-        wall0, sim0 = self._origin
-        ahead_s = (t_s - sim0) / self.speedup - (now - wall0)
-        if ahead_s > 0.0:
-            self._sleep_s(ahead_s)
-        elif ahead_s < -0.5:  # the machine fell behind: do not race to catch up
-            self._origin = (now, t_s)
 
     def close(self, *, timeout_s: float = 5.0) -> None:
         """Close the window and wait (up to timeout_s) for the viewer's thread to end: it draws from the plant's
