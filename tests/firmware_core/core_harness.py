@@ -304,11 +304,14 @@ class CoreHarness:
         # a host's view of the core's signed frames: every one must be taken (tag, session, a growing counter)
         self._host_view = LinkSession(TEST_KEY, session_id=SESSION_ID)
         self._commit_key: bytes | None = None  # expect_commit(): the key signed frames may carry from this tick on
-        self._max_seq: dict[str, int] = {}  # per link: highest seq sent so far
+        # per link: highest seq sent so far; a fresh core numbers from 0, so the first frame out may be seq 1 when a
+        # reply overtakes frame 0 while it is being signed (seen in CI: the boot EVENT after a HELLO's reply)
+        self._max_seq: dict[str, int] = {"wifi": 65535, "serial": 65535}
+        # per link: seqs skipped by a reply that overtook a frame being signed
         self._seq_holes: dict[str, set[int]] = {"wifi": set(), "serial": set()}
         self._serial = bool(serial)
         self._provisioned = bool(provisioned)
-        self._callback_errors: list[Exception] = []  # raised in a HAL callback, re-raised by tick()  # seqs skipped by a reply that overtook a frame being signed
+        self._callback_errors: list[Exception] = []  # raised in a HAL callback, re-raised by tick()
         self.t_us = 0
         self.started = False
         self.seq = 0
@@ -460,9 +463,6 @@ class CoreHarness:
         when replies overtake the frame being signed, whose seq comes later. Never a repeat, never a second hole:
         at most one frame is being signed."""
         holes = self._seq_holes[link]
-        if link not in self._max_seq:
-            self._max_seq[link] = seq
-            return
         ahead = (seq - self._max_seq[link]) % 65536
         if ahead == 1 or (ahead == 2 and not holes):
             if ahead == 2:

@@ -46,6 +46,19 @@ def test_never_more_than_one_datagram_out_per_tick(rw_core):
     assert len(h.hal.pulses_us) == h.t_ms + 1, "one ESC write per tick"
 
 
+@pytest.mark.parametrize("command_at_ms", range(12))
+def test_frames_from_boot_are_numbered_0_1_2_without_repeat_or_hole(rw_core, command_at_ms):
+    """A reply may leave before the boot EVENT whose signing began first (it overtakes it, numbered one later):
+    whenever the first command arrives, the frames sent from boot carry seq 0, 1, 2 ... each once."""
+    h = CoreHarness(rw_core)
+    h.run_ms(command_at_ms)
+    h.queue(h.frame(ParamGet(P["telemetry_rate_hz"].id)))
+    h.run_ms(30)
+    seqs = [o.frame.seq for o in h.hal.out]
+    assert sorted(seqs) == list(range(len(seqs))) and len(seqs) >= 4
+    assert [type(o.msg) for o in h.replies()] == [Ack]
+
+
 def test_outbox_sends_param_value_then_event_then_telemetry(rw_core):
     h = CoreHarness(rw_core)  # 50 Hz: telemetry is queued at t = 0, 20, 40 ... ms
     h.tick()
