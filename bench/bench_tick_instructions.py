@@ -76,7 +76,7 @@ def group_of(func: str) -> str:
     return "core logic"
 
 
-MAC_ROOTS = ("rw_frame_tag_valid", "rw_frame_sign", "rw_signer_begin", "rw_signer_absorb", "rw_signer_finish")
+MAC_ROOTS = ("rw_frame_tag_valid", "rw_frame_sign", "rw_signer_begin_prepared", "rw_signer_absorb", "rw_signer_finish")
 
 # What ran in a tick, by the functions it executed (each is in its own translation unit: never inlined).
 TICK_PARTS = (
@@ -84,7 +84,8 @@ TICK_PARTS = (
     ("spindle", "rw_spindle_step"),
     ("telemetry pack", "rw_msg_telemetry_pack"),
     ("battery", "rw_throttle_map_prepare_battery"),
-    ("mac begin", "rw_signer_begin"),
+    ("load check", "rw_load_monitor_step_q16"),
+    ("mac begin", "rw_signer_begin_prepared"),
     ("mac absorb", "rw_signer_absorb"),
     ("mac finish+send", "rw_signer_finish"),
     ("rx verify", "rw_frame_tag_valid"),

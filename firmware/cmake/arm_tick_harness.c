@@ -60,7 +60,13 @@ static rw_encoder_sample fake_encoder_read(void *ctx)
     if (harness_wheel_rpm == 0u) {
         fake_wheel.next_edge_us = fake_wheel.now_us;
     } else {
-        uint32_t period_us = 60000000u / (harness_wheel_rpm * HARNESS_COUNTS_PER_REV);
+        /* the edge period once per wheel speed: a board's encoder read is a few capture registers, and a division
+         * here on every tick would be counted as the core's */
+        static uint32_t period_rpm, period_us;
+        if (period_rpm != harness_wheel_rpm) {
+            period_rpm = harness_wheel_rpm;
+            period_us = 60000000u / (harness_wheel_rpm * HARNESS_COUNTS_PER_REV);
+        }
         if ((int32_t)(fake_wheel.next_edge_us - (fake_wheel.last_edge_us + period_us)) > 0) {
             fake_wheel.next_edge_us = fake_wheel.last_edge_us + period_us; /* sped up since the last edge */
         }

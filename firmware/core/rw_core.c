@@ -38,7 +38,8 @@ void rw_core_init(rw_core *core)
     rw_tov_guard_init(&core->state.guard, &guard);
     rw_duplicate_cache_reset(&core->state.duplicates);
     rw_outbox_reset(&core->state.outbox);
-    rw_signer_reset(&core->state.signer);
+    rw_signer_reset(&core->state.signers[0]);
+    rw_signer_reset(&core->state.signers[1]);
     rw_spindle_config spindle = { 0 };
     rw_spindle_init(&core->state.spindle, &spindle);
     rw_load_monitor_config load_monitor;
@@ -57,7 +58,7 @@ _Static_assert(offsetof(rw_core, params) == 0, "rw_core.params must stay the fir
 
 bool rw_core_tx_idle(const rw_core *core)
 {
-    return rw_outbox_peek(&core->state.outbox) == NULL && !rw_signer_busy(&core->state.signer);
+    return rw_outbox_peek(&core->state.outbox) == NULL && !rw_core_signing(core);
 }
 
 size_t rw_core_sizeof(void)
@@ -229,14 +230,24 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         late_ms = late_ms <= RW_CORE_SCHEDULE_MAX_HOLD_MS ? late_ms : 0u;
         core->state.telemetry_due_ms = core->state.uptime_ms + core->state.telemetry_period_ms - late_ms;
     }
-    uint32_t mac_budget = speed_tick ? 0u
-                          : job == RW_CORE_JOB_NONE    ? RW_CORE_MAC_TICK_BUDGET
-                          : job == RW_CORE_JOB_BATTERY ? RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BATTERY_COST
-                                                       : 0u;
+    /* signing (rw_core_link.c): each kind of tick does what its own work leaves room for (rw_core.h) */
+    uint32_t mac_budget = RW_CORE_MAC_STEP_BUDGET; /* telemetry ticks: one step */
+    if (speed_tick) {
+        mac_budget = RW_CORE_MAC_STEP_BUDGET;
+    } else if (job == RW_CORE_JOB_SPINDLE) {
+        mac_budget = 0u; /* the spindle step and the load-loss check fill it */
+    } else if (job == RW_CORE_JOB_NONE) {
+        mac_budget = RW_CORE_MAC_TICK_BUDGET;
+    } else if (job == RW_CORE_JOB_BATTERY) {
+        mac_budget = RW_CORE_MAC_TICK_BUDGET - RW_CORE_MAC_BATTERY_COST;
+    } else if (job == RW_CORE_JOB_TELEMETRY && rw_core_signer_free(core)) {
+        mac_budget = RW_CORE_MAC_BEGIN_COST; /* the frame just packed begins at once */
+    }
     if ((job == RW_CORE_JOB_NONE || job == RW_CORE_JOB_BATTERY) && !speed_tick &&
         rw_burst_streaming(&core->state.burst) && rw_core_queue_burst_frame(core)) {
-        mac_budget = 0u; /* this tick's work was the burst frame's pack (as a telemetry tick's is), with at most
-                            the battery division beside it */
+        /* this tick's work is the burst frame's pack and its begin (as a telemetry tick's is; a signer is free),
+         * with at most the battery division beside it */
+        mac_budget = job == RW_CORE_JOB_NONE ? RW_CORE_MAC_BEGIN_COST : 0u;
     }
     rw_core_send_queued(core, hal, sent, mac_budget);
     /* 6. a staged parameter change: one module's conversion, at the tick boundary (rw_core_params.c) */

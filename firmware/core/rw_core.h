@@ -79,18 +79,23 @@
 #define RW_CORE_SPINDLE_PERIOD_MS 10u
 /* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
-/* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+
- * cycles): the work an idle tick may do, what beginning a frame costs (copy and checksum of up to 73 bytes)
- * and what finishing it costs (the last two blocks, four finalization rounds, the send). A full 64-byte
- * payload (TELEMETRY, BURST_DATA: 73 bytes + session id = 9 fixed blocks) is then signed and sent in two idle
- * ticks: begin + 4 blocks, then 5 blocks + finish; each under 10 % of a 1 kHz tick on the M0+
- * (bench/bench_tick_instructions.py). */
-#define RW_CORE_MAC_TICK_BUDGET 9u
+/* Signing in steps (rw_signer.h), in units of 100 modelled Cortex-M0+ cycles (bench/bench_tick_instructions.py):
+ * a step (8 bytes of checksum and one MAC block, two SipRounds) costs RW_CORE_MAC_STEP_COST, beginning a frame
+ * (copy, header, MAC init) RW_CORE_MAC_BEGIN_COST, finishing it (the last blocks with the counter, four
+ * finalization rounds, the send) RW_CORE_MAC_FINISH_COST. Every kind of tick signs with what its own work
+ * leaves of the periodic budget, 3,200 modelled cycles (10 % of a 1 kHz tick at 48 MHz with one flash wait
+ * state, x1.5): an idle tick RW_CORE_MAC_TICK_BUDGET (less by the battery division on a battery tick), a
+ * speed or pack (TELEMETRY, BURST_DATA) tick RW_CORE_MAC_STEP_BUDGET: one step (a TELEMETRY pack with nothing
+ * being signed: the begin of its frame), a spindle tick (spindle step and load-loss check) nothing. Two frames
+ * are signed at once (rw_core_link.c), so the steps of the ticks where a frame waits for room to finish go to
+ * the next one. A 64-byte payload (TELEMETRY, BURST_DATA: 73 bytes + session id) takes 9 steps. */
+#define RW_CORE_MAC_TICK_BUDGET 18u
+#define RW_CORE_MAC_STEP_BUDGET 3u
+#define RW_CORE_MAC_STEP_COST 3u
 #define RW_CORE_MAC_BEGIN_COST 5u
-#define RW_CORE_MAC_FINISH_COST 4u
-/* An idle tick that also refreshes the feed-forward's battery factor (one float division, ~500 cycles) signs
- * this much less. */
-#define RW_CORE_MAC_BATTERY_COST 2u
+#define RW_CORE_MAC_FINISH_COST 16u
+/* An idle tick that also refreshes the feed-forward's battery factor (one float division) signs this much less. */
+#define RW_CORE_MAC_BATTERY_COST 5u
 
 typedef struct rw_core_counters {
     uint16_t rx_ok;
@@ -119,7 +124,9 @@ typedef struct rw_core {
         rw_load_monitor load_monitor; /* load loss of the flying rope (rw_core_load_loss.c) */
         rw_duplicate_cache duplicates;
         rw_outbox outbox;
-        rw_signer signer;         /* the outbox frame being signed for the WiFi peer (over idle ticks) */
+        rw_signer signers[2];     /* outbox frames being signed for the WiFi peer (rw_core_link.c) */
+        uint8_t signer_head;      /* the older of the two (the next to leave) */
+        rw_siphash key_mac;       /* the MAC initialised under config.key (rw_core_link_prepare_key) */
         rw_core_counters counters;
         rw_config config;         /* the stored record (RAM copy): key, WiFi, boot counter; staged changes */
         bool config_dirty;        /* provisioning changed it since the last PROVISION_COMMIT */

@@ -24,6 +24,7 @@ static void load_config(rw_core *core, const rw_hal *hal)
         rw_config_clear_key(c);
     }
     core->state.session_id = rw_config_session_id(c);
+    rw_core_link_prepare_key(core);
     if (hal->config != NULL) {
         (void)hal->config->save(hal->config->ctx, c, sizeof *c);
     }

@@ -1,11 +1,12 @@
 /* Burst streaming (BURST_START, rw_burst.h): a captured burst leaves as BURST_DATA frames, one at a time, only
- * into an empty outbox with nothing being signed, so telemetry, events and replies never wait behind it for more
- * than one frame. Capturing is in the tick (rw_core.c, after the ESC write). */
+ * into an empty outbox with a signer free and no other BURST_DATA frame being signed, so telemetry, events and
+ * replies never wait behind it for more than one frame (they begin in the other signer), and the burst takes
+ * every signing slot they leave. Capturing is in the tick (rw_core.c, after the ESC write). */
 #include "rw_core_internal.h"
 
 bool rw_core_queue_burst_frame(rw_core *core)
 {
-    if (rw_signer_busy(&core->state.signer) || rw_outbox_peek(&core->state.outbox) != NULL) {
+    if (!rw_core_burst_slot_free(core) || rw_outbox_peek(&core->state.outbox) != NULL) {
         return false;
     }
     rw_msg_burst_data msg;

@@ -380,12 +380,16 @@ static void commit_done(rw_core *core)
     }
     core->state.session_id = rw_config_session_id(next);
     core->state.host_counter = 0u;
-    if (rw_signer_busy(&core->state.signer)) { /* signed for the old session (and key): it would be refused */
-        rw_signer_reset(&core->state.signer);
-        rw_outbox_count_drop(&core->state.outbox);
+    for (unsigned i = 0u; i < 2u; ++i) {
+        if (rw_signer_busy(&core->state.signers[i])) { /* signed for the old session (and key): it would be refused */
+            rw_signer_reset(&core->state.signers[i]);
+            rw_outbox_count_drop(&core->state.outbox);
+        }
     }
+    core->state.signer_head = 0u;
     core->state.config = *next;
     core->state.config_dirty = false;
+    rw_core_link_prepare_key(core);
 }
 
 bool rw_core_provision_poll(rw_core *core, const rw_hal *hal)

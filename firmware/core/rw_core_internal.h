@@ -83,15 +83,26 @@ uint16_t rw_core_take_seq(rw_core *core, rw_link_id link);
 void rw_core_link_send(rw_core *core, const rw_hal *hal, rw_link_id link, bool reply, const uint8_t *frame, size_t len);
 /* Step 5's send: the next outbox frame to the peer, at most one datagram a tick (none when `sent`: this tick
  * already answered a command); over a keyed WiFi link signed in steps with up to mac_budget units of MAC work
- * (RW_CORE_MAC_TICK_BUDGET on an idle tick, less on a battery tick, 0 on a tick with another job). */
+ * (rw_core.h: by the kind of tick). */
 void rw_core_send_queued(rw_core *core, const rw_hal *hal, bool sent, uint32_t mac_budget);
+
+/* The MAC's initial state under the link key (state.key_mac), once for every key (boot, PROVISION_COMMIT):
+ * beginning a frame then copies it instead of deriving it. */
+void rw_core_link_prepare_key(rw_core *core);
+/* True while a frame is being signed (either signer busy). */
+bool rw_core_signing(const rw_core *core);
+/* True when a signer can take the next frame. */
+bool rw_core_signer_free(const rw_core *core);
+/* True when a signer is free and neither holds a BURST_DATA frame: the next burst frame may be queued. */
+bool rw_core_burst_slot_free(const rw_core *core);
 
 /* ---- rw_core_boot.c ---- */
 /* First tick: the stored configuration (key, parameters) and a new session, then the BOOT event. */
 void rw_core_boot(rw_core *core, const rw_hal *hal);
 
-/* The next BURST_DATA frame of a captured burst into the outbox, when it is empty and nothing is being signed
- * (rw_core_burst.c); true when one was packed. */
+/* The next BURST_DATA frame of a captured burst into the outbox, when it is empty and rw_core_burst_slot_free
+ * (rw_core_burst.c): a TELEMETRY frame packed after it waits for it alone (it begins in the other signer); true
+ * when one was packed. */
 bool rw_core_queue_burst_frame(rw_core *core);
 
 #endif /* RW_CORE_INTERNAL_H */

@@ -53,7 +53,7 @@ void rw_core_queue_telemetry(rw_core *core, const rw_hal *hal)
         .nacks = c->nacks,
         .events = c->events,
         .tick_overruns = hal->scheduler != NULL ? (uint16_t)hal->scheduler->tick_overruns(hal->scheduler->ctx) : 0u,
-        .guide_position_um = rw_wire_i32_times(core->state.spindle.state.position_mm, 125u, 3), /* x 1000 */
+        .guide_position_um = core->state.spindle.state.position_um,
         .guide_target_um = rw_wire_i32_times(core->state.spindle.state.target_mm, 125u, 3),
         .spindle_load_permille = core->state.spindle.state.load_permille,
         .spindle_flags = spindle_flags(&core->state.spindle),

@@ -78,6 +78,12 @@ int32_t rw_lowpass_step(rw_lowpass *f, int32_t x_q16, float dt_s)
     }
     int64_t e = (int64_t)x_q16 * 65536 - f->state.y_q32;
     e = e > RW_LOWPASS_MAX_STEP_Q32 ? RW_LOWPASS_MAX_STEP_Q32 : (e < -RW_LOWPASS_MAX_STEP_Q32 ? -RW_LOWPASS_MAX_STEP_Q32 : e);
-    f->state.y_q32 += (e * alpha_q20) >> 20;
+    /* e alpha (|e| <= 2^42, alpha < 2^20) from 32-bit pieces, inline: e = e_hi 2^32 + e_lo with |e_hi| <= 2^10, so
+     * e_hi alpha fits 32 bits (libgcc's 64 x 64 multiply is a call of ~40 instructions on the Cortex-M0+) */
+    const int32_t e_hi = (int32_t)(e >> 32);
+    const uint32_t e_lo = (uint32_t)e;
+    const int64_t product = (int64_t)((uint64_t)(uint32_t)(e_hi * alpha_q20) << 32) +
+                            (int64_t)rw_mul_u32_u64(e_lo, (uint32_t)alpha_q20);
+    f->state.y_q32 += product >> 20;
     return rw_lowpass_output_q16(f);
 }

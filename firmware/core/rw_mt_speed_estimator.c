@@ -29,9 +29,9 @@
  * follow only while fewer than 14 significant bits are known; rounded to nearest at the last bit developed
  * (one division at the usual few edges per tick). false when an operand is too large for that (the caller
  * then divides in float, a rare path: several edges over a quarter second). Saturates at 32768 rev/s. */
-static bool mt_rev_per_s_q16(uint32_t dn, uint32_t counts_per_rev, uint32_t dt_us, int32_t *out)
+static bool mt_rev_per_s_q16(uint32_t dn, uint32_t counts_per_rev, uint32_t dt_us, uint32_t max_dt_us, int32_t *out)
 {
-    if (dn > RW_MT_INT_MAX_DN || dt_us > RW_MT_INT_MAX_DEN / counts_per_rev) {
+    if (dn > RW_MT_INT_MAX_DN || dt_us > max_dt_us) { /* max_dt_us = RW_MT_INT_MAX_DEN / counts_per_rev */
         return false;
     }
     const uint32_t den = counts_per_rev * dt_us; /* < 2^24 */
@@ -95,6 +95,8 @@ void rw_mt_speed_estimator_prepare(rw_mt_speed_estimator *e, float dt_s)
     e->state.valid = rw_mt_speed_estimator_config_is_valid(&e->cfg);
     const float r_m = e->cfg.wheel_radius_m;
     e->state.two_pi_r_q32 = rw_f32_positive_finite(r_m) ? two_pi_r_q32(r_m) : 0u;
+    /* the integer quotient's range in edge time, divided out once here (not on every step) */
+    e->state.max_int_dt_us = e->cfg.counts_per_rev > 0u ? RW_MT_INT_MAX_DEN / e->cfg.counts_per_rev : 0u;
     e->state.filter.cfg.tau_s = e->cfg.filter_tau_s;
     rw_lowpass_prepare(&e->state.filter, dt_s);
 }
@@ -218,7 +220,7 @@ float rw_mt_speed_estimator_step(rw_mt_speed_estimator *e, uint32_t count, uint3
             return 0.0f;
         }
         if (dt_edges_us > 0u) {
-            if (!mt_rev_per_s_q16(dn, e->cfg.counts_per_rev, dt_edges_us, &n_q16)) {
+            if (!mt_rev_per_s_q16(dn, e->cfg.counts_per_rev, dt_edges_us, e->state.max_int_dt_us, &n_q16)) {
                 /* rare: several edges over more than 2^24 / counts_per_rev us */
                 n_q16 = rw_f32_to_q16(((float)dn * RW_US_PER_S_F) /
                                       ((float)e->cfg.counts_per_rev * (float)dt_edges_us));

@@ -44,6 +44,7 @@ typedef struct rw_mt_speed_estimator {
         bool valid;            /**< rw_mt_speed_estimator_config_is_valid(cfg) (prepared) */
         uint32_t two_pi_r_q32; /**< 2 pi wheel_radius_m, metres Q32; 0 for an invalid radius (prepared) */
         int32_t rope_mps_q16;  /**< filtered rope speed, m/s Q16.16 (2 pi r x the filtered rev/s) */
+        uint32_t max_int_dt_us; /**< longest edge time the integer quotient takes: 2^24 / counts_per_rev (prepared) */
     } state;                   /**< private history */
 } rw_mt_speed_estimator;
 

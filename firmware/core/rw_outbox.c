@@ -10,6 +10,13 @@ void rw_outbox_reset(rw_outbox *o)
 /* The slot a frame of class cls takes: a free one, else (replies and events) the oldest telemetry. */
 static rw_outbox_slot *slot_for(rw_outbox *o, rw_outbox_class cls)
 {
+    if (o->state.used < RW_OUTBOX_SLOTS) { /* the first free one (the usual case: no scan of the rest) */
+        for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {
+            if (!o->state.slots[i].used) {
+                return &o->state.slots[i];
+            }
+        }
+    }
     rw_outbox_slot *free_slot = NULL;
     rw_outbox_slot *oldest_telemetry = NULL;
     for (unsigned i = 0u; i < RW_OUTBOX_SLOTS; ++i) {

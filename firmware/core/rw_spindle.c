@@ -104,31 +104,9 @@ static void derive(rw_spindle *s)
     s->state.memo_cfg = *c;
 }
 
-/* The same config bit for bit (integer compares: no float compare, no call). */
-static bool same_config(const rw_spindle_config *a, const rw_spindle_config *b)
+void rw_spindle_prepare(rw_spindle *s)
 {
-    _Static_assert(sizeof(rw_spindle_config) == 13u * sizeof(float), "same_config compares every field");
-    return rw_f32_same(a->lead_mm_per_rev, b->lead_mm_per_rev) &&
-           rw_f32_same(a->guide_min_mm, b->guide_min_mm) &&
-           rw_f32_same(a->guide_max_mm, b->guide_max_mm) &&
-           rw_f32_same(a->kp_per_s, b->kp_per_s) &&
-           rw_f32_same(a->max_speed_mmps, b->max_speed_mmps) &&
-           rw_f32_same(a->tolerance_mm, b->tolerance_mm) &&
-           rw_f32_same(a->homing_speed_mmps, b->homing_speed_mmps) &&
-           rw_f32_same(a->homing_load_pct, b->homing_load_pct) &&
-           rw_f32_same(a->stall_load_pct, b->stall_load_pct) &&
-           rw_f32_same(a->stall_time_s, b->stall_time_s) &&
-           rw_f32_same(a->secure_load_pct, b->secure_load_pct) &&
-           rw_f32_same(a->retract_speed_mmps, b->retract_speed_mmps) &&
-           rw_f32_same(a->timeout_s, b->timeout_s);
-}
-
-/* Derive again when the config changed. */
-static void refresh_derived(rw_spindle *s)
-{
-    if (!same_config(&s->cfg, &s->state.memo_cfg)) {
-        derive(s);
-    }
+    derive(s);
 }
 
 void rw_spindle_init(rw_spindle *s, const rw_spindle_config *cfg)
@@ -198,9 +176,22 @@ static uint16_t moving_speed_raw(const rw_spindle_derived *d, int32_t command_um
 /* The guide position (um) of a multi-turn angle: (angle - home) x lead / turn, rounded. */
 static int32_t position_um_of(const rw_spindle *s, int32_t angle_ticks)
 {
-    const int64_t delta_ticks = (int64_t)angle_ticks - (int64_t)s->state.home_ticks;
-    const int64_t um_q32 = delta_ticks * (int64_t)s->state.derived.um_per_tick_q32 + ((int64_t)1 << 31);
+    const int64_t delta_ticks = (int64_t)angle_ticks - (int64_t)s->state.home_ticks; /* |.| < 2^32 */
+    const uint32_t magnitude = delta_ticks < 0 ? (uint32_t)(-delta_ticks) : (uint32_t)delta_ticks;
+    const uint64_t product = rw_mul_u32_u64(magnitude, s->state.derived.um_per_tick_q32); /* < 2^63; inline */
+    const int64_t um_q32 = (delta_ticks < 0 ? -(int64_t)product : (int64_t)product) + ((int64_t)1 << 31);
     return clamp_i32(um_q32 >> 32, -RW_SPINDLE_MAX_UM, RW_SPINDLE_MAX_UM);
+}
+
+/* A position in um as millimetres without a soft-float call (it runs every spindle step): round(um x 65.536), the
+ * millimetres in Q16.16 (65.536 = 2199023256 / 2^25 to 2e-10), converted by bit operations (rw_f32_from_q16):
+ * within 8e-6 mm of um / 1000, saturated at +-32767 mm (the guide's stroke is 180 mm). */
+static float mm_of_um(int32_t um)
+{
+    const uint32_t magnitude = um < 0 ? 0u - (uint32_t)um : (uint32_t)um;
+    const uint64_t q16 = (rw_mul_u32_u64(magnitude, 2199023256u) + ((uint64_t)1 << 24)) >> 25;
+    const int32_t q = q16 > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)q16;
+    return rw_f32_from_q16(um < 0 ? -q : q);
 }
 
 /* The stall/home condition: pushing against something (|load| over threshold) and not moving. A step without a
@@ -218,7 +209,6 @@ static bool held_for(rw_spindle *s, bool measured, bool condition, uint32_t dt_m
 
 rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *reading, uint32_t dt_ms)
 {
-    refresh_derived(s);
     const rw_spindle_derived *d = &s->state.derived;
     rw_spindle_outcome outcome = RW_SPINDLE_NOTHING;
     int32_t load_permille = 0;
@@ -287,7 +277,7 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
         } else {
             s->state.target_reported = false;
             /* P law, rounded to the um/s: kp_per_s error */
-            const int64_t cmd_q16 = (int64_t)d->kp_per_s_q16 * error_um + 32768;
+            const int64_t cmd_q16 = rw_mul_s32_s64(d->kp_per_s_q16, error_um) + 32768;
             cmd_umps = clamp_i32(cmd_q16 >> 16, -d->max_speed_umps, d->max_speed_umps);
             /* wheel mode is open-loop drive: a blocked servo loads to about its drive level, which the P law
              * lowers near the target, so the stall threshold follows the drive (70 %; stall_load_pct caps it) */
@@ -326,6 +316,6 @@ rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *read
     }
     s->state.command_umps = cmd_umps;
     s->state.moving_speed_raw = moving_speed_raw(d, cmd_umps);
-    s->state.position_mm = (float)s->state.position_um * 1.0e-3f; /* for the telemetry and the commands */
+    s->state.position_mm = mm_of_um(s->state.position_um); /* for the commands */
     return outcome;
 }

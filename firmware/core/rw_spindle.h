@@ -84,7 +84,7 @@ typedef struct rw_spindle {
         bool target_reported;    /* TARGET_REACHED sent for the current target */
         int32_t home_ticks;      /* multi-turn angle at guide position 0 */
         int32_t position_um;     /* guide position from home, micrometres */
-        float position_mm;       /* the same in millimetres (telemetry, commands) */
+        float position_mm;       /* the same in millimetres, to 2^-16 mm (commands) */
         float target_mm;         /* as set by rw_spindle_move_to / rw_spindle_retract */
         int32_t target_um;       /* target_mm in micrometres (rounded) */
         uint16_t present_speed_raw; /* the last present-speed register read (stillness) */
@@ -93,12 +93,15 @@ typedef struct rw_spindle {
         uint32_t stall_ms;       /* time the stall/home condition has held */
         uint32_t silent_ms;      /* time since the last answer */
         uint16_t moving_speed_raw;
-        rw_spindle_config memo_cfg; /* the config derived belongs to (all zero: none yet) */
+        rw_spindle_config memo_cfg; /* the config derived belongs to (rw_spindle_prepare) */
         rw_spindle_derived derived;
     } state;
 } rw_spindle;
 
 void rw_spindle_init(rw_spindle *s, const rw_spindle_config *cfg);
+/* Convert cfg into the step's integer units (derived): after changing cfg, before the next step (the core does
+ * it from rw_core_apply_params; the step itself never looks at cfg's floats). */
+void rw_spindle_prepare(rw_spindle *s);
 /* Stop (IDLE); keeps homing and position. */
 void rw_spindle_stop(rw_spindle *s);
 void rw_spindle_home(rw_spindle *s);
@@ -106,7 +109,7 @@ void rw_spindle_home(rw_spindle *s);
 void rw_spindle_move_to(rw_spindle *s, float target_mm);
 void rw_spindle_retract(rw_spindle *s);
 /* One step: reading (NULL when the servo did not answer), elapsed time in milliseconds. Returns what happened.
- * Integer arithmetic (no soft-float on the Cortex-M0+) apart from position_mm, kept for the telemetry: the
+ * Integer arithmetic (no soft-float on the Cortex-M0+; position_mm by bit operations from Q16.16): the
  * angle in multi-turn ticks (rw_multiturn), the guide in micrometres, speeds in um/s (the P law's
  * quantisation: 1 um of error, kp_per_s um/s of command), times in milliseconds against the float time
  * parameters compared exactly (rw_f32_ms_past). */

@@ -268,6 +268,9 @@ class FakeSpindle:
 
 # ---- The harness -----------------------------------------------------------------------------------
 
+MAX_FRAMES_SIGNING = 2  # frames the core signs at once (rw_core.h: state.signers): replies may overtake them
+
+
 class CoreHarness:
     """One rw_core instance with a fake HAL. tick() advances the harness time t_us by dt_us and calls
     rw_core_tick(core, hal, (clock_offset_us + t_us) mod 2^32); the first tick is at t_us = 0.
@@ -460,13 +463,13 @@ class CoreHarness:
 
     def _check_numbering(self, seq: int, msg: proto.Message, link: str = "wifi") -> None:
         """Frames are numbered as they leave (a queued one when its signing begins): the next seq, or one more
-        when replies overtake the frame being signed, whose seq comes later. Never a repeat, never a second hole:
-        at most one frame is being signed."""
+        when replies overtake the frames being signed, whose seq comes later. Never a repeat, never a third hole:
+        at most two frames are being signed (rw_core.h: state.signers)."""
         holes = self._seq_holes[link]
         ahead = (seq - self._max_seq[link]) % 65536
-        if ahead == 1 or (ahead == 2 and not holes):
-            if ahead == 2:
-                holes.add((self._max_seq[link] + 1) % 65536)
+        if 1 <= ahead <= 1 + MAX_FRAMES_SIGNING - len(holes):
+            for skipped in range(1, ahead):
+                holes.add((self._max_seq[link] + skipped) % 65536)
             self._max_seq[link] = seq
         elif seq in holes:
             holes.discard(seq)

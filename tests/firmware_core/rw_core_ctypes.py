@@ -68,7 +68,7 @@ class MtConfig(ctypes.Structure):
 class _MtState(ctypes.Structure):
     _fields_ = [("last_count", c_uint32), ("last_edge_us", c_uint32), ("raw_rev_per_s_q16", c_int32),
                 ("filter", Lowpass), ("primed", c_bool), ("stale", c_bool), ("valid", c_bool),
-                ("two_pi_r_q32", c_uint32), ("rope_mps_q16", c_int32)]
+                ("two_pi_r_q32", c_uint32), ("rope_mps_q16", c_int32), ("max_int_dt_us", c_uint32)]
 
 
 class Mt(ctypes.Structure):

@@ -609,6 +609,13 @@ size_t rw_frame_sign(uint8_t *frame, size_t len, size_t cap, uint32_t session_id
 #define RW_FRAME_SIGN_FIXED_LEN(len) ((len) + 4u)
 #define RW_FRAME_SIGN_TAGGED_LEN(len) ((len) + 12u)
 size_t rw_frame_sign_begin(uint8_t *frame, size_t len, size_t cap, uint16_t seq, uint32_t session_id);
+/* rw_frame_sign_begin without the checksum, for a caller that computes it in pieces: sets seq and the flag,
+   appends session_id, gives the message's crc_extra (returns len, 0 as rw_frame_sign_begin would). The
+   checksum is rw_crc16_ccitt(0xFFFF, frame + 1, len - RW_FRAME_CHECKSUM_LEN - 1) (whole or in pieces), closed
+   and stored by rw_frame_checksum_put. */
+size_t rw_frame_sign_open(uint8_t *frame, size_t len, size_t cap, uint16_t seq, uint32_t session_id,
+                          uint16_t *crc_extra);
+void rw_frame_checksum_put(uint8_t *frame, size_t len, uint16_t body_crc, uint16_t crc_extra);
 /* Renumber an unsigned frame of len bytes in place: the new seq and its checksum (frames queued for the link
    are numbered when they leave, so seq grows in the order frames are sent). Returns len, 0 if malformed. */
 size_t rw_frame_renumber(uint8_t *frame, size_t len, uint16_t seq);
