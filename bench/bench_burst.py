@@ -72,15 +72,22 @@ def main() -> None:
               f"{rate * (tel_b + UDP_IP_HEADER_B) / 1000:.1f} kB/s with IP/UDP")
     print("\nSIL, flying at 5 m/s, 9 s from the command on (device time):")
     print("rate    burst  link kB/s  stream s  frames  telemetry  spacing ms  tx_dropped  pulses as without")
+    stream_s: dict[float, float | None] = {}
     for rate in (50.0, 100.0):
         plain = run(rate, burst=False)
         with_b = run(rate, burst=True)
+        stream_s[rate] = with_b["stream_s"]
         same = with_b["pulses"] == plain["pulses"]
         for name, r in (("no", plain), ("yes", with_b)):
             stream = "-" if r["stream_s"] is None else f"{r['stream_s']:.2f}"
             print(f"{rate:5g} Hz {name:>5s} {r['bytes_per_s'] / 1000:10.1f} {stream:>9s} {r['burst_frames']:7d} "
                   f"{r['telemetry']:10d} {str(r['spacing_ms']):>11s} {r['tx_dropped']:11d}  "
                   f"{'-' if name == 'no' else ('yes' if same else 'NO')}")
+
+    frames = math.ceil(SAMPLES / gen.BURST_SAMPLES_PER_FRAME)
+    for rate, t in stream_s.items():
+        shown = "not complete in 9 s" if t is None else f"{t:.2f} s ({frames / t:.0f} BURST_DATA frames/s)"
+        print(f"burst stream time beside {rate:g} Hz telemetry: {shown}")
 
 
 if __name__ == "__main__":

@@ -104,7 +104,8 @@ static rw_core_job other_tick_job(const rw_core *core)
     if (due(now_ms, core->state.spindle_due_ms)) {
         return RW_CORE_JOB_SPINDLE;
     }
-    if (!rw_f32_same(core->state.battery_v, rw_speed_loop_battery_v(&core->state.loop))) {
+    if (due(now_ms, core->state.battery_due_ms) &&
+        !rw_f32_same(core->state.battery_v, rw_speed_loop_battery_v(&core->state.loop))) {
         return RW_CORE_JOB_BATTERY;
     }
     return RW_CORE_JOB_NONE;
@@ -192,6 +193,9 @@ void rw_core_tick(rw_core *core, const rw_hal *hal, uint32_t now_us)
         /* the feed-forward's battery division happens here, never on a speed tick (it sees the battery a few
          * ms late) */
         rw_speed_loop_set_battery(loop, core->state.battery_v);
+        /* at most once a period: a reading that changes every tick (ADC noise) would take every idle tick from
+         * the signing */
+        core->state.battery_due_ms = core->state.uptime_ms + RW_CORE_BATTERY_PERIOD_MS;
         break;
     case RW_CORE_JOB_TELEMETRY:
     case RW_CORE_JOB_NONE:

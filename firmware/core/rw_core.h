@@ -36,7 +36,8 @@
  *                              check when due (RW_CORE_SPINDLE_PERIOD_MS); either waits for the next tick
  *                              of its kind;
  *                              with neither, the feed-forward's battery factor (60 / (2 pi r kv V), one
- *                              division) is refreshed if the battery reading changed, so the speed tick
+ *                              division) is refreshed if the battery reading changed (at most every
+ *                              RW_CORE_BATTERY_PERIOD_MS), so the speed tick
  *                              never divides for it (the feed-forward sees the battery a few ms late);
  *                              and an idle other tick (neither job) advances the signing of the next queued
  *                              frame (rw_signer.h): begin + a few MAC blocks, or the last blocks + finish +
@@ -77,6 +78,8 @@
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
 /* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
 #define RW_CORE_SPINDLE_PERIOD_MS 10u
+/* The feed-forward's battery factor is refreshed at most this often (ms), when the reading changed. */
+#define RW_CORE_BATTERY_PERIOD_MS 10u
 /* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
 /* Signing in steps (rw_signer.h), in units of 100 modelled Cortex-M0+ cycles (bench/bench_tick_instructions.py):
@@ -158,6 +161,7 @@ typedef struct rw_core {
         uint32_t spindle_due_ms;
         uint32_t spindle_last_ms;
         uint32_t battery_low_ms;
+        uint32_t battery_due_ms;  /* the next feed-forward battery refresh allowed (RW_CORE_BATTERY_PERIOD_MS) */
         bool grasp_pending;       /* GRASP: RELAX goes on to RETRACT once the rope has stopped */
         bool speed_tick_next;     /* schedule: the next call is a speed tick (see the schedule above) */
         uint32_t speed_dt_us;     /* time since the last speed tick, microseconds */
