@@ -15,11 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from robowrangler_sim.diagnose.errors import UnknownEffectError
+from robowrangler_sim.diagnose.errors import ModelMismatchError, UnknownEffectError
 from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
 from robowrangler_sim.diagnose.loop import shape_model as sm
 from robowrangler_sim.diagnose.loop.candidates import LOOP_LIBRARY, LoopCandidate
-from robowrangler_sim.diagnose.loop.data import LoopData, load_loop_data
+from robowrangler_sim.diagnose.loop.data import (LOOP_LENGTH_TOLERANCE, LoopData, length_mismatch_message,
+                                                 load_loop_data)
 from robowrangler_sim.diagnose.loop.locate import LoopLocator, frame_regimes, part_labels
 from robowrangler_sim.diagnose.loop.model_file import LoopModel
 from robowrangler_sim.diagnose.loop.replay import CHANNEL, LoopReplay
@@ -31,6 +32,8 @@ from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_cou
 BLOCK_S = 1.0
 HELDOUT_EVERY = 3
 ALPHA = 0.01
+SHORT_LOOP_EXPLAINED = 0.5
+"""A loop shorter than the model's is a loop effect's only when that effect at least halves the contour error."""
 
 LOOP_NOMINAL_REFIT: tuple[ParamSpec, ...] = (
     ParamSpec("servo_time_constant_s", sm.TH_TAU_S, "s", 0.5, 2.0, 0.5, relative=True),
@@ -106,7 +109,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
     cands = _resolve(effects)
     base = LoopModel.nominal() if model is None else (model if isinstance(model, LoopModel) else LoopModel.load(model))
     data = load_loop_data(recording_path, takeoff_speed_mps=base.takeoff_speed_mps(),
-                          loop_length_of_guide=base.loop_length_m)
+                          loop_length_of_guide=base.loop_length_m, defer_short_loop=True)
     shape = base.shape_model()
     replay = LoopReplay(data, shape, np.array([base.loop_length_m(g) for g in data.guide_m]))
     theta_base = base.theta(shape)
@@ -195,6 +198,8 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
         else:
             verdict = "missing_physics"
     timings["select_s"] = time.perf_counter() - t1
+    if abs(data.length_ratio - 1.0) > LOOP_LENGTH_TOLERANCE:
+        _check_short_loop_explained(data, base, verdict, chosen, sc_nom, chosen_sc)
 
     effects_out: list[LoopFinding] = []
     if verdict == "missing_physics":
@@ -233,6 +238,22 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                                                  - chosen_fit.prediction_[CHANNEL]).reshape(F, K) ** 2, axis=1)) * 1e3,
                 "observed": data.points_m, "nominal_theta": theta_base, "after_theta": chosen_fit.theta_,
                 "replay": replay})
+
+
+def _check_short_loop_explained(data: LoopData, base: LoopModel, verdict: str, chosen: list[str], sc_nom: ModelScore,
+                                chosen_sc: ModelScore) -> None:
+    """A loop shorter than the model's (kept by the loader) stands only when a loop effect explains the contours:
+    named or not identifiable among candidates, and held-out contour error at most SHORT_LOOP_EXPLAINED x the
+    refitted chain's. Else it is the rope length or guide calibration: ModelMismatchError, as the loader would."""
+    before, after = _mm(sc_nom), _mm(chosen_sc)
+    if verdict != "none" and after <= SHORT_LOOP_EXPLAINED * before:
+        return
+    what = (f"the best loop effect, {chosen[0]}, takes the held-out contour error only from {before:.1f} to "
+            f"{after:.1f} mm" if chosen else f"no loop effect explains the contours (held-out contour error "
+                                              f"{before:.1f} mm)")
+    raise ModelMismatchError(length_mismatch_message(data, base.loop_length_m, data.length_ratio)
+                             + f"; {what}, so a shorter loop is not the flutter or fold of a loop effect in the "
+                               "library (if the rope is right, it is physics outside it: a head wind crumples the tip)")
 
 
 def _mm(sc: ModelScore) -> float:
