@@ -3,8 +3,10 @@
 replay (the chain's fast form driven by rope speed, guide and phi) -> residuals (signed normal distance, noise from
 the data) -> locate (loop part, phi / speed band, steady / transient, time spans) -> refit the chain's own
 parameters (servo time constant kd/kp, loop length scale) -> each loop candidate fitted with 95 % intervals
-(diagnose.fit.ModelFitter) -> select on held-out frames and BIC (diagnose.select) -> extended model (loop model
-file) -> report (report_json / write_loop_report).
+(diagnose.fit.ModelFitter) -> select on held-out frames and BIC (diagnose.select) -> when the best effect leaves the
+contours above the camera noise, it and each next-best one fitted together, kept only if the pair beats the single
+effect by the same held-out test and BIC -> extended model (loop model file) -> report (report_json /
+write_loop_report).
 """
 
 from __future__ import annotations
@@ -32,6 +34,13 @@ from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_cou
 BLOCK_S = 1.0
 HELDOUT_EVERY = 3
 ALPHA = 0.01
+PAIR_TRIGGER_NOISE = 2.0
+"""Two effects together are tried when the best one leaves held-out contour error above this many camera-noise sigmas
+(the report's own 'beyond noise'), the best with each of the MAX_PARTNERS next-best candidates."""
+MAX_PARTNERS = 3
+PAIR_MAX_COSINE = 0.9
+"""A pair is kept only when the two laws move the contours differently on this recording: the cosine between their
+parameters' sensitivities (fit frames, at the pair's solution) at most this."""
 SHORT_LOOP_EXPLAINED = 0.5
 """A loop shorter than the model's is a loop effect's only when that effect at least halves the contour error."""
 
@@ -197,6 +206,37 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                                                                      for i in names)})
         else:
             verdict = "missing_physics"
+    pair_ev: dict | None = None
+    if verdict != "none" and chosen_sc.heldout_rms[CHANNEL] > PAIR_TRIGGER_NOISE * noise:
+        # one effect does not bring the contours down to the camera noise: the best with one more, fitted together
+        partners = sorted([i for i in fits if i != chosen[0]], key=lambda i: fits[i][2].block_sse.sum())[:MAX_PARTNERS]
+        best_pair = None
+        for other in partners:
+            _progress(progress, f"fitting {chosen[0]} + {other} together")
+            c1, c2 = fits[chosen[0]][0], fits[other][0]
+            th_p = c2.apply_neutral(fits[chosen[0]][1].theta_)
+            cols, starts = c2.start_grid(th_p)
+            specs = list(LOOP_NOMINAL_REFIT) + list(c1.params) + list(c2.params)
+            fp = ModelFitter(specs, weights=weights, max_nfev=15).fit(replay, th_p, fit_mask=fit_mask, starts=starts,
+                                                                      start_columns=cols, bounds_ref=theta_base)
+            r_p = replay.measured()[CHANNEL] - fp.prediction_[CHANNEL]
+            sc_p = score_model(f"{chosen[0]}+{other}", len(specs), {CHANNEL: r_p}, weights, fit_mask, block_id,
+                               held_blocks, n_eff)
+            ok, ev = accepted(sc_p, chosen_sc, alpha=ALPHA)
+            ev["sensitivity_cosine"] = round(_sensitivity_cosine(replay, fp.theta_, c1, c2, fit_mask), 4)
+            if abs(ev["sensitivity_cosine"]) > PAIR_MAX_COSINE:
+                ok = False  # the two laws move the contours alike here: their parameters trade, the pair is not separable
+            own = {x.name for x in c1.params} | {x.name for x in c2.params}
+            rows.append({"id": f"{chosen[0]}+{other}", "status": "accepted" if ok else "rejected", **ev,
+                         "heldout_rms_mm": _mm(sc_p), "against": chosen[0],
+                         "params": {q.name: round(q.value, 6) for q in fp.params_ if q.name in own}})
+            if ok and (best_pair is None or sc_p.block_sse.sum() < best_pair[2].block_sse.sum()):
+                best_pair = (other, fp, sc_p, ev)
+        if best_pair is not None:
+            verdict = "missing_physics"
+            if not_ident and "candidates" in not_ident[0]:
+                not_ident.pop(0)
+            chosen, chosen_fit, chosen_sc, pair_ev = [chosen[0], best_pair[0]], best_pair[1], best_pair[2], best_pair[3]
     timings["select_s"] = time.perf_counter() - t1
     if abs(data.length_ratio - 1.0) > LOOP_LENGTH_TOLERANCE:
         _check_short_loop_explained(data, base, verdict, chosen, sc_nom, chosen_sc)
@@ -204,9 +244,9 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
     effects_out: list[LoopFinding] = []
     if verdict == "missing_physics":
         _progress(progress, "intervals (jackknife)")
-        cand = fits[chosen[0]][0]
-        own = {s.name for s in cand.params}
-        jackknife_intervals(chosen_fit, own, max_nfev=4)
+        cands_chosen = [fits[i][0] for i in chosen]
+        own_all = {x.name for c in cands_chosen for x in c.params}
+        jackknife_intervals(chosen_fit, own_all, max_nfev=4)
         r_after = replay.measured()[CHANNEL] - chosen_fit.prediction_[CHANNEL]
         gain = (r_nom ** 2 - r_after ** 2).reshape(F, K)
         part_gain = {}
@@ -214,13 +254,16 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
             m = parts == p_i
             part_gain[p_name] = float(gain[m].sum())
         part = max(part_gain, key=part_gain.get)
-        ev = next(r for r in rows if r["id"] == chosen[0])
-        effects_out.append(LoopFinding(
-            effect_id=cand.effect_id, law=cand.law, part=part, spans_s=[s[:2] for s in loc.spans_],
-            params={p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
-                    for p in chosen_fit.params_ if p.name in own},
-            heldout_rms_mm_before=_mm(sc_nom), heldout_rms_mm_after=_mm(chosen_sc),
-            evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"]}))
+        for j, cand in enumerate(cands_chosen):
+            own = {x.name for x in cand.params}
+            ev = next(r for r in rows if r["id"] == cand.effect_id) if j == 0 else pair_ev
+            effects_out.append(LoopFinding(
+                effect_id=cand.effect_id, law=cand.law, part=part, spans_s=[s[:2] for s in loc.spans_],
+                params={p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
+                        for p in chosen_fit.params_ if p.name in own},
+                heldout_rms_mm_before=_mm(sc_nom), heldout_rms_mm_after=_mm(chosen_sc),
+                evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"],
+                          **({"against": chosen[0]} if j else {})}))
     nominal_refit = {p.name: {"nominal": float(theta_base[s.column]), "fitted": p.value, "unit": p.unit,
                               "ci95": list(p.ci95)}
                      for p, s in zip(nominal.params_, nominal.specs)}
@@ -238,6 +281,18 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                                                  - chosen_fit.prediction_[CHANNEL]).reshape(F, K) ** 2, axis=1)) * 1e3,
                 "observed": data.points_m, "nominal_theta": theta_base, "after_theta": chosen_fit.theta_,
                 "replay": replay})
+
+
+def _sensitivity_cosine(replay: LoopReplay, theta: np.ndarray, c1: LoopCandidate, c2: LoopCandidate,
+                        fit_mask: np.ndarray) -> float:
+    """Cosine between the contour changes of a small step (a tenth of the typical magnitude) in each law's parameter."""
+    rows = np.repeat(theta[None, :], 3, axis=0)
+    for i, spec in enumerate((c1.params[0], c2.params[0]), start=1):
+        rows[i, spec.column] += 0.1 * spec.scale
+    pred = replay.predict(rows)[CHANNEL]
+    a, b = (pred[1] - pred[0])[fit_mask], (pred[2] - pred[0])[fit_mask]
+    den = float(np.linalg.norm(a) * np.linalg.norm(b))
+    return float(a @ b) / den if den > 0 else 1.0
 
 
 def _check_short_loop_explained(data: LoopData, base: LoopModel, verdict: str, chosen: list[str], sc_nom: ModelScore,
