@@ -15,11 +15,16 @@ them) and the counters the SIL firmware prints on exit (its WiFi link's and its 
 
 from __future__ import annotations
 
+import io
+import json
 import subprocess
 from pathlib import Path
 
 import pytest
 
+from robowrangler.cli.environment import Environment
+from robowrangler.cli.exit_status import ExitStatus
+from robowrangler.cli.main import main
 from robowrangler.protocol import generated as gen
 from robowrangler_sim.sil import SilSession, UsbNotes, WifiModule, WifiModuleError
 from robowrangler_sim.sil.firmware import find_sil_binary
@@ -77,9 +82,10 @@ def test_a_module_that_never_answers_boots_to_no_module_and_the_tick_runs_on(nat
     assert led["off_ticks"] == 0 and led["on_ticks"] == led["ticks"] >= ticks and led["overruns"] == 0, led
 
 
-def _flight(wifi: WifiModule | None, *, silence_at_s: float | None = None, read_usb: bool = False):
+def _flight(wifi: WifiModule | None, *, silence_at_s: float | None = None, read_usb: bool = False,
+            end_s: float = 7.0):
     """Home-free flight at 5 m/s with a 2 s heartbeat timeout: ARM and spin from 0.6 s, airborne by 2.5 s; the
-    host falls silent at silence_at_s (None: heartbeats throughout, lost while the link is down); to 7 s."""
+    host falls silent at silence_at_s (None: heartbeats throughout, lost while the link is down); to end_s."""
     sil = SilSession(speedup=None, wifi=wifi, trace_every=1).start()
     usb = UsbNotes(sil.serial_path) if read_usb else None
     try:
@@ -93,7 +99,7 @@ def _flight(wifi: WifiModule | None, *, silence_at_s: float | None = None, read_
         if silence_at_s is not None:
             host.run_for(silence_at_s - sil.time_s)
             host.heartbeats_enabled = False
-        host.run_for(7.0 - sil.time_s)
+        host.run_for(end_s - sil.time_s)
         host.close()
     finally:
         if usb:
@@ -164,6 +170,21 @@ def test_a_module_slow_in_flight_leaves_the_esc_pulse_alone(native_build_dir: Pa
     assert host.last_telemetry.state == gen.State.AIRBORNE and host.last_telemetry.tick_overruns == 0
 
 
+def test_a_module_that_hangs_in_flight_is_no_module_and_the_rope_lands(native_build_dir: Path) -> None:
+    """Busy 5 s after the status poll at 3.0 s: hung after 1 s of it (the policy's module_hung_ms), no datagram
+    moves any more, the host falls silent for the core, which lands the rope on its heartbeat timeout."""
+    sil, host, pulses, notes = _flight(WifiModule(busy_after_call_us=5_000_000, slow_from_s=2.6), read_usb=True,
+                                       end_s=8.0)
+    t_hung = next(t for t, text in notes if text.startswith("wifi NO_MODULE"))
+    assert 3.9 < t_hung < 4.1, notes
+    assert max(t.time_ms for t in host.received.telemetry) / 1000 <= t_hung + 0.002, "no datagram after the hang"
+    wifi, led = sil.wifi_counters(), sil.led_counters()
+    assert wifi["state"] == "NO_MODULE" and wifi["module_hangs"] == 1 and wifi["calls_while_busy"] == 0, wifi
+    assert led["on"] == 1 and abs(led["last_change_ms"] - t_hung * 1000) <= 2 and led["overruns"] == 0, led
+    end = sil.trace[-1]
+    assert not end.loop_airborne and end.esc_pulse_us == IDLE_PULSE_US, "landed on the heartbeat timeout"
+
+
 @pytest.mark.parametrize("kwargs, option", [
     ({"boot_ready_s": -1.0}, "boot_ready_s"), ({"associate_s": float("nan")}, "associate_s"),
     ({"ap_back_s": 3.0}, "ap_back_s"), ({"ap_lost_s": 3.0, "ap_back_s": 2.0}, "ap_back_s"),
@@ -200,3 +221,23 @@ def test_module_specs_parse() -> None:
 def test_the_firmware_refuses_bad_wifi_options(native_build_dir: Path, args: list[str], message: str) -> None:
     run = subprocess.run([str(find_sil_binary()), *args], capture_output=True, text=True, timeout=10)
     assert run.returncode == 2 and message in run.stderr, run.stderr
+
+
+def _wrangler(*argv: str) -> tuple[ExitStatus, list[dict], str]:
+    out, err = io.StringIO(), io.StringIO()
+    status = main(["--json", *argv], Environment(out, err, {}))
+    return status, [json.loads(x) for x in out.getvalue().splitlines() if x.strip()], err.getvalue()
+
+
+def test_wrangler_sil_serves_a_device_with_a_hung_module(native_build_dir: Path) -> None:
+    status, out, err = _wrangler("sil", "--port", "0", "--unpaced", "--duration", "2.5", "--wifi", "boot=never")
+    assert status == ExitStatus.OK, err
+    assert out[-1]["wifi"]["state"] == "NO_MODULE" and out[-1]["wifi"]["boot_ms"] == 2000, out[-1]
+
+
+@pytest.mark.parametrize("spec, words", [("boot=soon", "boot: expected seconds or never"),
+                                         ("lost=5-4", "ap_back_s: expected a time later than ap_lost_s"),
+                                         ("volume=11", "wifi: expected one of boot")])
+def test_wrangler_sil_refuses_a_bad_wifi_spec_as_a_usage_error(spec: str, words: str) -> None:
+    status, _, err = _wrangler("sil", "--wifi", spec)
+    assert status == ExitStatus.USAGE and words in err, err

@@ -14,7 +14,10 @@ void sil_wifi_link_init(sil_wifi_link *link, const sil_nina_faults *faults, sil_
 void sil_wifi_link_update(sil_wifi_link *link, uint64_t now_us)
 {
     sil_nina_update(&link->nina, now_us);
-    const bool open = sil_nina_passes_datagrams(&link->nina);
+    /* the board moves datagrams only while its policy says UP (RW_WIFI_DO_IO): never while connecting or with
+     * no module, whatever the module itself still holds */
+    const bool open = link->boot_phase == SIL_WIFI_BOOT_DONE && link->supervisor.state == RW_WIFI_UP &&
+                      sil_nina_passes_datagrams(&link->nina);
     if (!open && link->air->open) {
         link->air->lost_rx += link->air->count; /* the module's socket closed with them */
         link->air->count = 0u;

@@ -1,6 +1,7 @@
 /* The board's WiFi link in SIL: the NINA module model (sil_nina.h) driven through core/rw_wifi_supervisor.h as
  * the board's hal/arduino/arduino_link.cpp drives the real module, over the SIL's UDP socket (sil_link.h), which
- * stands for the air: datagrams pass only while the modelled module is associated with its socket open.
+ * stands for the air: datagrams pass only while the policy says UP and the modelled module is associated with its
+ * socket open.
  *
  * As on the board:
  *  - boot (sil_wifi_link_boot_step, before the control tick starts; the ESCs hold the bottom pulse): the

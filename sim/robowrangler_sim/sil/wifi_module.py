@@ -15,7 +15,8 @@ Faults, all in plant time:
   good); the module re-associates by itself once it is back, and the board's policy re-opens the socket only
   while the rope is down;
 - ``busy_after_call_us``: after each call the ready line stays busy this long (from ``slow_from_s`` on): a slow
-  module; over 2000 us the HAL's bounded waits run out (counted), the tick never waits.
+  module; over 2000 us the HAL's bounded waits run out (counted), the tick never waits; over 1 s the policy
+  calls it hung: NO_MODULE (until a reset), no more datagrams.
 
 Spec text (``wrangler sil --wifi``, ``SilSession(wifi="...")``): comma-separated ``key=value`` items,
 ``boot=never|S``, ``associate=S``, ``lost=S-S`` or ``lost=S-`` (for good), ``busy_us=N``, ``slow_from=S``;
@@ -29,7 +30,8 @@ from dataclasses import dataclass
 
 MAX_TIME_S = 86_400.0
 """Fault times are plant time up to a day (the firmware's option range, 86,400,000 ms)."""
-MAX_BUSY_US = 1_000_000
+MAX_BUSY_US = 10_000_000
+"""A ready line busy up to 10 s after a call (over 1 s running: the board's policy calls the module hung)."""
 
 
 class WifiModuleError(ValueError):
