@@ -58,9 +58,10 @@ bool sil_nina_passes_datagrams(const sil_nina *n)
     return n->associated && n->socket_open;
 }
 
-/* A call made at t_us: counted. WiFiNINA first waits for the ready line without a time limit (counted: the HAL
- * guards its calls so that this never happens but where the board does it too); the answer is back
- * SIL_NINA_CALL_US after the start, then the line stays busy as the slow-module fault says. */
+/* A call made at t_us: counted. WiFiNINA first waits for the ready line without a time limit: the HAL checks the
+ * line before its calls so that this does not happen, except where the board's HAL does not either (the boot's
+ * WiFi.begin right after the first status answer); such waits are counted. The answer is back SIL_NINA_CALL_US
+ * after the call starts, then the line stays busy as the slow-module fault says. */
 static uint64_t call(sil_nina *n, uint64_t t_us)
 {
     ++n->counters.calls;

@@ -35,7 +35,7 @@ typedef struct sil_nina_faults {
 
 typedef struct sil_nina_counters {
     uint32_t calls;              /* WiFiNINA calls the HAL made */
-    uint32_t calls_while_busy;   /* calls made while the ready line was busy: the board would wait without limit */
+    uint32_t calls_while_busy;   /* calls made while the ready line was busy: WiFiNINA waited for it (no limit) */
     uint32_t associations;       /* associations made (at boot, by WiFi.begin, or by the module itself) */
     uint32_t association_losses; /* associations lost (access point out of reach) */
     uint32_t sockets_opened;     /* udp.begin that succeeded */
