@@ -57,7 +57,6 @@ def lost_in_flight() -> str:
     sil, host, notes, _ = flight("lost=2.6-3.3")
     t_down = next(t for t, x in notes if x == "wifi CONNECTING")
     t_up = next(t for t, x in notes if x == "wifi UP")
-    _, ref, _, _ = flight(None)  # only for the state timeline of the same flight: unaffected until t_up
     w = sil.wifi_counters()
     landed = [t.time_ms / 1000 for t in host.received.telemetry if t.time_ms / 1000 > t_up and t.state in ROPE_DOWN]
     return (f"access point lost 2.6-3.3 s in flight: loss seen at {t_down:.3f} s, socket re-opened at {t_up:.3f} s "
