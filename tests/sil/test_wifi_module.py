@@ -82,6 +82,39 @@ def test_a_module_that_never_answers_boots_to_no_module_and_the_tick_runs_on(nat
     assert led["off_ticks"] == 0 and led["on_ticks"] == led["ticks"] >= ticks and led["overruns"] == 0, led
 
 
+def test_a_module_slow_to_start_and_to_associate_boots_up(native_build_dir: Path) -> None:
+    """The board's boot with a module that takes 0.75 s to start and 0.3 s to associate (WiFi.begin blocking):
+    the tick starts once the link is UP, about 1.05 s in; then the host talks to the device."""
+    with SilSession(speedup=None, wifi="boot=0.75,associate=0.3", trace_every=1) as sil:
+        [(t_note, text)] = sil.usb_notes
+        assert text == "wifi UP" and 1.05 <= t_note <= 1.06, sil.usb_notes
+        assert {s.esc_pulse_us for s in sil.trace} == {BOTTOM_PULSE_US}
+        host = ScriptedHost(sil)  # HELLO answered: the link is up
+        host.run_for(0.6)  # the ESC arming hold, from the tick's start
+        assert isinstance(host.command(gen.Arm()), gen.Ack)
+        host.close()
+    wifi = sil.wifi_counters()
+    assert wifi["state"] == "UP" and 1050 <= wifi["boot_ms"] <= 1052 and wifi["connects"] == 1, wifi
+
+
+def test_new_credentials_reconnect_at_once_and_the_link_comes_back(native_build_dir: Path) -> None:
+    """A PROVISION_COMMIT that changes the SSID (rope down): the socket closed, the module disconnected, a new
+    connection started at once; the link is UP again after the next status poll (the SIL joins any SSID)."""
+    with SilSession(speedup=None) as sil:
+        host = ScriptedHost(sil)
+        host.run_for(0.2)
+        sil.provision(wifi_ssid="lab")  # over USB, the plant clock standing still
+        with UsbNotes(sil.serial_path) as usb:
+            notes = _notes(sil, usb)
+            host.run_for(0.7)
+        assert [text for _, text in notes] == ["wifi UP"] and 0.69 < notes[0][0] < 0.71, notes
+        host.hello()  # the commit began a new session: HELLO answered over the new connection
+        assert isinstance(host.command(gen.Arm()), gen.Ack)
+        host.close()
+    wifi = sil.wifi_counters()
+    assert wifi["connects"] == 2 and wifi["attempts"] == 1 and wifi["losses"] == 0 and wifi["lost_rx"] > 0, wifi
+
+
 def _flight(wifi: WifiModule | None, *, silence_at_s: float | None = None, read_usb: bool = False,
             end_s: float = 7.0):
     """Home-free flight at 5 m/s with a 2 s heartbeat timeout: ARM and spin from 0.6 s, airborne by 2.5 s; the

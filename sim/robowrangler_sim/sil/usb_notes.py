@@ -21,8 +21,9 @@ class UsbNotes:
         self._buffer = b""
 
     def read(self) -> list[str]:
-        """The status lines written since the last read (without "rw: "); frames and partial lines are skipped."""
-        while True:
+        """The status lines written since the last read (without "rw: "); frames and partial lines are skipped.
+        After close(): none."""
+        while self._fd >= 0:
             try:
                 chunk = os.read(self._fd, 4096)
             except BlockingIOError:
