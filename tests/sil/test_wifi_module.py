@@ -10,7 +10,10 @@ them) and the counters the SIL firmware prints on exit (its WiFi link's and its 
   only once the rope is down; until then the ESC pulse is, tick for tick, the one of the same flight whose host
   simply fell silent; counted (losses, one deferral, connects);
 - a slow module (its ready line busy 3 ms after each call, over the 2 ms bound): counted (busy passes, expired
-  waits), never NO_MODULE, never a late tick; in flight it leaves the ESC pulse as it is.
+  waits), never NO_MODULE, never a late tick; in flight it leaves the ESC pulse as it is; one busy for seconds
+  is hung: NO_MODULE, no datagram moves, the core lands the rope on its heartbeat timeout;
+- the boot's other bounds (WiFi.begin 15 s with the access point out of reach; a module slow to start) and new
+  credentials after a PROVISION_COMMIT (a new connection at once).
 """
 
 from __future__ import annotations
@@ -95,6 +98,18 @@ def test_a_module_slow_to_start_and_to_associate_boots_up(native_build_dir: Path
         host.close()
     wifi = sil.wifi_counters()
     assert wifi["state"] == "UP" and 1050 <= wifi["boot_ms"] <= 1052 and wifi["connects"] == 1, wifi
+
+
+def test_an_access_point_out_of_reach_at_boot_ends_the_blocking_begin_at_its_bound(native_build_dir: Path) -> None:
+    """WiFi.begin at boot blocks at most 15 s (RW_WIFI_BOOT_CONNECT_TIMEOUT_MS): then CONNECTING, the tick starts,
+    and the policy starts a new connection every 5 s (the rope down)."""
+    with SilSession(speedup=None, wifi="lost=0-", trace_every=0) as sil:
+        [(t_note, text)] = sil.usb_notes
+        assert text == "wifi CONNECTING" and 15.0 <= t_note <= 15.002, sil.usb_notes
+        ScriptedHost(sil, handshake=False).run_for(5.1)
+    wifi, led = sil.wifi_counters(), sil.led_counters()
+    assert 15000 <= wifi["boot_ms"] <= 15002 and wifi["attempts"] == 1 and wifi["associations"] == 0, wifi
+    assert wifi["state"] == "CONNECTING" and led["overruns"] == 0 and 45 <= led["changes"] <= 55, led
 
 
 def test_new_credentials_reconnect_at_once_and_the_link_comes_back(native_build_dir: Path) -> None:

@@ -87,8 +87,10 @@ class WifiModule:
 
     @property
     def boot_takes_time(self) -> bool:
-        """Whether the board's WiFi boot spans ticks (a slow or hung module, or an association that takes time)."""
-        return self.boot_ready_s != 0.0 or self.associate_s > 0.0
+        """Whether the board's WiFi boot spans ticks (a slow or hung module, an association that takes time, or an
+        access point out of reach when the session starts)."""
+        ap_lost_at_start = self.ap_lost_s is not None and round(self.ap_lost_s * 1000.0) == 0
+        return self.boot_ready_s != 0.0 or self.associate_s > 0.0 or ap_lost_at_start
 
     def firmware_args(self) -> list[str]:
         """rw_sil's --wifi-* options for this module (none for the healthy default)."""
