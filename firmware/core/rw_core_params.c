@@ -68,7 +68,7 @@ static void prepare_tov_guard(rw_core *core)
     rw_speed_loop_prepare_guard(&core->state.loop);
 }
 
-/* The spindle's config, converted once into its step's integer units (rw_spindle_prepare). */
+/* The spindle derives what it needs from its config itself (rw_spindle.h: memo_cfg). */
 static void prepare_spindle(rw_core *core)
 {
     const rw_params *p = &core->params;
@@ -86,7 +86,6 @@ static void prepare_spindle(rw_core *core)
     sp->secure_load_pct = rw_params_get(p, RW_PARAM_GRASP_SECURE_LOAD_PCT);
     sp->retract_speed_mmps = rw_params_get(p, RW_PARAM_RETRACT_SPEED_MMPS);
     sp->timeout_s = rw_params_get(p, RW_PARAM_SPINDLE_TIMEOUT_S);
-    rw_spindle_prepare(&core->state.spindle);
 }
 
 /* The new period starts now. */

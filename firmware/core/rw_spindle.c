@@ -104,9 +104,31 @@ static void derive(rw_spindle *s)
     s->state.memo_cfg = *c;
 }
 
-void rw_spindle_prepare(rw_spindle *s)
+/* The same config bit for bit (integer compares: no float compare, no call). */
+static bool same_config(const rw_spindle_config *a, const rw_spindle_config *b)
 {
-    derive(s);
+    _Static_assert(sizeof(rw_spindle_config) == 13u * sizeof(float), "same_config compares every field");
+    return rw_f32_same(a->lead_mm_per_rev, b->lead_mm_per_rev) &&
+           rw_f32_same(a->guide_min_mm, b->guide_min_mm) &&
+           rw_f32_same(a->guide_max_mm, b->guide_max_mm) &&
+           rw_f32_same(a->kp_per_s, b->kp_per_s) &&
+           rw_f32_same(a->max_speed_mmps, b->max_speed_mmps) &&
+           rw_f32_same(a->tolerance_mm, b->tolerance_mm) &&
+           rw_f32_same(a->homing_speed_mmps, b->homing_speed_mmps) &&
+           rw_f32_same(a->homing_load_pct, b->homing_load_pct) &&
+           rw_f32_same(a->stall_load_pct, b->stall_load_pct) &&
+           rw_f32_same(a->stall_time_s, b->stall_time_s) &&
+           rw_f32_same(a->secure_load_pct, b->secure_load_pct) &&
+           rw_f32_same(a->retract_speed_mmps, b->retract_speed_mmps) &&
+           rw_f32_same(a->timeout_s, b->timeout_s);
+}
+
+/* Derive again when the config changed. */
+static void refresh_derived(rw_spindle *s)
+{
+    if (!same_config(&s->cfg, &s->state.memo_cfg)) {
+        derive(s);
+    }
 }
 
 void rw_spindle_init(rw_spindle *s, const rw_spindle_config *cfg)
@@ -209,6 +231,7 @@ static bool held_for(rw_spindle *s, bool measured, bool condition, uint32_t dt_m
 
 rw_spindle_outcome rw_spindle_step(rw_spindle *s, const rw_spindle_reading *reading, uint32_t dt_ms)
 {
+    refresh_derived(s);
     const rw_spindle_derived *d = &s->state.derived;
     rw_spindle_outcome outcome = RW_SPINDLE_NOTHING;
     int32_t load_permille = 0;

@@ -93,15 +93,12 @@ typedef struct rw_spindle {
         uint32_t stall_ms;       /* time the stall/home condition has held */
         uint32_t silent_ms;      /* time since the last answer */
         uint16_t moving_speed_raw;
-        rw_spindle_config memo_cfg; /* the config derived belongs to (rw_spindle_prepare) */
+        rw_spindle_config memo_cfg; /* the config derived belongs to (all zero: none yet) */
         rw_spindle_derived derived;
     } state;
 } rw_spindle;
 
 void rw_spindle_init(rw_spindle *s, const rw_spindle_config *cfg);
-/* Convert cfg into the step's integer units (derived): after changing cfg, before the next step (the core does
- * it from rw_core_apply_params; the step itself never looks at cfg's floats). */
-void rw_spindle_prepare(rw_spindle *s);
 /* Stop (IDLE); keeps homing and position. */
 void rw_spindle_stop(rw_spindle *s);
 void rw_spindle_home(rw_spindle *s);

@@ -304,22 +304,6 @@ static void test_position_loop_is_p_law_saturated_and_zero_in_tolerance(void)
     }
 }
 
-/* The step works in the integer units rw_spindle_prepare derived: a changed cfg is in force from the prepare on
- * (the core prepares from rw_core_apply_params), never half way. */
-static void test_prepare_puts_a_changed_config_in_force(void)
-{
-    homed_at_zero();
-    rw_spindle_move_to(&sp, 1.0f);
-    rw_spindle_reading r = reading(0.0f, 0.0f, false);
-    sp.cfg.kp_per_s = 2.0f; /* changed, not yet prepared */
-    (void)rw_spindle_step(&sp, &r, DT_MS);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 4.0f, (float)sp.state.command_umps * 1.0e-3f);
-    rw_spindle_prepare(&sp);
-    (void)rw_spindle_step(&sp, &r, DT_MS);
-    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 2.0f, (float)sp.state.command_umps * 1.0e-3f);
-    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.0f, sp.state.position_mm); /* exact at 0, to 2^-16 mm elsewhere */
-}
-
 static void test_target_reached_once_per_target(void)
 {
     homed_at_zero();
@@ -528,6 +512,5 @@ int main(void)
     RUN_TEST(test_blocked_guide_stalls_after_the_stall_time);
     RUN_TEST(test_silent_servo_reported_once_after_the_timeout);
     RUN_TEST(test_command_register_never_exceeds_1023);
-    RUN_TEST(test_prepare_puts_a_changed_config_in_force);
     return UNITY_END();
 }
