@@ -211,8 +211,9 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
             load_mask = _tick_mask(data, below)
         _progress(progress, f"fitting {cand.effect_id}")
         theta_c = cand.apply_neutral(nominal.theta_)
-        # the candidate's own parameters and the nominal ones it trades against (the rest stay at the refit)
-        fitter = ModelFitter(_look_alikes(cand) + list(cand.params), weights=weights).fit(
+        # the candidate's own parameters and every nominal one, from the refit: what the refit absorbed of the
+        # effect (a dead band taken for Coulomb friction and inertia, a drag law for the resistance) is undone
+        fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
             replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, starts=cand.start_grid(theta_c)[1],
             start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
         r_c = _residuals(data, fitter.prediction_)
