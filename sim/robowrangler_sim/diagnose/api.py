@@ -276,7 +276,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         if s_f.block_sse.sum() <= chosen_score.block_sse.sum():
             chosen_fit, chosen_score = final, s_f
         _progress(progress, "intervals (jackknife)")
-        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params})
+        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params}, student_t=True)
     r_after = _residuals(data, chosen_fit.prediction_)
     effects_out: list[EffectFinding] = []
     load_spans: list = [(a, b) for a, b in below] if "external_rope_load" in chosen else []
