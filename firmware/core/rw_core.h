@@ -75,8 +75,9 @@
 #define RW_CORE_STOPPED_MPS 0.15f
 /* Throttle above idle, for the encoder-silence check: the ESC pulse is more than this over esc_min_us. */
 #define RW_CORE_THROTTLE_ACTIVE_US 30u
-/* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time). */
-#define RW_CORE_SPINDLE_PERIOD_MS 10u
+/* The spindle loop runs every this many milliseconds (one AX-12A read and one write each time); the spec owns it
+ * (a host waiting on MOVING needs it). */
+#define RW_CORE_SPINDLE_PERIOD_MS RW_SPINDLE_PERIOD_MS
 /* A telemetry frame this late at most (ms) was held back by the schedule, not by a stalled loop. */
 #define RW_CORE_SCHEDULE_MAX_HOLD_MS 2u
 /* Signing over idle ticks (rw_signer.h), in units of one MAC block (8 bytes, two SipRounds, ~250 Cortex-M0+

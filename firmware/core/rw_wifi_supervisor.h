@@ -18,6 +18,16 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+/* The bounds the HAL keeps around the policy's calls (board: hal/arduino/arduino_link.cpp; SIL:
+ * hal/sil/sil_wifi_link.c). */
+/* At boot, after its reset, the NINA module must raise its ready line within this time, else NO_MODULE. */
+#define RW_WIFI_BOOT_READY_MS 2000u
+/* Connection attempt at boot: WiFi.begin blocks at most this long (the watchdog is fed meanwhile). */
+#define RW_WIFI_BOOT_CONNECT_TIMEOUT_MS 15000u
+/* Within one datagram's or one step's calls the ready line is awaited at most this long before each call;
+ * longer and the step is abandoned (counted), the pass ends. */
+#define RW_WIFI_CALL_READY_WAIT_US 2000u
+
 /* The link's state (same values as the board's rw_link_state). */
 typedef enum {
     RW_WIFI_NOT_PROVISIONED = 0, /* no SSID stored: stays down */

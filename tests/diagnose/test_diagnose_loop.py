@@ -103,6 +103,23 @@ def test_uniform_wind_is_named(recs):
     assert res.effects[0].params["wind_speed_mps"]["value"] > 0  # blowing out along the launch direction
 
 
+def test_two_effects_are_named_together_when_one_does_not_suffice(tmp_path):
+    """C_f raised by 20 %, flown at the table's 4 and 5 m/s and between them (where the truth's continuous speed
+    dependence shows too): neither law alone explains the contours; the two together do."""
+    script = LoopScript(8.0, ((0.0, 4.0), (3.0, 4.0), (3.3, 4.5), (5.5, 4.5), (5.8, 5.0)), ((0.0, 0.05),))
+    case = generate_loop_recording(tmp_path / "pair.mcap", truth=LoopTruth("axial_drag_coefficient", cf_factor=1.2),
+                                   script=script, seed=17)
+    res = diagnose_loop(case.path)
+    assert res.verdict == "missing_physics", res.first_line
+    assert {e.effect_id for e in res.effects} == {"axial_drag_coefficient", "loop_speed_dependence"}, res.first_line
+    cf = next(e for e in res.effects if e.effect_id == "axial_drag_coefficient").params["skin_friction_coeff"]
+    assert abs(cf["value"] - 1.2 * CF0) / (1.2 * CF0) < 0.15
+    assert " together with " in res.first_line
+    assert set(res.model.effects) == {"axial_drag_coefficient", "loop_speed_dependence"}
+    pair = next(c for c in res.candidates if "+" in c["id"] and c["status"] == "accepted")
+    assert abs(pair["sensitivity_cosine"]) <= 0.9
+
+
 def test_an_effect_on_the_upper_branch_is_located_there(recs):
     res = diagnose_loop(recs["upper"].path)
     assert res.located["part"] == "upper_branch", res.located["cells"][:4]
@@ -156,6 +173,12 @@ def test_too_few_points_no_phi_and_a_wrong_loop_length_are_named(recs, tmp_path)
                       lambda d: {**d, "points_m": [[1.25 * x, 1.25 * z] for x, z in d["points_m"]]})
     with pytest.raises(ModelMismatchError, match="loop is .* long"):
         diagnose_loop(longer)
+    # a shorter loop is kept for a loop effect to explain (a head wind crumples the tip); a rope that is just shorter
+    # is not explained by any, and is refused with what was tried
+    shorter = _rewrite(recs["none"].path, tmp_path / "shorter.mcap",
+                       lambda d: {**d, "points_m": [[0.8 * x, 0.8 * z] for x, z in d["points_m"]]})
+    with pytest.raises(ModelMismatchError, match="loop is .* long.*not the flutter or fold of a loop effect"):
+        diagnose_loop(shorter)
     short = _rewrite(recs["none"].path, tmp_path / "short.mcap", lambda d: d if d["time_s"] < 0.9 else None)
     with pytest.raises(NoUsableSpanError, match="airborne camera frames"):
         diagnose_loop(short)

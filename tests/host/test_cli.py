@@ -16,7 +16,7 @@ from robowrangler.cli.main import main
 from robowrangler.client import Client
 from host_settings import QUICK_ARM
 from core_device import CoreDevice, lose_messages
-from core_harness import TEST_KEY, FakeSpindle
+from core_harness import TEST_KEY, CoreHarness, FakeSpindle
 from robowrangler.protocol import generated as gen
 from robowrangler.protocol.generated import PARAMS, MsgId
 
@@ -245,6 +245,43 @@ def test_home_loop_grasp_release_from_the_shell(device: CoreDevice) -> None:
     assert wrangler(*url, "--json", "release").json["state"] == "ARMED"
     assert [n for n in device.executed_names() if n != "SET_ROPE_SPEED"] == [
         "ARM", "HOME", "SET_LOOP", "GRASP", "RELEASE"]
+
+
+def test_loop_is_not_done_on_the_samples_sent_before_the_spindle_loop_acted(core_lib) -> None:
+    """The core's own telemetry after SET_LOOP: the first frame may carry the new target but no moving speed yet (the
+    spindle loop steps every SPINDLE_PERIOD_MS), the guide where it was. `wrangler loop` must not stop there, on
+    whichever sample a busy machine happens to deliver first."""
+    from robowrangler.cli.spindle import _settled_at
+    from robowrangler.telemetry import TelemetrySample
+
+    def move_after(delay_ms: int) -> list[TelemetrySample]:
+        """The core's telemetry from a SET_LOOP 12 mm sent delay_ms into a 20 ms telemetry period."""
+        h = CoreHarness(core_lib, params=QUICK_ARM, spindle=FakeSpindle(start_mm=6.0))
+        h.run_ms(600)
+        h.command(gen.Home())
+        h.run_until(lambda: h.events(gen.EventKind.SPINDLE_HOMED) != [], max_ms=3000, what="SPINDLE_HOMED")
+        h.command(gen.Arm())
+        h.run_ms(100)
+        sent = len(h.telemetry())
+        h.run_until(lambda: len(h.telemetry()) > sent, max_ms=40, what="a telemetry frame")
+        h.run_ms(delay_ms)
+        n = len(h.telemetry())
+        h.command(gen.SetLoop(12_000))
+        for _ in range(40):  # a live host: the guide moves only while one heartbeats
+            h.heartbeat()
+            h.run_ms(100)
+        return [TelemetrySample.from_wire(t, received_s=0.0) for t in h.telemetry()[n:]]
+
+    for delay_ms in range(0, 20, 3):  # the command's phase against the spindle loop's steps
+        samples = move_after(delay_ms)
+        first = samples[0]
+        if gen.SpindleFlag.MOVING not in first.spindle_flags:
+            break
+    assert abs(first.guide_target_m - 0.012) < 1e-6 and gen.SpindleFlag.MOVING not in first.spindle_flags
+    assert first.guide_position_m < 0.001  # the sample a naive "target and not MOVING" would take as done
+    done = _settled_at(0.012)
+    end = next(s for s in samples if done(s))
+    assert abs(end.guide_position_m - 0.012) < 0.0006  # within spindle_tolerance_mm of the target
 
 
 def test_a_retract_that_secures_nothing_exits_1(device: CoreDevice) -> None:

@@ -91,8 +91,9 @@ def test_recording_through_the_proxy_loses_nothing_while_another_tool_commands(n
 
     rec = read_recording(out)
     seqs = rec.telemetry["seq"]
-    span_s = rec.duration_s
-    assert len(seqs) >= 0.9 * 50 * span_s, (len(seqs), span_s)  # 50 Hz, not 18
+    # on the device's clock, as for the watcher: the proxy's window is wall time and a busy machine runs the SIL slower
+    span_s = float(rec.telemetry["time_s"][-1] - rec.telemetry["time_s"][0])
+    assert len(seqs) >= 0.9 * 50 * span_s and span_s > 3.0, (len(seqs), span_s)  # 50 Hz, not 18
     assert sum(g["missing"] for g in rec.gaps) <= 5, rec.gaps  # loopback UDP: none expected, a few tolerated
     carried = [(c["message"], c["verdict"]) for c in rec.commands if c["message"] not in ("PARAM_GET",)]
     assert ("ARM", "ACK") in carried and ("SET_ROPE_SPEED", "ACK") in carried and ("SPINDOWN", "ACK") in carried

@@ -31,6 +31,8 @@ extern "C" {
 #define RW_ENCODER_STALE_EDGE_PERIODS 4u
 /* The stale bound is never shorter than this (a turning wheel's silence between two ticks never trips it). (us) */
 #define RW_ENCODER_STALE_MIN_US 3000u
+/* The spindle loop's period: it reads the servo, steps the position loop and writes a moving speed this often (device time), so a new guide target shows as MOVING in telemetry at most this much later. (ms) */
+#define RW_SPINDLE_PERIOD_MS 10u
 
 /* Device state machine. */
 typedef enum {

@@ -2,6 +2,10 @@
 
 #include <string.h>
 
+extern "C" {
+#include "rw_link_status.h"
+}
+
 namespace {
 
 /* A small text builder without printf (whole numbers only). */
@@ -39,22 +43,6 @@ void put_u32(line *l, const char *name, uint32_t v)
     put(l, out + 0);
 }
 
-const char *state_text(uint8_t state)
-{
-    switch (state) {
-    case RW_LINK_NOT_PROVISIONED:
-        return "wifi NOT_PROVISIONED: no SSID stored (provision over USB)";
-    case RW_LINK_NO_MODULE:
-        return "wifi NO_MODULE: the NINA WiFi module does not answer (LED steady on); reset or check the module";
-    case RW_LINK_CONNECTING:
-        return "wifi CONNECTING";
-    case RW_LINK_UP:
-        return "wifi UP";
-    default:
-        return "wifi ?";
-    }
-}
-
 } // namespace
 
 void rw_arduino_board_report_begin(rw_arduino_board_report *r, uint32_t now_ms)
@@ -71,7 +59,7 @@ void rw_arduino_board_report_service(rw_arduino_board_report *r, uint32_t now_ms
     const uint8_t state = link->supervisor.state;
     if (state != r->last_link_state) {
         r->last_link_state = state;
-        rw_arduino_serial_link_note(usb, state_text(state));
+        rw_arduino_serial_link_note(usb, rw_link_status_text(state));
         return;
     }
     if (r->next_line == 0u && now_ms - r->last_round_ms >= RW_REPORT_PERIOD_MS) {

@@ -21,12 +21,12 @@ extern "C" {
 static const uint16_t RW_LINK_UDP_PORT = 14550u;
 
 /* Connection attempt at boot: WiFi.begin blocks at most this long (the watchdog is fed meanwhile). */
-static const uint32_t RW_LINK_BOOT_CONNECT_TIMEOUT_MS = 15000u;
+static const uint32_t RW_LINK_BOOT_CONNECT_TIMEOUT_MS = RW_WIFI_BOOT_CONNECT_TIMEOUT_MS;
 /* At boot, after its reset, the NINA module must raise its ready line within this time, else NO_MODULE. */
-static const uint32_t RW_LINK_MODULE_BOOT_READY_MS = 2000u;
+static const uint32_t RW_LINK_MODULE_BOOT_READY_MS = RW_WIFI_BOOT_READY_MS;
 /* Within one datagram's calls (parsePacket, remoteIP, ...), the ready line is awaited at most this long
  * before each call; longer and the datagram is abandoned (counted), the pass ends. */
-static const uint32_t RW_LINK_CALL_READY_WAIT_US = 2000u;
+static const uint32_t RW_LINK_CALL_READY_WAIT_US = RW_WIFI_CALL_READY_WAIT_US;
 
 enum rw_link_state {
     RW_LINK_NOT_PROVISIONED = RW_WIFI_NOT_PROVISIONED, /* no SSID stored: stays down */

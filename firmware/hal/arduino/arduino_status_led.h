@@ -6,10 +6,7 @@
 
 #include "arduino_link.h"
 
-/*   not provisioned : two short flashes every 2 s
- *   no NINA module  : on
- *   connecting      : 5 Hz blink
- *   link up         : 1 Hz blink (50 ms flash)  */
+/* The pattern per link state: core/rw_link_status.h (the SIL shows the same). */
 void rw_arduino_status_led_begin(void);
 void rw_arduino_status_led_update(uint32_t now_ms, rw_link_state state);
 

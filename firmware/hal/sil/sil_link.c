@@ -19,6 +19,7 @@ bool sil_link_open(sil_link *link, uint16_t port)
     }
     int flags = fcntl(link->fd, F_GETFL, 0);
     fcntl(link->fd, F_SETFL, flags | O_NONBLOCK);
+    link->open = true;
     return true;
 }
 
@@ -44,7 +45,9 @@ void sil_link_poll(sil_link *link)
         }
         d->len = (size_t)n;
         ++link->received_total;
-        if (d == &scratch) {
+        if (!link->open) {
+            ++link->lost_rx; /* never reached the module */
+        } else if (d == &scratch) {
             ++link->fifo_overflows; /* as a full WiFi buffer would: the datagram is lost */
         } else {
             ++link->count;
@@ -72,6 +75,11 @@ static size_t hal_recv(void *ctx, uint8_t *buf, size_t cap)
 {
     sil_link *link = ctx;
     sil_link_poll(link);
+    if (!link->open) {
+        link->lost_rx += link->count; /* the module's socket closed with them */
+        link->count = 0u;
+        return 0u;
+    }
     if (link->count == 0u) {
         return 0u;
     }
@@ -80,6 +88,7 @@ static size_t hal_recv(void *ctx, uint8_t *buf, size_t cap)
     --link->count;
     link->last_from = d->from;
     link->has_last = true;
+    ++link->delivered;
     if (d->len > cap) {
         memcpy(buf, d->bytes, cap);
         return cap + 1u;
@@ -91,7 +100,12 @@ static size_t hal_recv(void *ctx, uint8_t *buf, size_t cap)
 static void hal_reply(void *ctx, const uint8_t *frame, size_t len)
 {
     sil_link *link = ctx;
+    if (!link->open) {
+        ++link->lost_tx;
+        return;
+    }
     if (link->has_last) {
+        ++link->sent;
         sendto(link->fd, frame, len, 0, (const struct sockaddr *)&link->last_from, sizeof link->last_from);
     }
 }
@@ -108,7 +122,12 @@ static void hal_accept_peer(void *ctx)
 static void hal_send(void *ctx, const uint8_t *frame, size_t len)
 {
     sil_link *link = ctx;
+    if (!link->open) {
+        ++link->lost_tx;
+        return;
+    }
     if (link->has_peer) {
+        ++link->sent;
         sendto(link->fd, frame, len, 0, (const struct sockaddr *)&link->peer, sizeof link->peer);
     }
 }

@@ -1,5 +1,8 @@
 /* SIL command link: the rw_hal_link over a UDP socket on 127.0.0.1, same frames as WiFi on the board.
- * Datagrams are read from the socket into a FIFO with their senders; the core takes one per tick. */
+ * Datagrams are read from the socket into a FIFO with their senders; the core takes one per tick.
+ * The socket stands for the air between the host and the NINA module: datagrams pass only while `open`
+ * (the modelled module is associated and its socket open, set each tick by sil_wifi_link.h); otherwise what
+ * arrives is read (the lockstep barrier counts it) and lost, and what the core sends is lost (counted). */
 #ifndef SIL_LINK_H
 #define SIL_LINK_H
 
@@ -32,6 +35,11 @@ typedef struct sil_link {
     bool has_last;
     struct sockaddr_in peer;
     bool has_peer;
+    bool open;               /* datagrams pass (true from sil_link_open until the WiFi model says otherwise) */
+    uint32_t delivered;      /* datagrams the core took */
+    uint32_t sent;           /* datagrams the core sent that left */
+    uint32_t lost_rx;        /* datagrams that arrived while the link was not open */
+    uint32_t lost_tx;        /* datagrams the core sent while the link was not open */
 } sil_link;
 
 /* Bind 127.0.0.1:port (0 = any free port; the bound port is in link->port). false on error (errno set). */

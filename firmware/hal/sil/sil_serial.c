@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <poll.h>
 #include <stdlib.h>
 #include <string.h>
 #include <termios.h>
@@ -82,6 +83,28 @@ static void hal_send(void *ctx, const uint8_t *frame, size_t len)
     }
     out[n++] = 0u;
     write_all(s->fd, out, n);
+}
+
+bool sil_serial_listening(const sil_serial *s)
+{
+    struct pollfd pfd = { .fd = s->fd, .events = POLLOUT, .revents = 0 };
+    return poll(&pfd, 1, 0) >= 0 && (pfd.revents & (POLLHUP | POLLERR)) == 0; /* no other side open: HUP */
+}
+
+void sil_serial_note(sil_serial *s, const char *text)
+{
+    if (!sil_serial_listening(s)) {
+        ++s->notes_dropped;
+        return;
+    }
+    char line[200];
+    const size_t n = strlen(text) < sizeof line - 6u ? strlen(text) : sizeof line - 6u;
+    memcpy(line, "rw: ", 4u);
+    memcpy(line + 4u, text, n);
+    line[4u + n] = '\n';
+    line[5u + n] = '\0';
+    ++s->notes;
+    write_all(s->fd, (const uint8_t *)line, n + 6u);
 }
 
 static void hal_accept_peer(void *ctx)

@@ -13,6 +13,7 @@ or any tool through `wrangler proxy`).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import click
 
@@ -21,7 +22,8 @@ from robowrangler.cli.negative_numbers import NumberArgsCommand
 from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.progress import Progress
 from robowrangler.errors import InvalidArgument, RoboWranglerError, StateTimeout
-from robowrangler.protocol.generated import SpindleFlag, State
+from robowrangler.protocol.generated import SPINDLE_PERIOD_MS, SpindleFlag, State
+from robowrangler.telemetry import TelemetrySample
 
 _WITHIN = dict(type=Seconds(positive=True), metavar="SECONDS", show_default=True)
 _HEARTBEAT_NOTE = "the device stops the spindle heartbeat_timeout_s after this command exits"
@@ -58,6 +60,27 @@ def _wait_for_guide(ctx: CliContext, rw, done, *, within_s: float, what: str, ta
                                "exits: give a longer --within" if moving else "")) from None
     finally:
         progress.end_line()
+
+
+def _settled_at(target_m: float) -> Callable[[TelemetrySample], bool]:
+    """done() for a loop move: the device reports the target and no moving speed, after its spindle loop has acted
+    on the target. The first samples that carry a new target may come before the loop's next step (every
+    SPINDLE_PERIOD_MS of the device's time): they say "not moving" with the guide where it was. So a sample
+    counts once MOVING has been seen, or from two spindle periods (device time) after the target first showed."""
+    first_s: list[float] = []
+    seen_moving = False
+
+    def done(sample: TelemetrySample) -> bool:
+        nonlocal seen_moving
+        if abs(sample.guide_target_m - target_m) >= 1e-6:
+            return False
+        moving = SpindleFlag.MOVING in sample.spindle_flags
+        seen_moving |= moving
+        if not first_s:
+            first_s.append(sample.time_s)
+        acted = seen_moving or sample.time_s - first_s[0] >= 2 * SPINDLE_PERIOD_MS / 1000
+        return acted and not moving
+    return done
 
 
 GUIDE_WIRE_LIMIT_MM = units.INT32_MAX / 1000.0  # SET_LOOP carries um in an int32
@@ -111,8 +134,7 @@ def loop(ctx: CliContext, guide_mm: float, within_s: float, no_wait: bool) -> No
             ctx.result({"command": "loop", "guide_target_mm": guide_mm, "state": state.name},
                        f"guide target {guide_mm:g} mm (state {state.name})")
             return
-        done = _wait_for_guide(ctx, rw, lambda s: abs(s.guide_target_m - target_m) < 1e-6
-                               and SpindleFlag.MOVING not in s.spindle_flags, within_s=within_s, what="loop",
+        done = _wait_for_guide(ctx, rw, _settled_at(target_m), within_s=within_s, what="loop",
                                target=f" of the target {guide_mm:g} mm")
     ctx.result({"command": "loop", "guide_target_mm": guide_mm, "guide_mm": _guide_mm(done), "state": done.state.name},
                f"guide at {_guide_mm(done):g} mm (target {guide_mm:g} mm, state {done.state.name})")

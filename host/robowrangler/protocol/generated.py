@@ -31,6 +31,7 @@ ESC_PULSE_MAX_US = 2000  # Full throttle: the top of the ESC pulse protocol; no 
 ENCODER_HOLD_MIN_MMPS = 1000  # At a speed setpoint of at least this, an encoder silence longer than the stale bound holds the throttle and the integrator (a stale reading, not a stopped rope). (mm/s)
 ENCODER_STALE_EDGE_PERIODS = 4  # The stale bound: this many encoder edge periods at the speed setpoint, and at least ENCODER_STALE_MIN_US. (1)
 ENCODER_STALE_MIN_US = 3000  # The stale bound is never shorter than this (a turning wheel's silence between two ticks never trips it). (us)
+SPINDLE_PERIOD_MS = 10  # The spindle loop's period: it reads the servo, steps the position loop and writes a moving speed this often (device time), so a new guide target shows as MOVING in telemetry at most this much later. (ms)
 
 
 class State(IntEnum):

@@ -60,6 +60,25 @@ class ScenarioName(click.ParamType):
         return value
 
 
+class WifiSpec(click.ParamType):
+    """The SIL board's NINA WiFi module and its faults (robowrangler_sim.sil.wifi_module.WifiModule.parse)."""
+
+    name = "wifi"
+
+    def get_metavar(self, param: click.Parameter, ctx: click.Context) -> str:
+        return "SPEC"
+
+    def convert(self, value, param, ctx):
+        from robowrangler_sim.sil.wifi_module import WifiModule, WifiModuleError
+
+        if not isinstance(value, str):
+            return value
+        try:
+            return WifiModule.parse(value)
+        except WifiModuleError as exc:
+            self.fail(str(exc), param, ctx)
+
+
 def _sil_modules():
     from robowrangler_sim import demo, sil
 
@@ -100,11 +119,16 @@ def _sil_modules():
 @click.option("--shape-table", "shape_table", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="With --scenario: the rope chain's shape table (JSON, e.g. from `wrangler identify`) instead of "
                    "the shipped default.")
+@click.option("--wifi", "wifi", type=WifiSpec(), default=None,
+              help="The board's NINA WiFi module and its faults, plant time in seconds, comma-separated: "
+                   "boot=never (a module that never answers: NO_MODULE after 2 s, LED on), boot=S (its ready line "
+                   "S after reset), associate=S, lost=START-END (the access point out of reach; START- for good), "
+                   "busy_us=N (its ready line busy N us after each call), slow_from=S. Default: a healthy module.")
 @pass_context
 def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, seed: int,
                 duration_s: float | None, state_file: str | None, scenario: str | None, n_links: int,
                 render_dir: str | None, viewer: bool, shape_table: str | None, model_file: str | None = None,
-                foxglove_port: int | None = None) -> None:
+                foxglove_port: int | None = None, wifi=None) -> None:
     """Run a simulated RoboWrangler (SIL firmware + drive plant) on udp://127.0.0.1:PORT.
 
     Point any wrangler command or the Python client at it: it speaks the board's protocol. It is provisioned
@@ -124,6 +148,9 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
                                "against it)")
     if viewer and scenario is None:
         raise click.UsageError("--viewer needs --scenario")
+    if wifi is not None and scenario is not None:
+        raise click.UsageError("--wifi shapes a served SIL device's WiFi module; a --scenario runs its own host "
+                               "over a healthy link")
     if viewer and render_dir is not None:
         raise click.UsageError("--viewer and --render cannot be combined: MuJoCo uses one OpenGL backend per process "
                                "(GLFW windows for --viewer, headless OSMesa for --render)")
@@ -144,7 +171,7 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     sil_pkg, _ = _sil_modules()
     try:
         session = sil_pkg.SilSession(speedup=None if unpaced else speedup, seed=seed, cmd_port=cmd_port,
-                                     trace_every=0, key=ctx.key, state_file=state_file, model=model_file)
+                                     trace_every=0, key=ctx.key, state_file=state_file, model=model_file, wifi=wifi)
         session.start()
     except sil_pkg.SilError as exc:
         raise SimulatorUnavailable(str(exc)) from exc
@@ -176,8 +203,13 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
         raise SimulatorUnavailable(f"the SIL stopped: {exc}") from exc
     finally:
         session.stop()
-    ctx.result({"command": "sil", "simulated_s": round(session.time_s, 3)},
-               f"SIL stopped after {session.time_s:.3f} simulated seconds")
+    wifi_counters = session.wifi_counters()
+    wifi_data = {k: wifi_counters[k] for k in ("state", "boot_ms", "losses", "deferred", "module_busy",
+                                                "module_hangs", "ready_waits_expired")}
+    ctx.result({"command": "sil", "simulated_s": round(session.time_s, 3), "wifi": wifi_data},
+               f"SIL stopped after {session.time_s:.3f} simulated seconds (WiFi {wifi_data['state']}: "
+               f"{wifi_data['losses']} losses, {wifi_data['deferred']} deferred reconnects, "
+               f"{wifi_data['module_busy']} passes with the module busy)")
 
 
 def _load_shape_table(path: str):

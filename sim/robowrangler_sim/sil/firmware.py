@@ -38,7 +38,7 @@ class FirmwareProcess:
 
     def __init__(self, *, cmd_port: int = 0, plant_port: int = 0, plant_timeout_s: int = 10, tick_us: int = 1000,
                  state_file: Path | None = None, binary: Path | None = None, start_timeout_s: float = 5.0,
-                 spindle_bus_us: int | None = None) -> None:
+                 spindle_bus_us: int | None = None, wifi_args: list[str] | None = None) -> None:
         for name, port in (("cmd_port", cmd_port), ("plant_port", plant_port)):
             if not isinstance(port, int) or not 0 <= port <= 65535:
                 raise ValueError(f"{name}: expected a UDP port 0..65535, got {port!r}")
@@ -52,6 +52,7 @@ class FirmwareProcess:
                 raise ValueError(f"spindle_bus_us: expected the bus time of one spindle transaction, 1..1000000 us, "
                                  f"got {spindle_bus_us!r}")
             self._args += ["--spindle-bus-us", str(spindle_bus_us)]
+        self._args += list(wifi_args or [])  # the NINA module's faults (wifi_module.WifiModule.firmware_args)
         self.exit_stderr = ""  # what the process wrote on stderr, read when it is stopped
         self._start_timeout_s = start_timeout_s
         self._proc: subprocess.Popen[str] | None = None

@@ -32,6 +32,12 @@ from robowrangler_sim.sil.errors import SilError, SilFirmwareError
 from robowrangler_sim.sil.firmware import FirmwareProcess
 from robowrangler_sim.sil.lockstep import LockstepLink
 from robowrangler_sim.sil.provisioning_jig import Provisioner
+from robowrangler_sim.sil.usb_notes import UsbNotes
+from robowrangler_sim.sil.wifi_module import WifiModule, WifiModuleError, parse_counters
+
+BOOT_LIMIT_S = 20.0
+"""The longest WiFi boot a session waits for before provisioning (the board's bounds: 2 s for the module's ready
+line, 15 s for the blocking WiFi.begin; plant time)."""
 
 
 @dataclass(frozen=True)
@@ -143,6 +149,11 @@ class SilSession:
         spindle_bus_us: bus time of one spindle transaction in the firmware's bus model (rw_sil
             --spindle-bus-us, firmware/hal/sil/sil_spindle_bus.h; None: its default, 350 us). The firmware
             steps the spindle with the reading its bus side completed since the previous step, as on the board.
+        wifi: the board's NINA WiFi module in the firmware (robowrangler_sim.sil.wifi_module): None or a default
+            WifiModule is a healthy module (the link up from the first tick); a WifiModule, or its spec text (e.g.
+            "boot=never", "lost=3.0-3.8", "busy_us=3000"), scripts its faults. A module that is slow to boot
+            delays the firmware's control tick as the board's setup() does: start() steps the plant until the
+            device's USB says how the WiFi boot ended (``usb_notes``), then provisions it.
 
     Each tick the session composes the plants through the contract only: the drive gets DriveInputs (the
     firmware's ESC pulse after the actuator filters, the scene's ``loads``, the rope exposed = the spindle's
@@ -170,7 +181,7 @@ class SilSession:
                  drive: Plant | Callable[..., Plant] | None = None,
                  spindle: Plant | Callable[..., Plant] | None = None,
                  spindle_bus_us: int | None = None,
-                 tick_timeout_s: float = 2.0, model=None) -> None:
+                 tick_timeout_s: float = 2.0, model=None, wifi: WifiModule | str | None = None) -> None:
         diagnosed = None
         if model is not None:  # a drive model file written by `wrangler diagnose` (or a DiagnosedModel)
             from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
@@ -209,8 +220,17 @@ class SilSession:
         self._provision_on_start = provision
         self._tmpdir = None if state_file is not None else tempfile.TemporaryDirectory(prefix="rw_sil_")
         self.state_file = Path(state_file) if state_file is not None else Path(self._tmpdir.name) / "flash.bin"
+        if isinstance(wifi, str):
+            wifi = WifiModule.parse(wifi)
+        elif wifi is None:
+            wifi = WifiModule()
+        elif not isinstance(wifi, WifiModule):
+            raise WifiModuleError("wifi", "None, a WifiModule or its spec text (e.g. 'boot=never')", wifi)
+        self.wifi = wifi
+        self.usb_notes: list[tuple[float, str]] = []  # status lines read by start() while the WiFi booted
         self._firmware = FirmwareProcess(cmd_port=cmd_port, plant_timeout_s=plant_timeout_s, tick_us=tick_us,
-                                         state_file=self.state_file, spindle_bus_us=spindle_bus_us)
+                                         state_file=self.state_file, spindle_bus_us=spindle_bus_us,
+                                         wifi_args=wifi.firmware_args())
         self._link: LockstepLink | None = None
         self._actions: list[tuple[int, int, Callable[[], None]]] = []
         self._action_counter = itertools.count()
@@ -261,9 +281,33 @@ class SilSession:
         self._firmware.start()
         self._link = LockstepLink(self._firmware.plant_port, tick_timeout_s=self.tick_timeout_s,
                                   alive=lambda: self._firmware.poll() is None)
+        if self.wifi.boot_takes_time:
+            self._power_up()
         if self._provision_on_start:
             self.provision(key=self.key)
         return self
+
+    def _power_up(self) -> None:
+        """Step the plant while the board's WiFi boot runs (its control tick has not started: USB is not served),
+        until the device's USB says how it ended (``wifi UP``, ``wifi CONNECTING``, ``wifi NO_MODULE: ...``)."""
+        end_us = self.drive_out.time_us + round(BOOT_LIMIT_S * 1e6)
+        with UsbNotes(self.serial_path) as usb:
+            while not any(text.startswith("wifi") for _, text in self.usb_notes):
+                if self.drive_out.time_us >= end_us:
+                    raise SilError(f"the SIL device's WiFi boot did not end within {BOOT_LIMIT_S:g} s of plant time "
+                                   f"(module {self.wifi})")
+                self.step()
+                self.usb_notes += [(self.time_s, text) for text in usb.read()]
+
+    def wifi_counters(self) -> dict[str, int | str]:
+        """After stop(): the firmware's WiFi link counters ("rw_sil wifi" on its stderr): state, boot_ms, polls,
+        connects, losses, attempts, deferred, module_busy, module_hangs, ready_waits_expired, calls, ... ."""
+        return parse_counters(self.firmware_stderr, "rw_sil wifi")
+
+    def led_counters(self) -> dict[str, int | str]:
+        """After stop(): the status LED ("rw_sil led"): on (at the end), on_ticks, off_ticks, changes,
+        last_change_ms; with the ticks the control tick ran and its overruns."""
+        return parse_counters(self.firmware_stderr, "rw_sil led")
 
     def provision(self, **fields) -> ProvisionStatus:
         """Provision over the USB serial (the key, WiFi, parameters: Provisioner.provision's keywords) while

@@ -3,8 +3,10 @@
 replay (the chain's fast form driven by rope speed, guide and phi) -> residuals (signed normal distance, noise from
 the data) -> locate (loop part, phi / speed band, steady / transient, time spans) -> refit the chain's own
 parameters (servo time constant kd/kp, loop length scale) -> each loop candidate fitted with 95 % intervals
-(diagnose.fit.ModelFitter) -> select on held-out frames and BIC (diagnose.select) -> extended model (loop model
-file) -> report (report_json / write_loop_report).
+(diagnose.fit.ModelFitter) -> select on held-out frames and BIC (diagnose.select) -> when the best effect leaves the
+contours above the camera noise, it and each next-best one fitted together, kept only if the pair beats the single
+effect by the same held-out test and BIC -> extended model (loop model file) -> report (report_json /
+write_loop_report).
 """
 
 from __future__ import annotations
@@ -15,11 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-from robowrangler_sim.diagnose.errors import UnknownEffectError
+from robowrangler_sim.diagnose.errors import ModelMismatchError, UnknownEffectError
 from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
 from robowrangler_sim.diagnose.loop import shape_model as sm
 from robowrangler_sim.diagnose.loop.candidates import LOOP_LIBRARY, LoopCandidate
-from robowrangler_sim.diagnose.loop.data import LoopData, load_loop_data
+from robowrangler_sim.diagnose.loop.data import (LOOP_LENGTH_TOLERANCE, LoopData, length_mismatch_message,
+                                                 load_loop_data)
 from robowrangler_sim.diagnose.loop.locate import LoopLocator, frame_regimes, part_labels
 from robowrangler_sim.diagnose.loop.model_file import LoopModel
 from robowrangler_sim.diagnose.loop.replay import CHANNEL, LoopReplay
@@ -31,6 +34,18 @@ from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_cou
 BLOCK_S = 1.0
 HELDOUT_EVERY = 3
 ALPHA = 0.01
+PAIR_TRIGGER_NOISE = 2.0
+"""Two effects together are tried when the best one (or the refitted chain, when none is accepted alone) leaves
+held-out contour error above this many camera-noise sigmas (the report's own 'beyond noise'): each of the PAIR_FIRSTS
+candidates with the lowest held-out error with the PAIR_PARTNERS others that could explain most of what it leaves
+(linear gain on its fit residual)."""
+PAIR_FIRSTS = 2
+PAIR_PARTNERS = 2
+PAIR_MAX_COSINE = 0.9
+"""A pair is kept only when the two laws move the contours differently on this recording: the cosine between their
+parameters' sensitivities (fit frames, at the pair's solution) at most this."""
+SHORT_LOOP_EXPLAINED = 0.5
+"""A loop shorter than the model's is a loop effect's only when that effect at least halves the contour error."""
 
 LOOP_NOMINAL_REFIT: tuple[ParamSpec, ...] = (
     ParamSpec("servo_time_constant_s", sm.TH_TAU_S, "s", 0.5, 2.0, 0.5, relative=True),
@@ -106,7 +121,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
     cands = _resolve(effects)
     base = LoopModel.nominal() if model is None else (model if isinstance(model, LoopModel) else LoopModel.load(model))
     data = load_loop_data(recording_path, takeoff_speed_mps=base.takeoff_speed_mps(),
-                          loop_length_of_guide=base.loop_length_m)
+                          loop_length_of_guide=base.loop_length_m, defer_short_loop=True)
     shape = base.shape_model()
     replay = LoopReplay(data, shape, np.array([base.loop_length_m(g) for g in data.guide_m]))
     theta_base = base.theta(shape)
@@ -194,14 +209,73 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                                                                      for i in names)})
         else:
             verdict = "missing_physics"
+    pair_ev: dict | None = None
+    single_rms = chosen_sc.heldout_rms[CHANNEL]
+    if single_rms > PAIR_TRIGGER_NOISE * noise and len(fits) >= 2:
+        # one effect does not bring the contours down to the camera noise (or none is accepted alone): two together
+        ranked = sorted(fits, key=lambda i: fits[i][2].block_sse.sum())
+        firsts = ranked[:PAIR_FIRSTS]
+        if chosen and chosen[0] not in firsts:
+            firsts = [chosen[0]] + firsts[:-1]
+        pairs: list[tuple[str, str]] = []
+        for first in firsts:  # forward step: the partners that could explain most of what the first one leaves
+            gains = {o: _partner_gain(replay, fits[first][1], fits[o][0], fit_mask) for o in fits if o != first}
+            for o in sorted(gains, key=gains.get, reverse=True)[:PAIR_PARTNERS]:
+                if gains[o] > 0 and (first, o) not in pairs and (o, first) not in pairs:
+                    pairs.append((first, o))
+        ok_pairs: list[tuple] = []
+        for first, other in pairs:
+            _progress(progress, f"fitting {first} + {other} together")
+            c1, c2 = fits[first][0], fits[other][0]
+            th_p = c2.apply_neutral(fits[first][1].theta_)
+            cols, starts = c2.start_grid(th_p)
+            specs = list(LOOP_NOMINAL_REFIT) + list(c1.params) + list(c2.params)
+            fp = ModelFitter(specs, weights=weights, max_nfev=15).fit(replay, th_p, fit_mask=fit_mask, starts=starts,
+                                                                      start_columns=cols, bounds_ref=theta_base)
+            r_p = replay.measured()[CHANNEL] - fp.prediction_[CHANNEL]
+            sc_p = score_model(f"{first}+{other}", len(specs), {CHANNEL: r_p}, weights, fit_mask, block_id,
+                               held_blocks, n_eff)
+            # the pair must beat the better of its two alone and the single-effect verdict (or the refitted chain)
+            ok, ev = accepted(sc_p, fits[first][2], alpha=ALPHA)
+            ok = ok and accepted(sc_p, chosen_sc, alpha=ALPHA)[0]
+            ev["sensitivity_cosine"] = round(_sensitivity_cosine(replay, fp.theta_, c1, c2, fit_mask), 4)
+            if abs(ev["sensitivity_cosine"]) > PAIR_MAX_COSINE:
+                ok = False  # the two laws move the contours alike here: their parameters trade, the pair is not separable
+            own = {x.name for x in c1.params} | {x.name for x in c2.params}
+            rows.append({"id": f"{first}+{other}", "status": "accepted" if ok else "rejected", **ev,
+                         "heldout_rms_mm": _mm(sc_p), "against": first,
+                         "params": {q.name: round(q.value, 6) for q in fp.params_ if q.name in own}})
+            if ok:
+                ok_pairs.append((first, other, fp, sc_p, ev))
+        if ok_pairs:
+            ok_pairs.sort(key=lambda q: q[3].block_sse.sum())
+            best_pair = ok_pairs[0]
+            rivals = [q for q in ok_pairs[1:] if heldout_p(best_pair[3], q[3]) >= ALPHA
+                      and abs(q[3].bic - best_pair[3].bic) < 10.0]
+            if not_ident and "candidates" in not_ident[0]:
+                not_ident.pop(0)
+            chosen, chosen_fit, chosen_sc, pair_ev = [best_pair[0], best_pair[1]], best_pair[2], best_pair[3], best_pair[4]
+            if rivals:
+                verdict = "not_identifiable"
+                names = [f"{q[0]}+{q[1]}" for q in [best_pair] + rivals]
+                ids = list(dict.fromkeys(i for q in [best_pair] + rivals for i in q[:2]))
+                not_ident.insert(0, {"id": " / ".join(names), "candidates": names,
+                                     "reason": "these pairs of effects explain the contours equally well on held-out "
+                                               "frames",
+                                     "separating_measurement": "; ".join(f"{i}: {fits[i][0].separating_measurement}"
+                                                                         for i in ids)})
+            else:
+                verdict = "missing_physics"
     timings["select_s"] = time.perf_counter() - t1
+    if abs(data.length_ratio - 1.0) > LOOP_LENGTH_TOLERANCE:
+        _check_short_loop_explained(data, base, verdict, chosen, sc_nom, chosen_sc)
 
     effects_out: list[LoopFinding] = []
     if verdict == "missing_physics":
         _progress(progress, "intervals (jackknife)")
-        cand = fits[chosen[0]][0]
-        own = {s.name for s in cand.params}
-        jackknife_intervals(chosen_fit, own, max_nfev=4)
+        cands_chosen = [fits[i][0] for i in chosen]
+        own_all = {x.name for c in cands_chosen for x in c.params}
+        jackknife_intervals(chosen_fit, own_all, max_nfev=4)
         r_after = replay.measured()[CHANNEL] - chosen_fit.prediction_[CHANNEL]
         gain = (r_nom ** 2 - r_after ** 2).reshape(F, K)
         part_gain = {}
@@ -209,13 +283,16 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
             m = parts == p_i
             part_gain[p_name] = float(gain[m].sum())
         part = max(part_gain, key=part_gain.get)
-        ev = next(r for r in rows if r["id"] == chosen[0])
-        effects_out.append(LoopFinding(
-            effect_id=cand.effect_id, law=cand.law, part=part, spans_s=[s[:2] for s in loc.spans_],
-            params={p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
-                    for p in chosen_fit.params_ if p.name in own},
-            heldout_rms_mm_before=_mm(sc_nom), heldout_rms_mm_after=_mm(chosen_sc),
-            evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"]}))
+        for j, cand in enumerate(cands_chosen):
+            own = {x.name for x in cand.params}
+            ev = next(r for r in rows if r["id"] == cand.effect_id) if j == 0 and pair_ev is None else pair_ev
+            effects_out.append(LoopFinding(
+                effect_id=cand.effect_id, law=cand.law, part=part, spans_s=[s[:2] for s in loc.spans_],
+                params={p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
+                        for p in chosen_fit.params_ if p.name in own},
+                heldout_rms_mm_before=_mm(sc_nom), heldout_rms_mm_after=_mm(chosen_sc),
+                evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"],
+                          **({"pair_against_single": chosen[0]} if pair_ev is not None else {})}))
     nominal_refit = {p.name: {"nominal": float(theta_base[s.column]), "fitted": p.value, "unit": p.unit,
                               "ci95": list(p.ci95)}
                      for p, s in zip(nominal.params_, nominal.specs)}
@@ -233,6 +310,52 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                                                  - chosen_fit.prediction_[CHANNEL]).reshape(F, K) ** 2, axis=1)) * 1e3,
                 "observed": data.points_m, "nominal_theta": theta_base, "after_theta": chosen_fit.theta_,
                 "replay": replay})
+
+
+def _partner_gain(replay: LoopReplay, first_fit: ModelFitter, partner: LoopCandidate, fit_mask: np.ndarray) -> float:
+    """How much of the first effect's fit residual the partner's law could take (least-squares gain of the partner's
+    contour change, best over its start points, on the fit frames), m^2."""
+    theta = partner.apply_neutral(first_fit.theta_)
+    cols, starts = partner.start_grid(theta)
+    rows = np.repeat(theta[None, :], starts.shape[0] + 1, axis=0)
+    rows[1:, cols] = starts
+    pred = replay.predict(rows)[CHANNEL]
+    r = (replay.measured()[CHANNEL] - pred[0])[fit_mask]
+    best = 0.0
+    for d in pred[1:]:
+        dd = (d - pred[0])[fit_mask]
+        n2 = float(dd @ dd)
+        if n2 > 0:
+            best = max(best, float(dd @ r) ** 2 / n2)
+    return best
+
+
+def _sensitivity_cosine(replay: LoopReplay, theta: np.ndarray, c1: LoopCandidate, c2: LoopCandidate,
+                        fit_mask: np.ndarray) -> float:
+    """Cosine between the contour changes of a small step (a tenth of the typical magnitude) in each law's parameter."""
+    rows = np.repeat(theta[None, :], 3, axis=0)
+    for i, spec in enumerate((c1.params[0], c2.params[0]), start=1):
+        rows[i, spec.column] += 0.1 * spec.scale
+    pred = replay.predict(rows)[CHANNEL]
+    a, b = (pred[1] - pred[0])[fit_mask], (pred[2] - pred[0])[fit_mask]
+    den = float(np.linalg.norm(a) * np.linalg.norm(b))
+    return float(a @ b) / den if den > 0 else 1.0
+
+
+def _check_short_loop_explained(data: LoopData, base: LoopModel, verdict: str, chosen: list[str], sc_nom: ModelScore,
+                                chosen_sc: ModelScore) -> None:
+    """A loop shorter than the model's (kept by the loader) stands only when a loop effect explains the contours:
+    named or not identifiable among candidates, and held-out contour error at most SHORT_LOOP_EXPLAINED x the
+    refitted chain's. Else it is the rope length or guide calibration: ModelMismatchError, as the loader would."""
+    before, after = _mm(sc_nom), _mm(chosen_sc)
+    if verdict != "none" and after <= SHORT_LOOP_EXPLAINED * before:
+        return
+    what = (f"the best loop effect, {chosen[0]}, takes the held-out contour error only from {before:.1f} to "
+            f"{after:.1f} mm" if chosen else f"no loop effect explains the contours (held-out contour error "
+                                              f"{before:.1f} mm)")
+    raise ModelMismatchError(length_mismatch_message(data, base.loop_length_m, data.length_ratio)
+                             + f"; {what}, so a shorter loop is not the flutter or fold of a loop effect in the "
+                               "library (if the rope is right, it is physics outside it: a head wind crumples the tip)")
 
 
 def _mm(sc: ModelScore) -> float:

@@ -6,10 +6,16 @@ rope_speed_mps. Guide position: /device/telemetry guide_position_m, else the gui
 Only frames where the chain model flies the loop are compared: rope speed at least AIRBORNE_MARGIN x ToV, and
 TAKEOFF_SETTLE_S after the speed last crossed it (the takeoff itself is the lift model's business, not the
 shape table's).
+
+Loop length: a contour longer than the model's loop by more than LOOP_LENGTH_TOLERANCE is refused here (no loop
+effect lengthens the rope). A shorter one, down to SHORT_LOOP_FLOOR, is what a rope that flutters or folds at the tip
+looks like on a K-point contour (a head wind crumples the tip: the resampled contour is shorter than the rope); the
+loader keeps it (LoopData.length_ratio) and the diagnosis refuses it only when no loop effect explains the contours.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,6 +32,7 @@ MIN_FRAMES = 30
 AIRBORNE_MARGIN = 1.1
 TAKEOFF_SETTLE_S = 1.0
 LOOP_LENGTH_TOLERANCE = 0.10
+SHORT_LOOP_FLOOR = 0.70
 EXIT_TOLERANCE_FRACTION = 0.05
 
 
@@ -44,7 +51,8 @@ class LoopData:
         segment: (F,) index of the contiguous airborne stretch each frame belongs to.
         observed_length_m: (F,) arc length of each observed contour.
         notes: what the loader assumed (missing optional channels).
-        truth: /sim/plant_truth columns when present (scoring only; the diagnosis never reads them).
+        length_ratio: median observed / model loop length; outside 1 +- LOOP_LENGTH_TOLERANCE only when shorter and
+            deferred (see module doc): the diagnosis then needs an effect that explains the contours.
     """
 
     path: Path
@@ -57,6 +65,7 @@ class LoopData:
     observed_length_m: np.ndarray
     frames_total: int
     notes: list[str] = field(default_factory=list)
+    length_ratio: float = 1.0
 
     @property
     def n_frames(self) -> int:
@@ -84,9 +93,11 @@ def _arc_length(points: np.ndarray) -> float:
     return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
 
 
-def load_loop_data(path: str | Path, *, takeoff_speed_mps: float, loop_length_of_guide, n_points: int = N_POINTS
-                   ) -> LoopData:
+def load_loop_data(path: str | Path, *, takeoff_speed_mps: float, loop_length_of_guide, n_points: int = N_POINTS,
+                   defer_short_loop: bool = False) -> LoopData:
     """Read and check the loop channels. loop_length_of_guide: guide travel (m) -> the model's loop length (m).
+    defer_short_loop: keep a loop shorter than the model's (down to SHORT_LOOP_FLOOR) for the diagnosis to explain
+    (LoopData.length_ratio) instead of raising ModelMismatchError here.
 
     Raises MissingChannelsError (no /loop/observation, no phi, no rope speed), ContourFrameError (contours not in
     the table's frame), NoUsableSpanError (too few points or airborne frames), ModelMismatchError (the observed
@@ -168,11 +179,25 @@ def load_loop_data(path: str | Path, *, takeoff_speed_mps: float, loop_length_of
     _, seg_k = np.unique(seg[idx], return_inverse=True)
     data = LoopData(path=path, time_s=t[idx], phi_rad=phi[idx], speed_mps=speed[idx], guide_m=guide[idx],
                     points_m=pts, segment=seg_k, observed_length_m=lengths, frames_total=len(rows), notes=notes)
-    _check_frame(data, loop_length_of_guide)
-    return data
+    ratio = _check_frame(data, loop_length_of_guide)
+    if abs(ratio - 1.0) > LOOP_LENGTH_TOLERANCE:
+        if not (defer_short_loop and SHORT_LOOP_FLOOR <= ratio < 1.0):
+            raise ModelMismatchError(length_mismatch_message(data, loop_length_of_guide, ratio))
+        notes.append(f"the observed loop is {1.0 - ratio:.0%} shorter than the model's (ratio {ratio:.3f}): kept for "
+                     "a loop effect to explain (a rope fluttering or folding at the tip is shorter on the contour)")
+    return dataclasses.replace(data, length_ratio=ratio)
 
 
-def _check_frame(data: LoopData, loop_length_of_guide) -> None:
+def length_mismatch_message(data: LoopData, loop_length_of_guide, ratio: float) -> str:
+    """What a loop-length mismatch says: observed and model lengths, the ratio, the tolerance, what to pass."""
+    model_len = np.array([loop_length_of_guide(g) for g in data.guide_m])
+    return (f"{data.path}: the observed loop is {np.median(data.observed_length_m):.3f} m long (median), the model's "
+            f"{np.median(model_len):.3f} m at the recorded guide position (ratio {ratio:.3f}, tolerance "
+            f"+-{LOOP_LENGTH_TOLERANCE:.0%}): another rope length or guide calibration; pass a chain model with the "
+            "right rope_length_m")
+
+
+def _check_frame(data: LoopData, loop_length_of_guide) -> float:
     """The table's frame: metres, the exit at the origin, the upper branch above the lower one, and a loop as long
     as the model's."""
     model_len = np.array([loop_length_of_guide(g) for g in data.guide_m])
@@ -197,8 +222,4 @@ def _check_frame(data: LoopData, loop_length_of_guide) -> None:
     if np.median(data.points_m[:, :, 0].max(axis=1)) <= 0:
         raise ContourFrameError(f"{data.path}: contours do not reach out in +x: expected x pointing away from the "
                                 "robot")
-    if abs(ratio - 1.0) > LOOP_LENGTH_TOLERANCE:
-        raise ModelMismatchError(f"{data.path}: the observed loop is {np.median(data.observed_length_m):.3f} m long "
-                                 f"(median), the model's {np.median(model_len):.3f} m at the recorded guide position "
-                                 f"(ratio {ratio:.3f}, tolerance +-{LOOP_LENGTH_TOLERANCE:.0%}): another rope length or "
-                                 "guide calibration; pass a chain model with the right rope_length_m")
+    return ratio

@@ -26,9 +26,12 @@ def loop_first_line(res) -> str:
         d = res.not_identifiable[0]
         return f"loop: not identifiable from these contours: {d['id']}; would separate them: {d['separating_measurement']}"
     e = res.effects[0]
-    ps = ", ".join(f"{k} {p['value']:.3g} {p['unit']} ({p['ci95'][0]:.3g}-{p['ci95'][1]:.3g})" for k, p in e.params.items())
-    return (f"loop: left out: {e.effect_id.replace('_', ' ')} {ps}, mostly on the {e.part.replace('_', ' ')}, held-out "
-            f"contour error {e.heldout_rms_mm_before:.1f} -> {e.heldout_rms_mm_after:.1f} mm")
+    named = " together with ".join(
+        f"{x.effect_id.replace('_', ' ')} " + ", ".join(f"{k} {p['value']:.3g} {p['unit']} ({p['ci95'][0]:.3g}-"
+                                                          f"{p['ci95'][1]:.3g})" for k, p in x.params.items())
+        for x in res.effects)
+    return (f"loop: left out: {named}, mostly on the {e.part.replace('_', ' ')}, held-out contour error "
+            f"{e.heldout_rms_mm_before:.1f} -> {e.heldout_rms_mm_after:.1f} mm")
 
 
 def loop_report_json(res) -> dict:
