@@ -122,12 +122,7 @@ def _dev_case(name: str):
     return next(c for c in proof_cases(seeds=[1], clean_seeds=[]) if c.name == name)
 
 
-NOT_RECOVERED = pytest.mark.xfail(strict=True, reason="known shortfall (README, Diagnose): with only its own and its "
-                                  "look-alike parameters free the fit does not undo what the nominal refit absorbed")
-
-
-@pytest.mark.parametrize("effect_id", [pytest.param(e, marks=NOT_RECOVERED) if e in ("rope_drag_law", "esc_deadband")
-                                       else e for e in RIVAL])
+@pytest.mark.parametrize("effect_id", list(RIVAL))
 def test_each_candidate_is_recovered_from_a_generated_recording(effect_id, tmp_path):
     case = _dev_case(f"{effect_id}/plain/1")
     truth, _ = case.truth_effect()

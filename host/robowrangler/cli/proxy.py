@@ -15,7 +15,7 @@ from robowrangler.cli.context import CliContext, Seconds, pass_context
 from robowrangler.cli.exit_status import ExitStatus
 from robowrangler.cli.progress import PROGRESS_PERIOD_S
 from robowrangler.cli.record import check_recording_path, default_source
-from robowrangler.cli.signals import sigterm_as_interrupt
+from robowrangler.cli.signals import Interrupt, sigterm_as_interrupt
 from robowrangler.client import Client
 from robowrangler.errors import RoboWranglerError
 from robowrangler.link_proxy import DEFAULT_PROXY_PORT, LinkProxy, TeeTransport
@@ -81,7 +81,7 @@ def proxy(ctx: CliContext, listen_port: int, record_path: Path | None, force: bo
             transport = RecordingTransport(transport, recorder)
         client = Client(ctx.url, connect_timeout_s=ctx.timeout_s, key=ctx.key,
                         transport=TeeTransport(transport, link_proxy.from_device))
-        with sigterm_as_interrupt():
+        with sigterm_as_interrupt() as stop:
             try:
                 client.connect()
                 params = _record_params(ctx, client, writer, live) if sinks else {}
@@ -95,7 +95,7 @@ def proxy(ctx: CliContext, listen_port: int, record_path: Path | None, force: bo
                 ctx.note(f"serving {local} for local tools (wrangler --url {local} ...)"
                          + (f", recording to {record_path}" if record_path else "")
                          + (f", live in Foxglove at {live.url}" if live else "") + "; Ctrl-C or SIGTERM ends it")
-                _serve(ctx, client, link_proxy, recorder, duration_s, start_s,
+                _serve(ctx, client, link_proxy, recorder, duration_s, start_s, stop,
                        republish=(lambda: live.publish_params(params)) if live is not None and params else None)
             except KeyboardInterrupt:
                 interrupted = True
@@ -126,11 +126,12 @@ def proxy(ctx: CliContext, listen_port: int, record_path: Path | None, force: bo
 
 
 def _serve(ctx: CliContext, client: Client, link_proxy: LinkProxy, recorder: LinkRecorder | None,
-           duration_s: float | None, start_s: float, republish) -> None:
+           duration_s: float | None, start_s: float, stop: Interrupt, republish) -> None:
     """Until --duration (or Ctrl-C): progress on stderr; the parameters again every PARAMS_PERIOD_S for
     Foxglove clients that connected later (its channels keep no last value)."""
     last_note_s = last_params_s = start_s
     while duration_s is None or time.monotonic() - start_s < duration_s:
+        stop.check()
         time.sleep(TICK_S)
         now_s = time.monotonic()
         if republish is not None and now_s - last_params_s >= PARAMS_PERIOD_S:

@@ -76,8 +76,9 @@ def record(ctx: CliContext, out: Path, duration_s: float | None, source: str | N
     client: Client | None = None
     waiting_noted = lost = interrupted = False
     try:
-        with sigterm_as_interrupt():
+        with sigterm_as_interrupt() as stop:
             while True:
+                stop.check()
                 now_s = time.monotonic()
                 remaining_s = None if deadline_s is None else deadline_s - now_s
                 if remaining_s is not None and remaining_s <= 0:

@@ -12,23 +12,49 @@ import threading
 from collections.abc import Iterator
 
 
-@contextlib.contextmanager
-def sigterm_as_interrupt() -> Iterator[None]:
-    """While inside, SIGTERM raises KeyboardInterrupt in the main thread (as SIGINT does).
+class Interrupt:
+    """What sigterm_as_interrupt() hands its block: `requested` turns true at the first SIGINT or SIGTERM.
 
-    Outside the main thread (signals cannot be handled there) it does nothing. The previous handler is
-    restored on exit, so that cleanup after the block is not interrupted by this handler again.
+    The signal also raises KeyboardInterrupt in the main thread, but Python drops an exception raised while a
+    finalizer (__del__, a weakref callback) runs ("Exception ignored in ..."): a loop that checks `requested`
+    ends even when its KeyboardInterrupt was lost that way."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if a signal asked to stop (for loops: call once per pass)."""
+        if self.requested:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[Interrupt]:
+    """While inside, SIGTERM raises KeyboardInterrupt in the main thread (as SIGINT does), and both set the
+    yielded Interrupt's `requested`.
+
+    Outside the main thread (signals cannot be handled there) it only yields an Interrupt that stays unset. The
+    previous handlers are restored on exit, so that cleanup after the block is not interrupted by this handler
+    again.
     """
+    stop = Interrupt()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield stop
         return
 
-    def interrupt(_signum: int, _frame: object) -> None:
+    def on_sigterm(_signum: int, _frame: object) -> None:
         signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a second SIGTERM must not cut the cleanup short
+        stop.requested = True
         raise KeyboardInterrupt
 
-    previous = signal.signal(signal.SIGTERM, interrupt)
+    def on_sigint(_signum: int, _frame: object) -> None:
+        stop.requested = True
+        raise KeyboardInterrupt
+
+    previous_term = signal.signal(signal.SIGTERM, on_sigterm)
+    previous_int = signal.signal(signal.SIGINT, on_sigint)
     try:
-        yield
+        yield stop
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGTERM, previous_term)
+        signal.signal(signal.SIGINT, previous_int)

@@ -185,7 +185,7 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
     try:
         # `kill %1` (SIGTERM; a background job ignores Ctrl-C's SIGINT) stops it as Ctrl-C does: firmware stopped,
         # temporary flash removed, exit 130
-        with sigterm_as_interrupt():
+        with sigterm_as_interrupt() as stop:
             session.run_in_background()
             if ctx.json_mode:
                 ctx.json_line({"type": "ready", "url": session.cmd_url, "serial": session.serial_path,
@@ -196,6 +196,7 @@ def sil_command(ctx: CliContext, cmd_port: int, speedup: float, unpaced: bool, s
                 ctx.note(f"SIL device on {session.cmd_url} ({pace}), USB serial {session.serial_path}, "
                          f"provisioned with {key_note}; Ctrl-C (or SIGTERM) to stop")
             while duration_s is None or session.time_s < duration_s:
+                stop.check()
                 session.check()
                 time.sleep(0.05)
             session.check()

@@ -13,6 +13,7 @@ from threadpoolctl import threadpool_limits
 
 from robowrangler_sim.diagnose.candidates import LIBRARY, Candidate
 from robowrangler_sim.diagnose.errors import UnknownEffectError
+from robowrangler_sim.diagnose.findings import EffectFinding, effect_finding, effect_params, nominal_refit_table
 from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
 from robowrangler_sim.diagnose.locate import Locator, spans_mask
 from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
@@ -28,21 +29,6 @@ from robowrangler_sim.plants import drive_batch as db
 BLOCK_S = 0.5
 HELDOUT_EVERY = 3  # every third 1 s block is held out of every fit
 ALPHA = 0.01
-
-
-@dataclass
-class EffectFinding:
-    """A fitted candidate as the report states it."""
-
-    effect_id: str
-    params: dict[str, dict]
-    channels: list[str]
-    spans_s: list[list[float]]
-    regime: dict
-    heldout_rms_before: dict[str, float]
-    heldout_rms_after: dict[str, float]
-    evidence: dict
-    law: str
 
 
 @dataclass
@@ -211,8 +197,9 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
             load_mask = _tick_mask(data, below)
         _progress(progress, f"fitting {cand.effect_id}")
         theta_c = cand.apply_neutral(nominal.theta_)
-        # the candidate's own parameters and the nominal ones it trades against (the rest stay at the refit)
-        fitter = ModelFitter(_look_alikes(cand) + list(cand.params), weights=weights).fit(
+        # the candidate's own parameters and every nominal one, from the refit: what the refit absorbed of the
+        # effect (a dead band taken for Coulomb friction and inertia, a drag law for the resistance) is undone
+        fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
             replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, starts=cand.start_grid(theta_c)[1],
             start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
         r_c = _residuals(data, fitter.prediction_)
@@ -289,16 +276,14 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         if s_f.block_sse.sum() <= chosen_score.block_sse.sum():
             chosen_fit, chosen_score = final, s_f
         _progress(progress, "intervals (jackknife)")
-        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params})
+        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params}, student_t=True)
     r_after = _residuals(data, chosen_fit.prediction_)
     effects_out: list[EffectFinding] = []
     load_spans: list = [(a, b) for a, b in below] if "external_rope_load" in chosen else []
     if verdict == "missing_physics":
         for eid in chosen:
             cand = fits[eid][0]
-            own = {s.name for s in cand.params}
-            params = {p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
-                      for p in chosen_fit.params_ if p.name in own}
+            params = effect_params(chosen_fit, cand)
             spans = _improvement_spans(data, r_nom, r_after, weights, on_tel)
             if cand.uses_located_spans:
                 spans = [[round(a, 3), round(b, 3)] for a, b in below]
@@ -309,17 +294,10 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
             if getattr(cand, "time_params", ()):
                 spans = [[round(params["load_start_s"]["value"], 3), round(params["load_end_s"]["value"], 3)]]
                 load_spans = spans
-            ev = next(r for r in cand_rows if r["id"] == eid)
-            effects_out.append(EffectFinding(
-                effect_id=eid, params=params, channels=list(cand.channels), spans_s=spans,
-                regime=dominant_regime(labels, spans_mask(data.time_s, [tuple(s) for s in spans])),
-                heldout_rms_before=score_nom.heldout_rms, heldout_rms_after=chosen_score.heldout_rms,
-                evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"]}, law=cand.law))
-    nominal_refit = {}
-    for p in nominal.params_:
-        spec = next(s for s in NOMINAL_REFIT if s.name == p.name)
-        nominal_refit[p.name] = {"nominal": float(theta_base[spec.column]), "fitted": p.value, "unit": p.unit,
-                                 "ci95": list(p.ci95)}
+            effects_out.append(effect_finding(cand, params, spans_s=spans, labels=labels, time_s=data.time_s,
+                                              rows=cand_rows, before=score_nom.heldout_rms,
+                                              after=chosen_score.heldout_rms))
+    nominal_refit = nominal_refit_table(nominal, NOMINAL_REFIT, theta_base)
     sse_before = score_nom.block_sse.sum()
     unexplained = float(chosen_score.block_sse.sum() / sse_before) if sse_before > 0 else 0.0
     final_theta = chosen_fit.theta_

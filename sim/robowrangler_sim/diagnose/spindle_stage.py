@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from robowrangler_sim.diagnose.candidates.base import Candidate
+from robowrangler_sim.diagnose.findings import effect_finding, effect_params, nominal_refit_table
 from robowrangler_sim.diagnose.locate import Locator, spans_mask
 from robowrangler_sim.diagnose.parameters import ParamSpec
 from robowrangler_sim.diagnose.regimes import dominant_regime
@@ -220,24 +221,11 @@ def diagnose_spindle_data(data: SpindleData, *, base: SpindleParams, candidates:
     r_after = _residuals(replay, chosen_fit.prediction_)
     effects_out = []
     if verdict == "missing_physics":
-        from robowrangler_sim.diagnose.api import EffectFinding
         spans = _improvement_spans(data.time_s, r_nom, r_after, weights)
-        for eid in chosen:
-            cand = fits[eid][0]
-            own = {s.name for s in cand.params}
-            params = {p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
-                      for p in chosen_fit.params_ if p.name in own}
-            ev = next(r for r in rows if r["id"] == eid)
-            effects_out.append(EffectFinding(
-                effect_id=eid, params=params, channels=list(cand.channels), spans_s=spans,
-                regime=dominant_regime(labels, spans_mask(data.time_s, [tuple(s) for s in spans])),
-                heldout_rms_before=score_nom.heldout_rms, heldout_rms_after=chosen_score.heldout_rms,
-                evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"]}, law=cand.law))
-    nominal_refit = {}
-    for p in nominal.params_:
-        spec = next(s for s in SPINDLE_REFIT if s.name == p.name)
-        nominal_refit[p.name] = {"nominal": float(theta_base[spec.column]), "fitted": p.value, "unit": p.unit,
-                                 "ci95": list(p.ci95)}
+        effects_out = [effect_finding(fits[eid][0], effect_params(chosen_fit, fits[eid][0]), spans_s=spans,
+                                      labels=labels, time_s=data.time_s, rows=rows, before=score_nom.heldout_rms,
+                                      after=chosen_score.heldout_rms) for eid in chosen]
+    nominal_refit = nominal_refit_table(nominal, SPINDLE_REFIT, theta_base)
     sse_before = score_nom.block_sse.sum()
     timings["spindle_total_s"] = time.perf_counter() - t0
     return SpindleDiagnosis(
