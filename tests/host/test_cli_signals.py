@@ -43,3 +43,17 @@ def test_handlers_are_restored_after_the_block() -> None:
     with sigterm_as_interrupt() as stop:
         assert signal.getsignal(signal.SIGINT) is not before[0]
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before and not stop.requested
+
+
+def test_an_ignored_sigint_stays_ignored() -> None:
+    """A background job of a shell ignores Ctrl-C's SIGINT; only SIGTERM ends it."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with sigterm_as_interrupt() as stop:
+            assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+            stop.check()
+        assert not stop.requested and signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)

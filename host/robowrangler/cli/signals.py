@@ -31,7 +31,7 @@ class Interrupt:
 @contextlib.contextmanager
 def sigterm_as_interrupt() -> Iterator[Interrupt]:
     """While inside, SIGTERM raises KeyboardInterrupt in the main thread (as SIGINT does), and both set the
-    yielded Interrupt's `requested`.
+    yielded Interrupt's `requested` (SIGINT only where Python's own handler had it: not when it is ignored).
 
     Outside the main thread (signals cannot be handled there) it only yields an Interrupt that stays unset. The
     previous handlers are restored on exit, so that cleanup after the block is not interrupted by this handler
@@ -52,9 +52,12 @@ def sigterm_as_interrupt() -> Iterator[Interrupt]:
         raise KeyboardInterrupt
 
     previous_term = signal.signal(signal.SIGTERM, on_sigterm)
-    previous_int = signal.signal(signal.SIGINT, on_sigint)
+    # an ignored SIGINT (a shell's background job) stays ignored; another handler someone set stays theirs
+    take_int = signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    previous_int = signal.signal(signal.SIGINT, on_sigint) if take_int else None
     try:
         yield stop
     finally:
         signal.signal(signal.SIGTERM, previous_term)
-        signal.signal(signal.SIGINT, previous_int)
+        if take_int:
+            signal.signal(signal.SIGINT, previous_int)
