@@ -110,3 +110,21 @@ bool rw_config_commit(rw_config *c, uint32_t session_epoch, const float values[R
     rw_config_seal(c);
     return true;
 }
+
+bool rw_config_take_credentials(const rw_config *c, char ssid[RW_CONFIG_SSID_LEN],
+                                char password[RW_CONFIG_PASSWORD_LEN])
+{
+    char new_ssid[RW_CONFIG_SSID_LEN];
+    char new_password[RW_CONFIG_PASSWORD_LEN];
+    memcpy(new_ssid, c->wifi_ssid, sizeof new_ssid);
+    memcpy(new_password, c->wifi_password, sizeof new_password);
+    new_ssid[sizeof new_ssid - 1u] = '\0';
+    new_password[sizeof new_password - 1u] = '\0';
+    if (c->password_set == 0u) {
+        new_password[0] = '\0';
+    }
+    const bool changed = strcmp(new_ssid, ssid) != 0 || strcmp(new_password, password) != 0;
+    memcpy(ssid, new_ssid, sizeof new_ssid);
+    memcpy(password, new_password, sizeof new_password);
+    return changed;
+}

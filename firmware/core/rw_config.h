@@ -78,6 +78,10 @@ bool rw_config_commit(rw_config *c, uint32_t session_epoch, const float values[R
                       const uint8_t key[RW_KEY_LEN]);
 /* Forget the link key (zeroed, key_set = 0) and reseal. */
 void rw_config_clear_key(rw_config *c);
+/* The record's WiFi credentials into ssid and password, NUL-terminated (an unset password is empty), as a link
+ * uses them; true if they differ from what the two buffers held (the link must connect again). */
+bool rw_config_take_credentials(const rw_config *c, char ssid[RW_CONFIG_SSID_LEN],
+                                char password[RW_CONFIG_PASSWORD_LEN]);
 /* CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF). */
 uint32_t rw_crc32(const void *data, uint32_t len);
 

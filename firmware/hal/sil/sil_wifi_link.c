@@ -136,19 +136,7 @@ bool sil_wifi_link_boot_step(sil_wifi_link *link, uint64_t now_us)
 /* Copy the record's credentials (always NUL-terminated); true if they differ from those in use. */
 static bool take_credentials(sil_wifi_link *link, const rw_config *config)
 {
-    char ssid[RW_CONFIG_SSID_LEN];
-    char password[RW_CONFIG_PASSWORD_LEN];
-    memcpy(ssid, config->wifi_ssid, sizeof ssid);
-    memcpy(password, config->wifi_password, sizeof password);
-    ssid[sizeof ssid - 1u] = '\0';
-    password[sizeof password - 1u] = '\0';
-    if (config->password_set == 0u) {
-        password[0] = '\0';
-    }
-    const bool changed = strcmp(ssid, link->ssid) != 0 || strcmp(password, link->password) != 0;
-    memcpy(link->ssid, ssid, sizeof ssid);
-    memcpy(link->password, password, sizeof password);
-    return changed;
+    return rw_config_take_credentials(config, link->ssid, link->password);
 }
 
 void sil_wifi_link_take_credentials(sil_wifi_link *link, const rw_config *config)

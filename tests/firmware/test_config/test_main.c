@@ -181,6 +181,24 @@ static void test_commit_in_one_piece_equals_the_three_steps(void)
     TEST_ASSERT_EQUAL_MEMORY(&before, &no_key, sizeof no_key);
 }
 
+static void test_take_credentials_terminates_blanks_an_unset_password_and_says_what_changed(void)
+{
+    rw_config c;
+    rw_config_defaults(&c);
+    memset(c.wifi_ssid, 'S', sizeof c.wifi_ssid); /* no NUL in the record: the copy is cut one short */
+    memcpy(c.wifi_password, "secret", 7);
+    c.password_set = 0u;
+    char ssid[RW_CONFIG_SSID_LEN] = "";
+    char password[RW_CONFIG_PASSWORD_LEN] = "";
+    TEST_ASSERT_TRUE(rw_config_take_credentials(&c, ssid, password));
+    TEST_ASSERT_EQUAL_size_t(sizeof ssid - 1u, strlen(ssid));
+    TEST_ASSERT_EQUAL_STRING("", password);
+    TEST_ASSERT_FALSE(rw_config_take_credentials(&c, ssid, password));
+    c.password_set = 1u;
+    TEST_ASSERT_TRUE(rw_config_take_credentials(&c, ssid, password));
+    TEST_ASSERT_EQUAL_STRING("secret", password);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -194,5 +212,6 @@ int main(void)
     RUN_TEST(test_a_new_epoch_restarts_the_session_range);
     RUN_TEST(test_the_boot_counter_never_wraps_the_session_id);
     RUN_TEST(test_clear_key_forgets_the_key);
+    RUN_TEST(test_take_credentials_terminates_blanks_an_unset_password_and_says_what_changed);
     return UNITY_END();
 }
