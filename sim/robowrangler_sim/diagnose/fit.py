@@ -99,7 +99,35 @@ def gauss_newton_spread(r: np.ndarray, J: np.ndarray, huber_scale: float, inflat
     return GaussNewtonSpread(sd, s2, inflation, col)
 
 
-class ModelFitter:
+class ParamRowsFitter:
+    """What the drive's and the spindle's batched fitters share: the free parameters (a later spec with the same
+    theta column replaces an earlier one), theta rows for a batch of their values, and the solver's scaled box."""
+
+    def __init__(self, specs: list[ParamSpec], *, weights: dict, max_nfev: int, huber_scale: float) -> None:
+        by_col: dict[int, ParamSpec] = {}
+        for s in specs:
+            by_col[s.column] = s
+        self.specs = list(by_col.values())
+        self.weights = dict(weights)
+        self.max_nfev = max_nfev
+        self.huber_scale = huber_scale
+
+    def _rows(self, theta_base: np.ndarray, xs: np.ndarray) -> np.ndarray:
+        rows = np.repeat(theta_base[None, :], xs.shape[0], axis=0)
+        for j, s in enumerate(self.specs):
+            rows[:, s.column] = xs[:, j] * s.scale
+        return rows
+
+    def _box(self, theta_base: np.ndarray, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(scales, lo, hi, x0): the solver works on theta / scale within the specs' bounds around ref."""
+        scales = np.array([s.scale for s in self.specs])
+        lo = np.array([s.bounds(ref[s.column])[0] for s in self.specs]) / scales
+        hi = np.array([s.bounds(ref[s.column])[1] for s in self.specs]) / scales
+        x0 = np.clip(np.array([theta_base[s.column] for s in self.specs]) / scales, lo, hi)
+        return scales, lo, hi, x0
+
+
+class ModelFitter(ParamRowsFitter):
     """Estimator. Constructor stores config; fit(replay, theta_base, ...) returns self.
 
     Args:
@@ -114,19 +142,7 @@ class ModelFitter:
 
     def __init__(self, specs: list[ParamSpec], *, weights: dict[str, np.ndarray], max_nfev: int = 25,
                  huber_scale: float = 3.0) -> None:
-        by_col: dict[int, ParamSpec] = {}
-        for s in specs:
-            by_col[s.column] = s
-        self.specs = list(by_col.values())
-        self.weights = dict(weights)
-        self.max_nfev = max_nfev
-        self.huber_scale = huber_scale
-
-    def _rows(self, theta_base: np.ndarray, xs: np.ndarray) -> np.ndarray:
-        rows = np.repeat(theta_base[None, :], xs.shape[0], axis=0)
-        for j, s in enumerate(self.specs):
-            rows[:, s.column] = xs[:, j] * s.scale
-        return rows
+        super().__init__(specs, weights=weights, max_nfev=max_nfev, huber_scale=huber_scale)
 
     def _resid(self, pred: dict[str, np.ndarray], measured: dict[str, np.ndarray], mask: np.ndarray) -> np.ndarray:
         parts = [((measured[c][None, :] - pred[c]) * w)[:, mask] for c, w in self.weights.items()]
@@ -143,10 +159,7 @@ class ModelFitter:
         # a replay with other channels (the loop's contours) says what it measured
         measured = (replay.measured() if hasattr(replay, "measured")
                     else {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v})
-        scales = np.array([s.scale for s in self.specs])
-        lo = np.array([s.bounds(ref[s.column])[0] for s in self.specs]) / scales
-        hi = np.array([s.bounds(ref[s.column])[1] for s in self.specs]) / scales
-        x0 = np.clip(np.array([theta_base[s.column] for s in self.specs]) / scales, lo, hi)
+        scales, lo, hi, x0 = self._box(theta_base, ref)
         self.evaluations_ = 0
 
         def simulate(xs: np.ndarray) -> np.ndarray:

@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import least_squares
 
-from robowrangler_sim.diagnose.fit import FittedParam, batched_objective, best_start, gauss_newton_spread, huber
+from robowrangler_sim.diagnose.fit import (FittedParam, ParamRowsFitter, batched_objective, best_start,
+                                           gauss_newton_spread, huber)
 from robowrangler_sim.diagnose.parameters import ParamSpec
 from robowrangler_sim.diagnose.residuals import effective_fraction
 
@@ -21,7 +22,7 @@ CHI2_95_1DOF = 3.841
 SCAN_POINTS = 121
 
 
-class SpindleFitter:
+class SpindleFitter(ParamRowsFitter):
     """Estimator. SpindleFitter(specs, weights=...).fit(replay, theta_base, fit_mask=...) returns self.
 
     weights: channel -> 1/sigma (scalar). Fitted: theta_, params_ (FittedParam list), prediction_ (channel -> (S,)),
@@ -29,19 +30,7 @@ class SpindleFitter:
 
     def __init__(self, specs: list[ParamSpec], *, weights: dict[str, float], max_nfev: int = 30,
                  huber_scale: float = 3.0) -> None:
-        by_col: dict[int, ParamSpec] = {}
-        for s in specs:
-            by_col[s.column] = s
-        self.specs = list(by_col.values())
-        self.weights = dict(weights)
-        self.max_nfev = max_nfev
-        self.huber_scale = huber_scale
-
-    def _rows(self, theta_base: np.ndarray, xs: np.ndarray) -> np.ndarray:
-        rows = np.repeat(theta_base[None, :], xs.shape[0], axis=0)
-        for j, s in enumerate(self.specs):
-            rows[:, s.column] = xs[:, j] * s.scale
-        return rows
+        super().__init__(specs, weights=weights, max_nfev=max_nfev, huber_scale=huber_scale)
 
     def fit(self, replay, theta_base: np.ndarray, *, fit_mask: np.ndarray, starts: np.ndarray | None = None,
             start_columns: list[int] | None = None, bounds_ref: np.ndarray | None = None,
@@ -49,10 +38,7 @@ class SpindleFitter:
         """starts (G, k): start values of theta columns start_columns; scan: parameter names whose interval is
         also scanned on a grid."""
         ref = theta_base if bounds_ref is None else bounds_ref
-        scales = np.array([s.scale for s in self.specs])
-        lo = np.array([s.bounds(ref[s.column])[0] for s in self.specs]) / scales
-        hi = np.array([s.bounds(ref[s.column])[1] for s in self.specs]) / scales
-        x0 = np.clip(np.array([theta_base[s.column] for s in self.specs]) / scales, lo, hi)
+        scales, lo, hi, x0 = self._box(theta_base, ref)
         self.evaluations_ = 0
         measured = replay.measured
 
