@@ -42,7 +42,17 @@ def _worker_init(threads: int) -> None:
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
 
-def run_one(effect: str | None, seed: int, workdir: str, keep: bool) -> dict:
+ABLATIONS = {
+    "zero10": {"esc_dead_time_duty": 0.0, "esc_zero_us": 10.0},
+    "ideal_encoder": {"encoder_line_error": [0.0] * 16, "encoder_quad_error": [0.0, 0.0], "edge_jitter_us": 0.0},
+    "esc_one_frame": {"esc_average_frames": 1, "esc_proc_delay_s": 0.0},
+}
+"""Named sets of unit constants (outside_writer.draw_unit keys) that take one structural difference of the outside
+base out (--base): the ESC's zero exactly at the 10 us assumed (no PWM dead time), an encoder without line or
+quadrature errors, an ESC that applies each frame at once."""
+
+
+def run_one(effect: str | None, seed: int, workdir: str, keep: bool, overrides: dict | None = None) -> dict:
     """Write one outside recording, diagnose it blind, score it against the writer's truth."""
     from robowrangler.recorder import read_recording
     from robowrangler_sim.diagnose import diagnose
@@ -50,7 +60,7 @@ def run_one(effect: str | None, seed: int, workdir: str, keep: bool) -> dict:
     name = f"{effect or 'none'}_{seed}"
     path = Path(workdir) / f"outside_{name}.mcap"
     t0 = time.perf_counter()
-    truth = write_outside_recording(path, seed=seed, effect=effect)
+    truth = write_outside_recording(path, seed=seed, effect=effect, unit_overrides=overrides)
     read_recording(path)  # the schema validates (the reader checks every message)
     t_write = time.perf_counter() - t0
     t1 = time.perf_counter()
@@ -150,6 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", help="write every row to this JSON file")
     ap.add_argument("--keep", help="keep the recordings in this directory")
+    ap.add_argument("--base", default="", help=f"comma list of ablations of the outside base: {', '.join(ABLATIONS)}")
     args = ap.parse_args(argv)
     if not 1 <= args.workers <= 2:
         ap.error(f"--workers: expected 1 or 2 (the machine has 2 cores), got {args.workers}")
@@ -157,20 +168,25 @@ def main(argv: list[str] | None = None) -> int:
     for o in only:
         if o != "none" and o not in OUTSIDE_EFFECTS:
             ap.error(f"--only: unknown {o!r}; expected none or one of {', '.join(OUTSIDE_EFFECTS)}")
+    overrides: dict = {}
+    for b in filter(None, args.base.split(",")):
+        if b not in ABLATIONS:
+            ap.error(f"--base: unknown {b!r}; expected one of {', '.join(ABLATIONS)}")
+        overrides.update(ABLATIONS[b])
     jobs = []
     for o in only:
         seeds = _parse_seeds(args.seeds) if args.seeds else (DEFAULT_CLEAN_SEEDS if o == "none" else DEFAULT_EFFECT_SEEDS)
         jobs.extend((None if o == "none" else o, s) for s in seeds)
     workdir = args.keep or tempfile.mkdtemp(prefix="outside_bench_")
     Path(workdir).mkdir(parents=True, exist_ok=True)
-    print(f"outside bench: {len(jobs)} recordings (12 s excite-like runs), {args.workers} process(es), in {workdir}",
-          flush=True)
+    print(f"outside bench: {len(jobs)} recordings (12 s excite-like runs), {args.workers} process(es), in {workdir}"
+          + (f"; base ablated: {args.base}" if args.base else ""), flush=True)
     rows: list[dict] = []
     t0 = time.perf_counter()
     threads = 1 if args.workers == 2 else 2
     with ProcessPoolExecutor(args.workers, mp_context=get_context("spawn"), initializer=_worker_init,
                              initargs=(threads,)) as pool:
-        futs = {pool.submit(run_one, e, s, workdir, bool(args.keep)): (e, s) for e, s in jobs}
+        futs = {pool.submit(run_one, e, s, workdir, bool(args.keep), overrides or None): (e, s) for e, s in jobs}
         for fut in as_completed(futs):
             e, s = futs[fut]
             try:

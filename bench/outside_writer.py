@@ -88,6 +88,7 @@ DATASHEET = {
     "adc_tau_s": 0.5e-3,               # battery divider's anti-alias RC
     "adc_noise_v": 0.008,
     "edge_jitter_us": 0.4,
+    "esc_average_frames": 2,           # input frames the ESC averages
 }
 PERTURBED = ("r_phase_ohm", "r_esc_ohm", "l_phase_h", "i_noload_hyst_a", "i_noload_eddy_a_at_1309",
              "rotor_inertia_kg_m2", "guide_friction_n", "guide_capstan_mu_theta", "nip_friction_n",
@@ -154,6 +155,7 @@ def draw_unit(rng: np.random.Generator) -> dict:
     unit["encoder_quad_error"] = rng.uniform(-0.03, 0.03, 2)    # quadrature phase / duty error, fraction of pitch
     unit["pwm_phase_us"] = rng.uniform(0.0, PWM_PERIOD_US)
     unit["cog_nm"] = 0.08e-3
+    unit["shaft_angle0_rad"] = rng.uniform(0.0, 2.0 * math.pi)
     return unit
 
 
@@ -204,15 +206,16 @@ class _Esc:
         self.proc_s = unit["esc_proc_delay_s"]
         self.dead_time = unit["esc_dead_time_duty"]
         self.effect = effect
-        self.last_frames = [0.0, 0.0]
+        self.n_avg = int(unit["esc_average_frames"])
+        self.last_frames = [0.0] * self.n_avg
         self.pending: list[tuple[float, float]] = []  # (apply time s, throttle)
         self.throttle = 0.0
         self.running = False  # the duty dead band's hysteresis state
 
     def frame(self, start_s: float, pulse_us: float, frame_index: int) -> None:
         thr = min(max((pulse_us - self.zero_us) / (2000.0 - self.zero_us), 0.0), 1.0)
-        self.last_frames = [self.last_frames[1], thr]
-        avg = 0.5 * (self.last_frames[0] + self.last_frames[1])
+        self.last_frames = self.last_frames[1:] + [thr]
+        avg = sum(self.last_frames) / self.n_avg
         t_apply = start_s + pulse_us * 1e-6 + self.proc_s
         if self.effect is not None and self.effect.effect_id == "esc_latency":
             p = self.effect.params
@@ -325,7 +328,7 @@ class _Drive:
 class _Encoder:
     """16 lines x 4 quadrature edges on motor 1's shaft; line-spacing and quadrature errors; 1 us capture."""
 
-    def __init__(self, unit: dict, rng: np.random.Generator, boot_us: int) -> None:
+    def __init__(self, unit: dict, rng: np.random.Generator, boot_us: int, theta0_rad: float) -> None:
         pitch = 2.0 * math.pi / 64.0
         pos = []
         for line in range(16):
@@ -337,7 +340,9 @@ class _Encoder:
         self.rng = rng
         self.jitter = unit["edge_jitter_us"]
         self.count = 0
-        self.next_k = 0  # index of the next edge (absolute)
+        self.next_k = 0  # index of the next edge (absolute): the first one beyond the shaft's rest angle
+        while self.edge_pos[self.next_k % 64] + (self.next_k // 64) * 2.0 * math.pi <= theta0_rad:
+            self.next_k += 1
         self.last_edge_us = boot_us
 
     def advance(self, theta0: float, theta1: float, t0_us: float, h_us: float) -> None:
@@ -446,8 +451,8 @@ def excite_commands(rng: np.random.Generator, duration_s: float) -> list[tuple[f
     burst_speed(0.45 * s, v1)
     burst_speed(1.8 * s, v2)
     ramp(3.0 * s, 0.9 * s, v2, v3)
-    burst_speed(4.6 * s, v4)
-    burst_speed(5.95 * s, v5)
+    burst_speed(4.5 * s, v4)
+    burst_speed(6.0 * s, v5)
     chirp(6.4 * s, 1.7 * s, v5, 1.5, 0.3, 4.0)
     ramp(8.1 * s, 0.8 * s, v5, 5.0)
     chirp(8.95 * s, 1.3 * s, 5.0, 1.0, 0.3, 4.0)
@@ -484,6 +489,9 @@ class OutsideTruth:
     spans_s: list[tuple[float, float]]
     describe: str
     unit: dict = field(repr=False, default_factory=dict)
+    edge_pattern: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(64))
+    """The encoder's true pattern as the recording sees it: the edge with count c lies at c + edge_pattern[c % 64]
+    pitches from the edge at count 0 (zero mean)."""
 
 
 def _truth_values(effect: OutsideEffect | None, unit: dict, recording_t0_s: float) -> tuple[dict, list]:
@@ -531,7 +539,11 @@ def write_outside_recording(path: str | Path, *, seed: int, effect: str | Outsid
     battery = _Battery(unit, effect.params if effect is not None and effect.effect_id == "battery_sag" else None)
     esc = _Esc(unit, effect)
     drive = _Drive(unit, effect)
-    encoder = _Encoder(unit, noise_rng, t0_us - 500_000)
+    drive.theta = unit["shaft_angle0_rad"]  # where the shaft came to rest last time
+    encoder = _Encoder(unit, noise_rng, t0_us - 500_000, drive.theta)
+    err = np.array([p / encoder.pitch - i for i, p in enumerate(encoder.edge_pos)])
+    edge_pattern = err[(encoder.next_k + np.arange(64) - 1) % 64]  # count c = c edges crossed: edge next_k + c - 1
+    edge_pattern -= edge_pattern.mean()
     fw = _Firmware(DEVICE_PARAMS)
     fw.state = "DISARMED"
     cmds = excite_commands(rng, duration_s)
@@ -616,15 +628,21 @@ def write_outside_recording(path: str | Path, *, seed: int, effect: str | Outsid
                 state_event("SPINDOWN", now_us, 1)
             elif msg == "DISARM" and fw.state == "ARMED":
                 state_event("DISARMED", now_us, 1)
-            elif msg == "BURST_START" and burst is None and not stream_queue:
-                burst_id += 1
-                burst = (burst_id, k, now_us, [])
-            emit(None, None, now_us)  # the ACK frame spends a device seq
+            verdict, reason, detail = "ACK", None, None
+            if msg == "BURST_START":
+                if burst is None and not stream_queue:
+                    burst_id += 1
+                    burst = (burst_id, k, now_us, [])
+                else:  # the device refuses while a burst is captured or streamed
+                    verdict, reason = "NACK", "BURST_BUSY"
+                    detail = (1000 - len(burst[3]) if burst is not None else 0) + 6 * len(stream_queue)
+                    counters["nacks"] += 1
+            emit(None, None, now_us)  # the reply frame spends a device seq
             reply_s = (now_us - arrive_us) * 1e-6 + 2.0 * one_way + float(noise_rng.gamma(2.0, 0.4e-3))
             send_ns = unix0_ns + int(round(t_send * 1e9))
             out.append((send_ns, send_ns + int(reply_s * 1e9), "/host/command",
                         {"seq": host_seq % 65536, "message": msg, "fields": fields_, "transmissions": 1,
-                         "verdict": "ACK", "reason": None, "state": fw.state, "detail": None,
+                         "verdict": verdict, "reason": reason, "state": fw.state, "detail": detail,
                          "reply_latency_s": round(reply_s, 6)}))
             host_seq += 1
         # --- the tick: read encoder and battery, estimate, control, write the pulse register
@@ -662,7 +680,8 @@ def write_outside_recording(path: str | Path, *, seed: int, effect: str | Outsid
                    "motor_rpm": int(round(max(fw.speed, 0.0) / (2 * math.pi * 0.015) * 60.0)),
                    "esc_pulse_us": int(round(pulse_us)), "battery_v": battery_mv / 1000.0,
                    "heartbeat_age_s": round(float(noise_rng.uniform(0.0, 0.1)), 3),
-                   "rx_ok": counters["rx_ok"] % 65536, "rx_bad": 0, "rx_duplicates": 0, "nacks": 0,
+                   "rx_ok": counters["rx_ok"] % 65536, "rx_bad": 0, "rx_duplicates": 0,
+                   "nacks": counters["nacks"] % 65536,
                    "events": events % 65536, "tick_overruns": 0, "guide_position_m": 0.0412,
                    "guide_target_m": 0.0412, "spindle_load_permille": int(noise_rng.integers(-8, 9)),
                    "spindle_flags": ["HOMED", "ANSWERING"], "spindle_rejected": 0, "rx_auth_failed": 0,
@@ -697,7 +716,7 @@ def write_outside_recording(path: str | Path, *, seed: int, effect: str | Outsid
            effect.describe if effect is not None else "none")
     return OutsideTruth(path=path, seed=seed, effect_id=effect.effect_id if effect else None,
                         key=effect.key if effect else None, truth=truth, spans_s=loaded_spans,
-                        describe=effect.describe if effect else "effect-free", unit=unit)
+                        describe=effect.describe if effect else "effect-free", unit=unit, edge_pattern=edge_pattern)
 
 
 def _write(path: Path, out: list, lost: list, seed: int, end_ns: int, describe: str) -> None:
