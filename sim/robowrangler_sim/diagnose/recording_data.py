@@ -25,6 +25,7 @@ import numpy as np
 from robowrangler.recorder import read_recording
 from robowrangler.recorder.burst import bursts as read_bursts
 from robowrangler.recorder.errors import RecordingError
+from robowrangler_sim.diagnose.encoder_pattern import corrected_counts, estimate_edge_pattern
 from robowrangler_sim.diagnose.errors import DiagnoseError, MissingChannelsError, NoUsableSpanError
 
 TICK_S = 1e-3
@@ -88,6 +89,9 @@ class DriveData:
     preroll_ticks: int
     truncated: bool
     notes: list[str] = field(default_factory=list)
+    encoder_pattern: np.ndarray | None = None
+    """The encoder's edge pattern calibrated on this recording (encoder_pattern.py; pitches per count mod
+    counts_per_rev), None without 1 kHz bursts; the speeds are taken over the corrected edge positions."""
 
     @property
     def duration_s(self) -> float:
@@ -138,6 +142,21 @@ def _encoder_speed(time_s, counts, edge_s, group, step_m):
             edges[i] = (edge_s[j], edge_s[i])
         last[g] = i
     return speed, edges, floor
+
+
+def _burst_count_offset(b_time_s: np.ndarray, b_counts: np.ndarray, tel_t: np.ndarray,
+                        tel_counts: np.ndarray) -> float | None:
+    """Edge index of a burst's count 0: telemetry count - burst count at the ticks both sampled (the most common
+    difference), None when they share no tick or the telemetry has no counts."""
+    if not np.all(np.isfinite(tel_counts)) or tel_t.size == 0:
+        return None
+    k = np.clip(np.searchsorted(tel_t, b_time_s), 0, tel_t.size - 1)
+    k = np.where((k > 0) & (np.abs(tel_t[k - 1] - b_time_s) < np.abs(tel_t[k] - b_time_s)), k - 1, k)
+    same = (np.abs(tel_t[k] - b_time_s) < 2.5e-4) & np.isfinite(b_counts)
+    if not same.any():
+        return None
+    values, n = np.unique(np.round(tel_counts[k[same]] - b_counts[same]), return_counts=True)
+    return float(values[np.argmax(n)])
 
 
 def load_drive_data(path: str | Path) -> DriveData:
@@ -212,6 +231,7 @@ def load_drive_data(path: str | Path) -> DriveData:
     else:
         counts_list = [np.full(tel_t.size, np.nan)]
         edge_list = [np.full(tel_t.size, np.nan)]
+    absolute_list = [np.isfinite(counts_list[0])]  # counts that are the device's edge index (edges since boot)
     n_bursts = 0
     burst_s = 0.0
     try:
@@ -230,7 +250,11 @@ def load_drive_data(path: str | Path) -> DriveData:
         group_list.append(np.full(int(present.sum()), float(n_bursts)))
         pulse_list.append(b.esc_pulse_fine_us[present])
         batt_list.append(b.battery_v[present])
-        counts_list.append(b.encoder_counts[present])
+        # a burst counts from its first sample: its samples at a telemetry record's tick give the offset to the
+        # device's edge index (the same counter latched in the same tick)
+        offset = _burst_count_offset(b.time_s[present], b.encoder_counts[present], tel_t, counts_list[0])
+        counts_list.append(b.encoder_counts[present] + (offset if offset is not None else 0.0))
+        absolute_list.append(np.full(int(present.sum()), offset is not None))
         edge_list.append(b.start_time_s + b.encoder_edge_s[present])
     time_s = np.concatenate(t_list)
     order = np.argsort(time_s, kind="stable")
@@ -241,10 +265,16 @@ def load_drive_data(path: str | Path) -> DriveData:
     battery = np.concatenate(batt_list)[order]
     counts = np.concatenate(counts_list)[order]
     edge_s = np.concatenate(edge_list)[order]
+    absolute = np.concatenate(absolute_list)[order]
     # a burst sample at a telemetry record's time: both kept (different observations of one instant)
     r_m = params.get("wheel_radius_m", 0.015)
     cpr = params.get("encoder_counts_per_rev", 64.0)
     step_m = 2.0 * np.pi * r_m / cpr
+    # the encoder's own edge pattern (encoder_pattern.py), calibrated on this recording: speeds over the
+    # corrected edge positions
+    pattern = estimate_edge_pattern(np.where(absolute, edge_s, np.nan), np.where(absolute, counts, np.nan), cpr)
+    if pattern is not None:
+        counts = np.where(absolute, corrected_counts(counts, pattern), counts)
     enc_speed, enc_edges, enc_floor = _encoder_speed(time_s, counts, edge_s, group, step_m)
     t0 = float(tel_t[0])
     preroll = int(round(PREROLL_S / TICK_S))
@@ -304,4 +334,4 @@ def load_drive_data(path: str | Path) -> DriveData:
                      speed_valid=valid, speed_floor_mps=floor, edge_ticks=edges, speed_source=source, pulse_us=pulse, pulse_source=pulse_source,
                      tel_time_s=tel_t, tel_speed_mps=tel_speed, state=states, device_params=params,
                      telemetry_hz=telemetry_hz, bursts=n_bursts, burst_s=burst_s, preroll_ticks=preroll,
-                     truncated=bool(rec.truncated), notes=notes)
+                     truncated=bool(rec.truncated), notes=notes, encoder_pattern=pattern)

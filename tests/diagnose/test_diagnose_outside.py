@@ -1,0 +1,73 @@
+"""Diagnose on recordings made outside the project (bench/outside_writer.py: an independent drive simulator that
+writes the documented schema with the `mcap` library alone, its own motor/ESC/battery/encoder physics)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robowrangler.recorder import read_recording
+from robowrangler_sim.diagnose import diagnose
+from robowrangler_sim.diagnose.encoder_pattern import estimate_edge_pattern
+from robowrangler_sim.diagnose.recording_data import load_drive_data
+
+_BENCH = str(Path(__file__).resolve().parents[2] / "bench")
+if _BENCH not in sys.path:
+    sys.path.insert(0, _BENCH)
+from outside_writer import write_outside_recording  # noqa: E402
+
+IDEAL_ENCODER = {"encoder_line_error": [0.0] * 16, "encoder_quad_error": [0.0, 0.0], "edge_jitter_us": 0.0}
+
+
+def test_an_effect_free_outside_recording_validates_and_is_diagnosed(tmp_path: Path) -> None:
+    truth = write_outside_recording(tmp_path / "clean.mcap", seed=3, duration_s=10.0)
+    rec = read_recording(truth.path)  # validates every message against the schema files
+    assert not rec.truncated
+    assert {"/device/telemetry", "/device/burst", "/device/event", "/host/command"} <= set(rec.records)
+    assert rec.meta["source"] == "other" and rec.meta["time_base"] == "unix"
+    assert rec.telemetry["time_s"][0] > 10.0  # device time since boot, not from 0
+    data = load_drive_data(truth.path)
+    started = [r.data for r in rec.records["/host/command"] if r.data["message"] == "BURST_START"]
+    assert data.bursts == sum(c["verdict"] == "ACK" for c in started) >= 3  # a refused one (BURST_BUSY) has none
+    assert data.speed_source == "encoder"
+    res = diagnose(truth.path, effects=["rope_drag_law", "battery_sag"])
+    assert res.verdict in ("none", "missing_physics", "not_identifiable")
+    report = res.report
+    assert {"verdict", "effects", "nominal_refit", "unexplained_fraction"} <= set(report)
+    assert report["nominal_refit"]["torque_constant_nm_per_a"]["fitted"] > 0
+
+
+def test_a_strong_outside_dead_band_in_duty_is_named(tmp_path: Path) -> None:
+    """A dead band in the ESC's duty (not in the pulse, with hysteresis in duty): the library's pulse dead band is
+    the closest law, with the truth's equivalent width."""
+    truth = write_outside_recording(tmp_path / "deadband.mcap", seed=5, effect="esc_deadband", duration_s=10.0)
+    res = diagnose(truth.path, effects=["esc_deadband", "low_speed_friction", "esc_latency"])
+    assert res.verdict == "missing_physics"
+    assert res.effects[0].effect_id == "esc_deadband"
+    width = res.effects[0].params["deadband_us"]["value"]
+    assert width == pytest.approx(truth.truth["deadband_us"], rel=0.15)
+    eff = res.effects[0]
+    assert eff.heldout_rms_after["rope_speed_mps"] < 0.5 * eff.heldout_rms_before["rope_speed_mps"]
+
+
+def test_the_encoder_pattern_is_calibrated_from_the_recording(tmp_path: Path) -> None:
+    """Line and quadrature errors of a magnetic encoder (a few per cent of a pitch): the pattern estimated from the
+    recording's counts and edge times matches the writer's; an ideal encoder gives (nearly) none."""
+    real = write_outside_recording(tmp_path / "real.mcap", seed=4, duration_s=10.0)
+    ideal = write_outside_recording(tmp_path / "ideal.mcap", seed=4, duration_s=10.0, unit_overrides=IDEAL_ENCODER)
+    for truth in (real, ideal):
+        est = load_drive_data(truth.path).encoder_pattern
+        assert est is not None
+        assert np.sqrt(np.mean((est - truth.edge_pattern) ** 2)) < 1.5e-3
+    assert np.std(real.edge_pattern) > 5e-3  # the real one has a pattern to find
+
+
+def test_too_few_edges_give_no_pattern() -> None:
+    t = np.linspace(0.0, 1.0, 100)
+    assert estimate_edge_pattern(t, np.arange(100.0), 64) is None  # < 8 observations per edge index
+    assert estimate_edge_pattern(t, np.arange(100.0), 64.5) is None
+    t = np.arange(2000) * 0.01  # 100 Hz records only: no densely sampled stretch
+    assert estimate_edge_pattern(t, np.arange(2000.0) * 30.0, 64) is None
