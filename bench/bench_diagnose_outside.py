@@ -88,7 +88,8 @@ def run_one(effect: str | None, seed: int, workdir: str, keep: bool, overrides: 
            "top3": [c["id"] for c in ranked[:3]], "heldout_before": before, "heldout_after": after,
            "battery_before": batt_before, "battery_after": batt_after,
            "first_line": res.first_line, "wall_s": wall, "write_s": t_write,
-           "accepted": [{"id": c["id"], "delta_bic": round(c["delta_bic"], 1), "heldout_p": c["heldout_p"],
+           "accepted": [{"id": c["id"], "delta_bic": round(c["delta_bic"], 1), "heldout_p": c.get("heldout_p"),
+                         "heldout_lr": c.get("heldout_lr"),
                          "heldout_speed_mm_s": round(c["heldout_rms"]["rope_speed_mps"] * 1e3, 2),
                          "params": c.get("params", {})}
                         for c in drive_rows if c.get("status") == "accepted"],

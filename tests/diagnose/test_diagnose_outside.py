@@ -33,7 +33,7 @@ def test_an_effect_free_outside_recording_validates_and_is_diagnosed(tmp_path: P
     started = [r.data for r in rec.records["/host/command"] if r.data["message"] == "BURST_START"]
     assert data.bursts == sum(c["verdict"] == "ACK" for c in started) >= 3  # a refused one (BURST_BUSY) has none
     assert data.speed_source == "encoder"
-    res = diagnose(truth.path, effects=["rope_drag_law", "battery_sag"])
+    res = diagnose(truth.path, effects=["rope_drag_law"])
     assert res.verdict in ("none", "missing_physics", "not_identifiable")
     report = res.report
     assert {"verdict", "effects", "nominal_refit", "unexplained_fraction"} <= set(report)
@@ -44,7 +44,7 @@ def test_a_strong_outside_dead_band_in_duty_is_named(tmp_path: Path) -> None:
     """A dead band in the ESC's duty (not in the pulse, with hysteresis in duty): the library's pulse dead band is
     the closest law, with the truth's equivalent width."""
     truth = write_outside_recording(tmp_path / "deadband.mcap", seed=5, effect="esc_deadband", duration_s=10.0)
-    res = diagnose(truth.path, effects=["esc_deadband", "low_speed_friction", "esc_latency"])
+    res = diagnose(truth.path, effects=["esc_deadband", "low_speed_friction"])
     assert res.verdict == "missing_physics"
     assert res.effects[0].effect_id == "esc_deadband"
     width = res.effects[0].params["deadband_us"]["value"]
