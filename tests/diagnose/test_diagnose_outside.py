@@ -38,6 +38,13 @@ def test_an_effect_free_outside_recording_validates_and_is_diagnosed(tmp_path: P
     report = res.report
     assert {"verdict", "effects", "nominal_refit", "unexplained_fraction"} <= set(report)
     assert report["nominal_refit"]["torque_constant_nm_per_a"]["fitted"] > 0
+    # the ESC's zero-throttle point is the unit's (its calibration plus the bridge's dead time), refitted as a
+    # nominal parameter, and the ESC's input stage (pulse known at its falling edge, two frames averaged) is a
+    # delay of 1-3 ms the refit carries
+    u = truth.unit
+    zero_us = u["esc_zero_us"] + u["esc_dead_time_duty"] * (1000.0 - u["esc_zero_us"])
+    assert report["nominal_refit"]["esc_zero_throttle_us"]["fitted"] == pytest.approx(zero_us, abs=1.0)
+    assert 0.5e-3 < report["nominal_refit"]["esc_input_delay_s"]["fitted"] <= 3e-3
 
 
 def test_a_strong_outside_dead_band_in_duty_is_named(tmp_path: Path) -> None:

@@ -45,5 +45,15 @@ NOMINAL_REFIT: tuple[ParamSpec, ...] = (
     ParamSpec("battery_internal_resistance_ohm", db.TH_BATT_R, "Ohm", 0.5, 2.0, 0.03, relative=True),
     ParamSpec("battery_open_circuit_v", db.TH_BATT_OCV, "V", 0.93, 1.07, 12.0, relative=True),
     ParamSpec("esc_lag_s", db.TH_ESC_LAG, "s", 0.3, 2.0, 0.003, relative=True),
+    ParamSpec("esc_zero_throttle_us", db.TH_DEADBAND, "us", 0.5, 2.0, 10.0, relative=True),
+    ParamSpec("esc_input_delay_s", db.TH_LATENCY, "s", 0.0, 0.003, 0.001),
 )
-"""The nominal model's own parameters the refit may move (class estimates and the ESC lag assumption)."""
+"""The nominal model's own parameters the refit may move (class estimates and the ESC assumptions).
+
+The ESC's zero-throttle point (its dead band above the minimum pulse, assumed 10 us) and an input delay of up to
+3 ms are unit properties of every BLHeli-class ESC, not missing physics: it times the pulse with its own oscillator
+(a 1 % clock error moves 1000 us by 10 us), loses a few us' worth of duty to the bridge's dead time, and knows a
+pulse's width only at its falling edge, 1-2 ms after the frame starts, before its input filter. An outside
+simulator built that way (bench/outside_writer.py) was named esc_deadband (12-15 us) and esc_latency (1-2.4 ms)
+on every effect-free recording while these two were fixed; a dead band or a delay beyond these bounds is still
+a candidate's to claim."""
