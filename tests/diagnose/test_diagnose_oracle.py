@@ -13,7 +13,7 @@ from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
 from robowrangler_sim.diagnose.proof.generator import generate_recording, run_truth
 from robowrangler_sim.diagnose.proof.oracle import exact_prediction, judge
 from robowrangler_sim.diagnose.proof.truth_effects import LatencyTruth
-from robowrangler_sim.plants import DriveParams
+from robowrangler_sim.plants import DriveParams, DrivePlant
 
 DURATION_S = 6.0
 ADC_SIGMA_V = float(np.hypot(DriveParams().battery_adc_noise_v, DriveParams().battery_adc_lsb_v / np.sqrt(12.0)))
@@ -89,3 +89,17 @@ def test_observe_refuses_a_trajectory_of_the_wrong_length(judged):
     with pytest.raises(ValueError, match="per tick of the replay grid"):
         replay.observe(np.zeros(n - 1), np.zeros(n))
     assert exact_prediction(case, replay)["rope_speed_mps"].shape == replay.data.time_s.shape
+
+
+def test_the_truths_delay_is_its_jitters_expectation():
+    """The oracle's truth of a jittered delay averages the pulse over the delay's distribution (no model predicts
+    the draws): weights sum to 1 with the mean at the true delay; a step comes through as a ramp centred there."""
+    eff = _latency(0.0017).systematic()
+    eff.reset(np.random.default_rng(0))
+    w = eff._w
+    assert w.sum() == pytest.approx(1.0, abs=1e-9)
+    assert np.dot(np.arange(w.size), w) == pytest.approx(1.7, abs=0.1)  # ticks (1 ms)
+    out = [eff.pulse(1000.0 if k < 10 else 1300.0, k * 1e-3, DrivePlant(DriveParams())) for k in range(20)]
+    assert out[9] == pytest.approx(1000.0) and out[19] == pytest.approx(1300.0)
+    assert 1000.0 < out[11] < 1300.0  # between the levels at the delay
+    assert eff.averaged and not _latency(0.0017).averaged  # the recording itself draws the jitter

@@ -1,22 +1,23 @@
-"""The identifiability oracle of the diagnose proof: could the effect be named from this recording at all?
+"""The identifiability oracle of the diagnose proof: can the effect be named from this recording at all?
 
-The truth itself is put to the engine's own acceptance rule. The truth's candidate is the nominal model plus the
-effect exactly as the truth has it: its true form, true size and, for a jittered delay, its jitter as it fell
-(the truth plant, true base parameters, driven by the recording's pulses as the engine reconstructs them, run
-with the effect and without it: the difference, observed as the engine observes a model through
-DriveReplay.observe). The nominal model's base parameters under it are refitted (ModelFitter, started from the
-truth's and from the nominal refit's), as every candidate's are, so the truth lives in the engine's plant and is
-judged in the engine's terms: the diagnosis's refitted nominal model, weights, fit samples and held-out blocks
-(NominalBasis.score_prediction: select.score_model, select.accepted), counted with the parameters a candidate
-for the effect has (the nominal refit's plus the library law's), though none of the effect's is fitted. If even
-that is not accepted, no law in any library can name the effect from this recording: it is not identifiable
-here, and the right answer is "none" (or "not_identifiable").
+The truth is put to the engine's own acceptance rule. The truth's candidate is the nominal model plus the effect
+as the truth has it, in its true form and size: the truth plant (true base parameters) driven by the recording's
+pulses as the engine reconstructs them, run with the effect and without it; the difference, observed as the
+engine observes a model (DriveReplay.observe: the mean speed between the recorded encoder edge times, the volts
+at the observation's tick), is added to the engine's nominal model, whose base parameters are refitted under it
+(ModelFitter, started from the truth's values and from the nominal refit's) as every candidate's are. It is
+scored against the diagnosis's refitted nominal model on the same observations, weights, fit samples and
+held-out blocks (NominalBasis.score_prediction: select.score_model, select.accepted), counted with the
+parameters a candidate for the effect has (the nominal refit's plus the library law's), though none of the
+effect's own is fitted. If even the truth is not accepted, the effect is not identifiable from this recording by
+the engine's rule, whatever the law, and the right answer is "none" (or "not_identifiable").
 
-Why not the truth plant's own run (exact_prediction: the per-tick pulses the recording does not keep)? Its
-residual is the measurement noise and quantisation only, and it beats the refitted nominal model even on
-effect-free recordings (the engine's batched plant and the pulse reconstructed from 100 Hz records leave a
-misfit above the noise there): it would call the engine's own modelling error an effect. Its residual is
-reported (exact_rms) as the check that the truth is the truth.
+Left out of the truth's prediction: the effect's random part (a delay's jitter: no model predicts its
+realisation), and the per-tick pulses the recording does not keep. The truth plant's own run (exact_prediction,
+TruthCase.tick_truth) has them; its residual is the measurement noise and quantisation only (reported as
+exact_rms: the check that the truth is the truth), but it beats the refitted nominal model even on effect-free
+recordings, since the engine's batched plant and the pulse interpolated between 100 Hz records leave a misfit
+above the noise there: judged with it, the oracle would call the engine's modelling error an effect.
 """
 
 from __future__ import annotations
@@ -99,7 +100,9 @@ def exact_prediction(case: TruthCase, replay) -> dict[str, np.ndarray]:
 def effect_contribution(case: TruthCase, replay) -> dict[str, np.ndarray]:
     """What the truth effect adds to the recording's observations (channel -> (S,)): the truth plant (true base
     parameters, seed) driven by the recording's pulses as the engine reconstructs them (replay.data.pulse_us),
-    with the effect in its true form minus without it. Zero for an effect-free case."""
+    with the effect in its true form minus without it. The effect's random part (a delay's jitter) is left out:
+    no model can predict its realisation, so the truth's prediction is its systematic part. Zero for an
+    effect-free case."""
     data = replay.data
     if case.effect is None:
         return {c: np.zeros(data.time_s.size) for c in CHANNELS}
@@ -108,7 +111,7 @@ def effect_contribution(case: TruthCase, replay) -> dict[str, np.ndarray]:
         raise ValueError(f"{case.path}: the first telemetry record is {k0} ticks after power-up, more than the "
                          f"replay's pre-roll ({data.preroll_ticks}): the truth's first ticks have no recorded pulse")
     pulse = data.pulse_us[data.preroll_ticks - k0:]  # from the truth plant's power-up
-    with_effect = _observe_run(replay, run_truth(case.params, case.effect, case.seed, pulse), k0)
+    with_effect = _observe_run(replay, run_truth(case.params, case.effect.systematic(), case.seed, pulse), k0)
     without = _observe_run(replay, run_truth(case.params, None, case.seed, pulse), k0)
     return {c: with_effect[c] - without[c] for c in CHANNELS}
 
