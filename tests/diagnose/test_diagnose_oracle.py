@@ -1,6 +1,6 @@
-"""The proof's identifiability oracle (proof/oracle.py) on short generated recordings: the truth put to the engine's
-acceptance rule calls a plain strong effect identifiable, gives an effect-free recording's truth no advantage, and
-its truth is the truth (its own run's residual is the board's measurement noise)."""
+"""The proof's identifiability oracles (proof/oracle.py, proof/spindle_oracle.py) on short generated recordings: the
+truth put to the engine's acceptance rule calls a plain strong effect identifiable, gives an effect-free
+recording's truth no advantage, and its truth is the truth (its own run's residual is the measurement noise)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,13 @@ from robowrangler_sim.diagnose.candidates.esc_latency import EscLatency
 from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
 from robowrangler_sim.diagnose.proof.generator import generate_recording, run_truth
 from robowrangler_sim.diagnose.proof.oracle import exact_prediction, judge
+from robowrangler_sim.diagnose.proof.spindle_cases import SpindleProofCase
+from robowrangler_sim.diagnose.proof.spindle_generator import MM_PER_POSITION_UNIT, run_spindle_truth
+from robowrangler_sim.diagnose.proof.spindle_oracle import judge_spindle
+from robowrangler_sim.diagnose.spindle_stage import diagnose_spindle
 from robowrangler_sim.diagnose.proof.truth_effects import LatencyTruth
 from robowrangler_sim.plants import DriveParams, DrivePlant
+from robowrangler_sim.plants.spindle import SpindleParams
 
 DURATION_S = 6.0
 ADC_SIGMA_V = float(np.hypot(DriveParams().battery_adc_noise_v, DriveParams().battery_adc_lsb_v / np.sqrt(12.0)))
@@ -103,3 +108,43 @@ def test_the_truths_delay_is_its_jitters_expectation():
     assert out[9] == pytest.approx(1000.0) and out[19] == pytest.approx(1300.0)
     assert 1000.0 < out[11] < 1300.0  # between the levels at the delay
     assert eff.averaged and not _latency(0.0017).averaged  # the recording itself draws the jitter
+
+
+# --- the spindle's oracle (proof/spindle_oracle.py)
+
+@pytest.fixture(scope="module")
+def spindle_judged(tmp_path_factory):
+    d = tmp_path_factory.mktemp("spindle_oracle")
+    out = {}
+    for case in (SpindleProofCase("screw_backlash/plain/1", 150, "screw_backlash", "plain", 6.0),
+                 SpindleProofCase("none/-/201", 201, None, "-", 6.0)):
+        truth = case.generate(d / f"{case.concealment}.mcap")
+        res = diagnose_spindle(truth.path, base=SpindleParams(), candidates=[])
+        out[case.effect_id] = (truth, judge_spindle(truth, res))
+    return out
+
+
+def _spindle_at_noise_level(truth, v) -> None:
+    """The truth spindle's own run leaves the registers' noise only: the load's sigma (and its whole-per-mille
+    step), the position's (in mm, on a difference of two samples)."""
+    load_sigma = float(np.hypot(truth.params.load_noise_permille, 1.0 / np.sqrt(12.0)))
+    step_sigma = np.sqrt(2.0) * truth.params.position_noise_units * MM_PER_POSITION_UNIT
+    assert v.exact_rms["spindle_load_permille"] == pytest.approx(load_sigma, rel=0.1)
+    assert v.exact_rms["guide_step_mm"] == pytest.approx(step_sigma, rel=0.1)
+
+
+def test_spindle_plain_backlash_is_identifiable(spindle_judged):
+    truth, v = spindle_judged["screw_backlash"]
+    assert v.identifiable and v.delta_bic < -10.0 and v.heldout_p < 0.01
+    assert v.truth_rms["spindle_load_permille"] < 0.8 * v.nominal_rms["spindle_load_permille"]
+    _spindle_at_noise_level(truth, v)
+    # the oracle's truth spindle is the one that made the recording
+    run = run_spindle_truth(truth.params, truth.plant_truth, truth.seed, truth.program)
+    for k in ("guide_position_mm", "load_permille"):
+        np.testing.assert_array_equal(run[k], truth.sample_truth[k])
+
+
+def test_spindle_effect_free_truth_has_no_advantage(spindle_judged):
+    truth, v = spindle_judged[None]
+    assert not v.identifiable and v.delta_bic > -10.0
+    _spindle_at_noise_level(truth, v)
