@@ -108,13 +108,12 @@ def run_case(case, workdir: str, rate_hz: float = 100.0, oracle: bool = True) ->
         verdict = judge(truth_case, res)
         oracle_s = time.perf_counter() - t1
     pred = res.effects[0].effect_id if res.verdict == "missing_physics" else res.verdict
-    # the ranking: what diagnose chose first, then the other fitted candidates by held-out p, ties (p = 0) by
-    # their held-out speed RMS
+    # the ranking: what diagnose chose first, then the other fitted candidates by their held-out likelihood ratio
+    # over the refit
     chosen_ids = [e.effect_id for e in res.effects]
-    ranked = sorted((c for c in res.candidates if "heldout_p" in c and "+" not in c["id"]
+    ranked = sorted((c for c in res.candidates if "heldout_lr" in c and "+" not in c["id"]
                      and c.get("plant") != "spindle"),
-                    key=lambda c: (c["id"] not in chosen_ids, c["heldout_p"],
-                                   c.get("heldout_rms", {}).get("rope_speed_mps", np.inf)))
+                    key=lambda c: (c["id"] not in chosen_ids, -c["heldout_lr"]))
     top3 = [c["id"] for c in ranked[:3]]
     nominal = next(c for c in res.candidates if c["id"] == "nominal_refit")
     before = nominal["heldout_rms"]["rope_speed_mps"]

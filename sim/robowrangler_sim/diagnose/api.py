@@ -22,7 +22,7 @@ from robowrangler_sim.diagnose.recording_data import DriveData, load_drive_data
 from robowrangler_sim.diagnose.regimes import coverage, dominant_regime, regime_labels
 from robowrangler_sim.diagnose.replay import DriveReplay
 from robowrangler_sim.diagnose.residuals import CHANNELS, Residuals, channel_noise, channel_weights, observed
-from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, heldout_p, score_model
+from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, equivalent, score_model
 from robowrangler_sim.plants import DriveParams
 from robowrangler_sim.plants import drive_batch as db
 
@@ -242,7 +242,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         r_c = _residuals(data, fitter.prediction_)
         sc = score_model(cand.effect_id, len(NOMINAL_REFIT) + len(cand.params), r_c, weights, fit_mask,
                          block_id, heldout_blocks, n_eff, valid=valid)
-        ok, ev = accepted(sc, score_nom, alpha=ALPHA)
+        ok, ev = accepted(sc, score_nom)
         fits[cand.effect_id] = (cand, fitter, sc, load_mask)
         cand_rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
                           "heldout_rms": sc.heldout_rms,
@@ -263,8 +263,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         best = ok_ids[0]
         rivals = []
         for other in ok_ids[1:]:
-            p_rival = heldout_p(fits[best][2], fits[other][2])
-            if p_rival >= ALPHA and abs(fits[other][2].bic - fits[best][2].bic) < 10.0:
+            if equivalent(fits[best][2], fits[other][2]):
                 rivals.append(other)
         chosen = [best]
         chosen_fit, chosen_score, chosen_mask = fits[best][1], fits[best][2], fits[best][3]
@@ -292,7 +291,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                     r_p = _residuals(data, pair.prediction_)
                     sp = score_model(f"{best}+{second}", len(pair.specs), r_p, weights, fit_mask, block_id,
                                      heldout_blocks, n_eff, valid=valid)
-                    ok2, ev2 = accepted(sp, chosen_score, alpha=ALPHA)
+                    ok2, ev2 = accepted(sp, chosen_score)
                     cand_rows.append({"id": f"{best}+{second}", "status": "accepted" if ok2 else "rejected", **ev2,
                                       "heldout_rms": sp.heldout_rms})
                     if ok2:

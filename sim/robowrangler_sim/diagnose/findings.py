@@ -47,7 +47,7 @@ def effect_finding(cand, params: dict[str, dict], *, spans_s: list[list[float]],
         effect_id=cand.effect_id, params=params, channels=list(cand.channels), spans_s=spans_s,
         regime=dominant_regime(labels, spans_mask(time_s, [tuple(s) for s in spans_s])),
         heldout_rms_before=before, heldout_rms_after=after,
-        evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"]}, law=cand.law)
+        evidence={"delta_bic": ev["delta_bic"], "heldout_lr": ev["heldout_lr"], "heldout_p": ev["heldout_p"]}, law=cand.law)
 
 
 def nominal_refit_table(fitter, specs: tuple[ParamSpec, ...] | list[ParamSpec], theta_base: np.ndarray) -> dict:

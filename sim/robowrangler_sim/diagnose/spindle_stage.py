@@ -2,8 +2,8 @@
 the nominal spindle parameters, fit the spindle candidates (screw_backlash, servo_deadband), select.
 
 The same rules as the drive (api.py): the nominal model's own parameters are refitted first within physical
-bounds; a candidate is accepted only where it beats the refitted nominal model on held-out blocks (one-sided
-Diebold-Mariano test, p < ALPHA) and by more than 10 in BIC (select.py); two accepted candidates that predict the
+bounds; a candidate is accepted only where it beats the refitted nominal model on held-out blocks (held-out
+likelihood ratio) and on the fit samples (BIC), each by more than 10 (select.py); two accepted candidates that predict the
 held-out blocks equally well are "not identifiable". A recording whose spindle never moves cannot test either
 effect: it says so (status "not_testable") and claims nothing.
 """
@@ -23,7 +23,7 @@ from robowrangler_sim.diagnose.locate import Locator, spans_mask
 from robowrangler_sim.diagnose.parameters import ParamSpec
 from robowrangler_sim.diagnose.regimes import dominant_regime
 from robowrangler_sim.diagnose.residuals import noise_sigma
-from robowrangler_sim.diagnose.select import accepted, effective_counts, heldout_p, score_model
+from robowrangler_sim.diagnose.select import HELDOUT_STRONG, accepted, effective_counts, equivalent, heldout_lr, score_model
 from robowrangler_sim.diagnose.spindle_data import (SpindleData, load_spindle_data, spindle_coverage,
                                                     spindle_regimes)
 from robowrangler_sim.diagnose.spindle_fit import SpindleFitter
@@ -204,7 +204,7 @@ def diagnose_spindle_data(data: SpindleData, *, base: SpindleParams, candidates:
         r_c = _residuals(replay, fitter.prediction_)
         sc = score_model(cand.effect_id, len(SPINDLE_REFIT) + len(cand.params), r_c, weights, fit_mask, block_id,
                          heldout_blocks, n_eff)
-        ok, ev = accepted(sc, score_nom, alpha=ALPHA)
+        ok, ev = accepted(sc, score_nom)
         fits[cand.effect_id] = (cand, fitter, sc)
         rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
                      "heldout_rms": sc.heldout_rms,
@@ -221,15 +221,14 @@ def diagnose_spindle_data(data: SpindleData, *, base: SpindleParams, candidates:
         best = ok_ids[0]
         chosen = [best]
         chosen_fit, chosen_score = fits[best][1], fits[best][2]
-        rivals = [o for o in ok_ids[1:] if heldout_p(fits[best][2], fits[o][2]) >= ALPHA
-                  and abs(fits[o][2].bic - fits[best][2].bic) < 10.0]
+        rivals = [o for o in ok_ids[1:] if equivalent(fits[best][2], fits[o][2])]
         if rivals:
             # both effects together may be what the recording holds: try the pair before calling them look-alikes
             pair_ok = False
             if len(ok_ids) >= 2:
                 pair_ok, pair_fit, pair_score = _fit_pair(fits, ok_ids[:2], replay, weights, fit_mask, block_id,
                                                           heldout_blocks, n_eff, theta_base, rows, progress)
-                if pair_ok and heldout_p(pair_score, chosen_score) < ALPHA:
+                if pair_ok and heldout_lr(pair_score, chosen_score) > HELDOUT_STRONG:
                     chosen, chosen_fit, chosen_score = ok_ids[:2], pair_fit, pair_score
                     verdict = "missing_physics"
             if verdict != "missing_physics":
@@ -244,7 +243,7 @@ def diagnose_spindle_data(data: SpindleData, *, base: SpindleParams, candidates:
             if len(ok_ids) >= 2:
                 pair_ok, pair_fit, pair_score = _fit_pair(fits, ok_ids[:2], replay, weights, fit_mask, block_id,
                                                           heldout_blocks, n_eff, theta_base, rows, progress)
-                if pair_ok and accepted(pair_score, chosen_score, alpha=ALPHA)[0]:
+                if pair_ok and accepted(pair_score, chosen_score)[0]:
                     chosen, chosen_fit, chosen_score = ok_ids[:2], pair_fit, pair_score
 
     r_after = _residuals(replay, chosen_fit.prediction_)
@@ -287,7 +286,7 @@ def _fit_pair(fits, ids, replay, weights, fit_mask, block_id, heldout_blocks, n_
                                                      scan={s.name for s in a[0].params + b[0].params})
     r_p = _residuals(replay, pair.prediction_)
     sp = score_model("+".join(ids), len(specs), r_p, weights, fit_mask, block_id, heldout_blocks, n_eff)
-    ok, ev = accepted(sp, a[2], alpha=ALPHA)
+    ok, ev = accepted(sp, a[2])
     rows.append({"id": "+".join(ids), "status": "accepted" if ok else "rejected", **ev, "heldout_rms": sp.heldout_rms})
     return ok, pair, sp
 

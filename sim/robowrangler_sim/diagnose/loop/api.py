@@ -29,7 +29,7 @@ from robowrangler_sim.diagnose.loop.replay import CHANNEL, LoopReplay
 from robowrangler_sim.diagnose.loop.residuals import LoopResiduals
 from robowrangler_sim.diagnose.parameters import ParamSpec
 from robowrangler_sim.diagnose.residuals import robust_scale
-from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, heldout_p, score_model
+from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, equivalent, score_model
 
 BLOCK_S = 1.0
 HELDOUT_EVERY = 3
@@ -184,7 +184,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
         r_c = replay.measured()[CHANNEL] - fitter.prediction_[CHANNEL]
         sc = score_model(cand.effect_id, len(LOOP_NOMINAL_REFIT) + len(cand.params), {CHANNEL: r_c}, weights,
                          fit_mask, block_id, held_blocks, n_eff)
-        ok, ev = accepted(sc, sc_nom, alpha=ALPHA)
+        ok, ev = accepted(sc, sc_nom)
         fits[cand.effect_id] = (cand, fitter, sc)
         own = {s.name for s in cand.params}
         rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
@@ -197,8 +197,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
     verdict, chosen, chosen_fit, chosen_sc = "none", [], nominal, sc_nom
     if ok_ids:
         best = ok_ids[0]
-        rivals = [o for o in ok_ids[1:] if heldout_p(fits[best][2], fits[o][2]) >= ALPHA
-                  and abs(fits[o][2].bic - fits[best][2].bic) < 10.0]
+        rivals = [o for o in ok_ids[1:] if equivalent(fits[best][2], fits[o][2])]
         chosen, chosen_fit, chosen_sc = [best], fits[best][1], fits[best][2]
         if rivals:
             verdict = "not_identifiable"
@@ -236,8 +235,8 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
             sc_p = score_model(f"{first}+{other}", len(specs), {CHANNEL: r_p}, weights, fit_mask, block_id,
                                held_blocks, n_eff)
             # the pair must beat the better of its two alone and the single-effect verdict (or the refitted chain)
-            ok, ev = accepted(sc_p, fits[first][2], alpha=ALPHA)
-            ok = ok and accepted(sc_p, chosen_sc, alpha=ALPHA)[0]
+            ok, ev = accepted(sc_p, fits[first][2])
+            ok = ok and accepted(sc_p, chosen_sc)[0]
             ev["sensitivity_cosine"] = round(_sensitivity_cosine(replay, fp.theta_, c1, c2, fit_mask), 4)
             if abs(ev["sensitivity_cosine"]) > PAIR_MAX_COSINE:
                 ok = False  # the two laws move the contours alike here: their parameters trade, the pair is not separable
@@ -250,8 +249,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
         if ok_pairs:
             ok_pairs.sort(key=lambda q: q[3].block_sse.sum())
             best_pair = ok_pairs[0]
-            rivals = [q for q in ok_pairs[1:] if heldout_p(best_pair[3], q[3]) >= ALPHA
-                      and abs(q[3].bic - best_pair[3].bic) < 10.0]
+            rivals = [q for q in ok_pairs[1:] if equivalent(best_pair[3], q[3])]
             if not_ident and "candidates" in not_ident[0]:
                 not_ident.pop(0)
             chosen, chosen_fit, chosen_sc, pair_ev = [best_pair[0], best_pair[1]], best_pair[2], best_pair[3], best_pair[4]
@@ -291,7 +289,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                 params={p.name: {"value": p.value, "unit": p.unit, "ci95": list(p.ci95)}
                         for p in chosen_fit.params_ if p.name in own},
                 heldout_rms_mm_before=_mm(sc_nom), heldout_rms_mm_after=_mm(chosen_sc),
-                evidence={"delta_bic": ev["delta_bic"], "heldout_p": ev["heldout_p"],
+                evidence={"delta_bic": ev["delta_bic"], "heldout_lr": ev["heldout_lr"], "heldout_p": ev["heldout_p"],
                           **({"pair_against_single": chosen[0]} if pair_ev is not None else {})}))
     nominal_refit = {p.name: {"nominal": float(theta_base[s.column]), "fitted": p.value, "unit": p.unit,
                               "ci95": list(p.ci95)}
