@@ -144,12 +144,12 @@ def _table(rows: list[dict], title: str) -> None:
     eff_rows = [r for r in rows if r["effect"] != "none"]
     clean = [r for r in rows if r["effect"] == "none"]
     print(f"{'effect':20s} {'concealment':12s} {'top1':>5s} {'top3':>5s} {'p.err':>6s} {'ci ok':>5s} "
-          f"{'RMS before->after mm/s':>24s} {'IoU':>5s} {'sysid':>7s} {'sindy':>7s} {'ident (dBIC, p)':>20s}  predicted")
+          f"{'RMS before->after mm/s':>24s} {'IoU':>5s} {'sysid':>7s} {'sindy':>7s} {'ident (dBIC, hLR)':>20s}  predicted")
     for r in sorted(eff_rows, key=lambda r: (r["effect"], r["concealment"])):
         pe = f"{r['param_error']:.2f}" if "param_error" in r else "-"
         ci = ("yes" if r["covered"] else "no") if "covered" in r else "-"
         iou = f"{r['iou']:.2f}" if "iou" in r else "-"
-        ident = (f"{'yes' if r['identifiable'] else 'no'} ({r['oracle_delta_bic']:.0f}, {r['oracle_heldout_p']:.1g})"
+        ident = (f"{'yes' if r['identifiable'] else 'no'} ({r['oracle_delta_bic']:.0f}, {r['oracle_heldout_lr']:.0f})"
                  if "identifiable" in r else "-")
         print(f"{r['effect']:20s} {r['concealment']:12s} {int(r['predicted'] == r['effect']):5d} "
               f"{int(r['effect'] in r['top3']):5d} {pe:>6s} {ci:>5s} "

@@ -17,6 +17,7 @@ from robowrangler_sim.diagnose.proof.spindle_generator import MM_PER_POSITION_UN
 from robowrangler_sim.diagnose.proof.spindle_oracle import judge_spindle
 from robowrangler_sim.diagnose.spindle_stage import diagnose_spindle
 from robowrangler_sim.diagnose.proof.truth_effects import LatencyTruth
+from robowrangler_sim.diagnose.select import BIC_STRONG, HELDOUT_STRONG
 from robowrangler_sim.plants import DriveParams, DrivePlant
 from robowrangler_sim.plants.spindle import SpindleParams
 
@@ -49,7 +50,7 @@ def _at_noise_level(v) -> None:
 def test_plain_strong_effect_is_identifiable(judged):
     case, res, v = judged["plain"]
     assert v.identifiable
-    assert v.delta_bic < -10.0 and v.heldout_p < 0.01
+    assert v.delta_bic < -BIC_STRONG and v.heldout_lr > HELDOUT_STRONG
     assert v.n_params == len(NOMINAL_REFIT) + len(EscLatency().params)  # counted as the library's candidate is
     assert v.effect_rms["rope_speed_mps"] > 10 * v.noise["rope_speed_mps"]
     assert v.truth_rms["rope_speed_mps"] < 0.5 * v.nominal_rms["rope_speed_mps"]
@@ -66,14 +67,14 @@ def test_effect_free_truth_has_no_advantage(judged):
     # ... yet the truth's candidate (no effect to add, its base refitted from the truth's own values) gains
     # nothing the rule accepts: naming anything here would be a false alarm
     assert not v.identifiable
-    assert v.delta_bic > -10.0
+    assert v.delta_bic > -BIC_STRONG
 
 
 def test_tiny_effect_judged_with_the_truth_at_the_noise(judged):
     case, res, v = judged["tiny"]
     _at_noise_level(v)
     assert 0.0 < v.effect_rms["rope_speed_mps"]
-    assert np.isfinite(v.delta_bic) and 0.0 <= v.heldout_p <= 1.0
+    assert np.isfinite(v.delta_bic) and np.isfinite(v.heldout_lr)
     # the truth's candidate carries the effect the nominal model lacks: it fits the recording no worse
     assert v.truth_rms["rope_speed_mps"] <= v.nominal_rms["rope_speed_mps"] * 1.02
 
@@ -135,7 +136,7 @@ def _spindle_at_noise_level(truth, v) -> None:
 
 def test_spindle_plain_backlash_is_identifiable(spindle_judged):
     truth, v = spindle_judged["screw_backlash"]
-    assert v.identifiable and v.delta_bic < -10.0 and v.heldout_p < 0.01
+    assert v.identifiable and v.delta_bic < -BIC_STRONG and v.heldout_lr > HELDOUT_STRONG
     assert v.truth_rms["spindle_load_permille"] < 0.8 * v.nominal_rms["spindle_load_permille"]
     _spindle_at_noise_level(truth, v)
     # the oracle's truth spindle is the one that made the recording
@@ -146,5 +147,5 @@ def test_spindle_plain_backlash_is_identifiable(spindle_judged):
 
 def test_spindle_effect_free_truth_has_no_advantage(spindle_judged):
     truth, v = spindle_judged[None]
-    assert not v.identifiable and v.delta_bic > -10.0
+    assert not v.identifiable and v.delta_bic > -BIC_STRONG
     _spindle_at_noise_level(truth, v)

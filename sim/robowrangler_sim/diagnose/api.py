@@ -56,11 +56,11 @@ class NominalBasis:
                          ) -> tuple[ModelScore, bool, dict[str, float], dict[str, np.ndarray]]:
         """Score a prediction (channel -> (S,) on the recording's observations) as a candidate counted with
         n_params parameters is scored: (its ModelScore, accepted over the refitted nominal model, the evidence
-        (delta_bic, heldout_p), its residuals)."""
+        (select.accepted's: delta_bic, the held-out statistics), its residuals)."""
         r = _residuals(self.data, prediction)
         sc = score_model(name, n_params, r, self.weights, self.fit_mask, self.block_id, self.heldout_blocks,
                          self.n_eff, valid=self.valid)
-        ok, ev = accepted(sc, self.score, alpha=ALPHA)
+        ok, ev = accepted(sc, self.score)
         return sc, ok, ev, r
 
 

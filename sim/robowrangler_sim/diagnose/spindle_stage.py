@@ -70,7 +70,7 @@ class SpindleBasis:
         r = _residuals(self.replay, prediction)
         sc = score_model(name, n_params, r, self.weights, self.fit_mask, self.block_id, self.heldout_blocks,
                          self.n_eff)
-        ok, ev = accepted(sc, self.score, alpha=ALPHA)
+        ok, ev = accepted(sc, self.score)
         return sc, ok, ev, r
 
 

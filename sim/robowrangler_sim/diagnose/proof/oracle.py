@@ -39,7 +39,8 @@ TICK_S = 1e-3
 @dataclass(frozen=True)
 class OracleVerdict:
     """identifiable: the truth's candidate is accepted over the refitted nominal model by the engine's rule.
-    delta_bic, heldout_p: the rule's evidence (truth - nominal refit BIC; p of the held-out test).
+    evidence: the rule's (select.accepted: delta_bic, truth - nominal refit BIC; heldout_lr, 2 ln of the truth's
+    held-out likelihood ratio over the nominal refit; ...).
     n_params: what the truth was counted as. Residual RMS per channel on every observed sample: truth_rms (the
     truth's candidate), exact_rms (the truth plant's own run: the measurement noise and quantisation),
     nominal_rms (the refitted nominal model). noise: the engine's noise estimate per channel (median over
@@ -47,8 +48,7 @@ class OracleVerdict:
     the effect adds to the observations (0: effect-free)."""
 
     identifiable: bool
-    delta_bic: float
-    heldout_p: float
+    evidence: dict[str, float]
     n_params: int
     truth_rms: dict[str, float]
     exact_rms: dict[str, float]
@@ -57,10 +57,19 @@ class OracleVerdict:
     heldout_rms_truth: dict[str, float]
     effect_rms: dict[str, float]
 
+    @property
+    def delta_bic(self) -> float:
+        return float(self.evidence["delta_bic"])
+
+    @property
+    def heldout_lr(self) -> float:
+        return float(self.evidence.get("heldout_lr", float("nan")))
+
     def row(self) -> dict:
         """The bench row's fields."""
-        return {"identifiable": self.identifiable, "oracle_delta_bic": self.delta_bic,
-                "oracle_heldout_p": self.heldout_p, "oracle_truth_rms": self.truth_rms,
+        return {"identifiable": self.identifiable, "oracle_evidence": dict(self.evidence),
+                "oracle_delta_bic": self.delta_bic, "oracle_heldout_lr": self.heldout_lr,
+                "oracle_truth_rms": self.truth_rms,
                 "oracle_exact_rms": self.exact_rms, "oracle_nominal_rms": self.nominal_rms,
                 "oracle_noise": self.noise, "oracle_effect_rms": self.effect_rms}
 
@@ -156,7 +165,7 @@ def judge(case: TruthCase, result) -> OracleVerdict:
         return {c: float(np.sqrt(np.mean(r[c][basis.valid[c]] ** 2))) for c in CHANNELS}
 
     noise = {c: float(np.median(list(v.values()))) for c, v in channel_noise(basis.data).items() if v}
-    return OracleVerdict(identifiable=ok, delta_bic=ev["delta_bic"], heldout_p=ev["heldout_p"], n_params=n_params,
+    return OracleVerdict(identifiable=ok, evidence=dict(ev), n_params=n_params,
                          truth_rms=rms(r_truth),
                          exact_rms=rms(r_exact), nominal_rms=rms(basis.residuals), noise=noise,
                          heldout_rms_truth=dict(sc.heldout_rms), effect_rms=rms(added))

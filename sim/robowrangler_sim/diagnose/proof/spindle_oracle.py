@@ -93,6 +93,6 @@ def judge_spindle(case: SpindleTruthCase, result) -> OracleVerdict:
 
     noise = {"guide_step_mm": noise_sigma(data.guide_mm) * np.sqrt(2.0),
              "spindle_load_permille": noise_sigma(data.load_permille)}
-    return OracleVerdict(identifiable=ok, delta_bic=ev["delta_bic"], heldout_p=ev["heldout_p"], n_params=n_params,
+    return OracleVerdict(identifiable=ok, evidence=dict(ev), n_params=n_params,
                          truth_rms=rms(r_truth), exact_rms=rms(r_exact), nominal_rms=rms(basis.residuals),
                          noise=noise, heldout_rms_truth=dict(sc.heldout_rms), effect_rms=rms(added))
