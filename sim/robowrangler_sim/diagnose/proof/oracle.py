@@ -58,6 +58,10 @@ class OracleVerdict:
     exact_rms: dict[str, float]
     nominal_rms: dict[str, float]
     null_rms: dict[str, float]
+    exact_speed_z: tuple[float, float] | None
+    """The truth plant's own run's speed residual over the encoder's quantisation sigma (exact_z): its robust
+    scale (about 1: the residual is quantisation) and the share beyond 4 (the first edges of a spin-up); None
+    where not computed (the spindle)."""
     noise: dict[str, float]
     heldout_rms_truth: dict[str, float]
     effect_rms: dict[str, float]
@@ -76,7 +80,7 @@ class OracleVerdict:
                 "oracle_delta_bic": self.delta_bic, "oracle_heldout_lr": self.heldout_lr,
                 "oracle_truth_rms": self.truth_rms,
                 "oracle_exact_rms": self.exact_rms, "oracle_nominal_rms": self.nominal_rms,
-                "oracle_null_rms": self.null_rms,
+                "oracle_null_rms": self.null_rms, "oracle_exact_speed_z": self.exact_speed_z,
                 "oracle_noise": self.noise, "oracle_effect_rms": self.effect_rms}
 
 
@@ -110,6 +114,23 @@ def exact_prediction(case: TruthCase, replay) -> dict[str, np.ndarray]:
     if not case.tick_truth:
         raise ValueError(f"{case.path}: the TruthCase has no tick_truth (made by an older generator)")
     return _observe_run(replay, case.tick_truth, _first_tick(replay.data))
+
+
+def quantisation_sigma_mps(data) -> np.ndarray:
+    """(S,) the speed observation's own quantisation: the two edge times it spans, each floored to the 1 us edge
+    clock (uniform errors: sigma 1 us / sqrt(6) on their difference, times speed / span), and, for a record that
+    saw less than one edge, its floor (recording_data: the uniform spread of [0, one edge))."""
+    span_s = np.maximum(data.edge_ticks[:, 1] - data.edge_ticks[:, 0], 1e-6) * TICK_S
+    return np.hypot(np.abs(data.speed_mps) * 1e-6 / np.sqrt(6.0) / span_s, data.speed_floor_mps)
+
+
+def exact_z(case: TruthCase, replay) -> np.ndarray:
+    """The truth plant's own run's speed residual over quantisation_sigma_mps, on the observed samples: about unit
+    scale where the truth is the truth (the residual is the encoder's quantisation)."""
+    data = replay.data
+    r = Residuals().fit(data, exact_prediction(case, replay)).residuals_["rope_speed_mps"]
+    m = np.asarray(data.speed_valid, dtype=bool)
+    return r[m] / np.maximum(quantisation_sigma_mps(data)[m], 1e-12)
 
 
 def truth_runs(case: TruthCase, replay) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -176,7 +197,9 @@ def judge(case: TruthCase, result) -> OracleVerdict:
         return {c: float(np.sqrt(np.mean(r[c][basis.valid[c]] ** 2))) for c in CHANNELS}
 
     noise = {c: float(np.median(list(v.values()))) for c, v in channel_noise(basis.data).items() if v}
+    z = exact_z(case, replay)
     return OracleVerdict(identifiable=ok, evidence=dict(ev), n_params=n_params, truth_rms=rms(r_truth),
                          exact_rms=rms(r_exact), nominal_rms=rms(basis.residuals), null_rms=rms(r_null),
+                         exact_speed_z=(1.4826 * float(np.median(np.abs(z))), float(np.mean(np.abs(z) > 4.0))),
                          noise=noise, heldout_rms_truth=dict(sc.heldout_rms),
                          effect_rms=rms({c: with_effect[c] - without[c] for c in CHANNELS}))

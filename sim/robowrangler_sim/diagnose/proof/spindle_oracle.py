@@ -103,5 +103,5 @@ def judge_spindle(case: SpindleTruthCase, result) -> OracleVerdict:
              "spindle_load_permille": noise_sigma(data.load_permille)}
     return OracleVerdict(identifiable=ok, evidence=dict(ev), n_params=n_params, truth_rms=rms(r_truth),
                          exact_rms=rms(r_exact), nominal_rms=rms(basis.residuals), null_rms=rms(r_null),
-                         noise=noise, heldout_rms_truth=dict(sc.heldout_rms),
+                         exact_speed_z=None, noise=noise, heldout_rms_truth=dict(sc.heldout_rms),
                          effect_rms=rms({c: with_effect[c] - without[c] for c in CHANNELS}))
