@@ -18,6 +18,7 @@ Seed sets: `dev` (seeds looked at while building the engine, including the earli
 x 2 seeds + 20 effect-free recordings). Each set is printed separately.
 
 Run:  uv run python bench/bench_diagnose.py --set dev [--quick] [--workers 2] [--address ADDR] [--json OUT]
+      [--seeds S,... --clean S,...] [--no-oracle]
       uv run python bench/bench_diagnose.py --set heldout --json heldout.json
       uv run python bench/bench_diagnose.py --speed     (a 60 s recording, whole library: time per stage)
       uv run python bench/bench_diagnose.py --spindle   (also the spindle proof, bench_diagnose_spindle.py)
@@ -250,6 +251,8 @@ def main() -> None:
     ap.add_argument("--set", choices=("dev", "heldout"), default="dev", help="which seed set (default: dev)")
     ap.add_argument("--quick", action="store_true", help="plain cases and 4 effect-free runs only")
     ap.add_argument("--only", default=None, help="effect ids (comma-separated) to run, and no effect-free runs")
+    ap.add_argument("--seeds", default=None, help="effect seeds (comma-separated) instead of the set's")
+    ap.add_argument("--clean", default=None, help="effect-free seeds (comma-separated) instead of the set's")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers (0: no Ray, in this process)")
     ap.add_argument("--local", action="store_true", help="local processes instead of Ray (Ray runs its workers niced)")
     ap.add_argument("--address", default=None, help="Ray cluster address (default: a local one)")
@@ -279,6 +282,8 @@ def main() -> None:
     conc = ("plain",) if args.quick else CONCEALMENTS
     seeds, clean = (DEV_SEEDS, DEV_CLEAN) if args.set == "dev" else (HELDOUT_SEEDS, HELDOUT_CLEAN)
     clean = clean[:4] if args.quick else clean
+    seeds = [int(x) for x in args.seeds.split(",")] if args.seeds else seeds
+    clean = [int(x) for x in args.clean.split(",")] if args.clean else clean
     effects = tuple(args.only.split(",")) if args.only else EFFECTS
     if args.only:
         clean = []
