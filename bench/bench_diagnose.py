@@ -5,7 +5,8 @@ runs) a Ray task generates the recording (proof/generator.py: perturbed base par
 from the library's laws, the board's measurement chain) and runs `diagnose` on it, which never reads
 /sim/plant_truth. Scored against the truth here: named top-1 / top-3, confusion matrix, key-parameter error and
 95 % interval coverage, held-out speed RMS before (nominal refit) / after, located-span IoU, false alarms, wall
-time per recording; baselines side by side: the nominal refit alone (a fixed-structure sysid) and PySINDy with
+time per recording; whether the effect is identifiable from the recording at all (proof/oracle.py: the truth's
+own candidate put to the engine's acceptance rule; `--no-oracle` skips it) and top-1 of the identifiable ones; baselines side by side: the nominal refit alone (a fixed-structure sysid) and PySINDy with
 control inputs on the refit's residual (discrete-time sparse regression, simulated over the held-out blocks).
 
 Recordings as a user makes them with `wrangler excite --profile drive` (12 s, compressed): 100 Hz telemetry with
@@ -17,6 +18,7 @@ Seed sets: `dev` (seeds looked at while building the engine, including the earli
 x 2 seeds + 20 effect-free recordings). Each set is printed separately.
 
 Run:  uv run python bench/bench_diagnose.py --set dev [--quick] [--workers 2] [--address ADDR] [--json OUT]
+      [--seeds S,... --clean S,...] [--no-oracle]
       uv run python bench/bench_diagnose.py --set heldout --json heldout.json
       uv run python bench/bench_diagnose.py --speed     (a 60 s recording, whole library: time per stage)
       uv run python bench/bench_diagnose.py --spindle   (also the spindle proof, bench_diagnose_spindle.py)
@@ -85,7 +87,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
-def run_case(case, workdir: str, rate_hz: float = 100.0) -> dict:
+def run_case(case, workdir: str, rate_hz: float = 100.0, oracle: bool = True) -> dict:
     from robowrangler_sim.diagnose import diagnose
     from robowrangler_sim.diagnose.locate import iou_s
     from robowrangler_sim.diagnose.proof.cases import KEY_PARAM
@@ -94,11 +96,18 @@ def run_case(case, workdir: str, rate_hz: float = 100.0) -> dict:
     effect, spans = case.truth_effect()
     path = Path(workdir) / f"{case.name.replace('/', '_')}.mcap"
     legacy = rate_hz == 50.0
-    generate_recording(path, effect=effect, seed=case.seed, duration_s=case.duration_s, telemetry_hz=rate_hz,
-                       fine_pulse=not legacy, bursts=not legacy)
+    truth_case = generate_recording(path, effect=effect, seed=case.seed, duration_s=case.duration_s,
+                                    telemetry_hz=rate_hz, fine_pulse=not legacy, bursts=not legacy)
     t0 = time.perf_counter()
     res = diagnose(path)
     wall = time.perf_counter() - t0
+    verdict = None
+    if oracle:  # is the effect identifiable from this recording at all? (proof/oracle.py)
+        from robowrangler_sim.diagnose.proof.oracle import judge
+
+        t1 = time.perf_counter()
+        verdict = judge(truth_case, res)
+        oracle_s = time.perf_counter() - t1
     pred = res.effects[0].effect_id if res.verdict == "missing_physics" else res.verdict
     # the ranking: what diagnose chose first, then the other fitted candidates by their held-out likelihood ratio
     # over the refit
@@ -115,6 +124,8 @@ def run_case(case, workdir: str, rate_hz: float = 100.0) -> dict:
            "predicted": pred, "chosen": [e.effect_id for e in res.effects], "top3": top3, "wall_s": wall,
            "heldout_before": before, "heldout_after": after, "first_line": res.first_line,
            "sindy": ours_sindy, "timings": res.timings_s, "cpu_s": res.timings_s.get("cpu_s", float("nan"))}
+    if verdict is not None:
+        out.update(verdict.row(), oracle_s=oracle_s)
     if case.effect_id is not None and case.effect_id in out["chosen"]:
         key = KEY_PARAM[case.effect_id]
         finding = next(e for e in res.effects if e.effect_id == case.effect_id)
@@ -134,26 +145,30 @@ def _table(rows: list[dict], title: str) -> None:
     eff_rows = [r for r in rows if r["effect"] != "none"]
     clean = [r for r in rows if r["effect"] == "none"]
     print(f"{'effect':20s} {'concealment':12s} {'top1':>5s} {'top3':>5s} {'p.err':>6s} {'ci ok':>5s} "
-          f"{'RMS before->after mm/s':>24s} {'IoU':>5s} {'sysid':>7s} {'sindy':>7s}  predicted")
+          f"{'RMS before->after mm/s':>24s} {'IoU':>5s} {'sysid':>7s} {'sindy':>7s} {'ident (dBIC, hLR)':>20s}  predicted")
     for r in sorted(eff_rows, key=lambda r: (r["effect"], r["concealment"])):
         pe = f"{r['param_error']:.2f}" if "param_error" in r else "-"
         ci = ("yes" if r["covered"] else "no") if "covered" in r else "-"
         iou = f"{r['iou']:.2f}" if "iou" in r else "-"
+        ident = (f"{'yes' if r['identifiable'] else 'no'} ({r['oracle_delta_bic']:.0f}, {r['oracle_heldout_lr']:.0f})"
+                 if "identifiable" in r else "-")
         print(f"{r['effect']:20s} {r['concealment']:12s} {int(r['predicted'] == r['effect']):5d} "
               f"{int(r['effect'] in r['top3']):5d} {pe:>6s} {ci:>5s} "
               f"{r['heldout_before'] * 1e3:10.1f} -> {r['heldout_after'] * 1e3:8.1f}   {iou:>5s} "
-              f"{r['heldout_before'] * 1e3:7.1f} {r['sindy']['heldout_rms_after'] * 1e3:7.1f}  {r['predicted']}")
+              f"{r['heldout_before'] * 1e3:7.1f} {r['sindy']['heldout_rms_after'] * 1e3:7.1f} {ident:>20s}  "
+              f"{r['predicted']}")
     by_c = defaultdict(list)
     for r in eff_rows:
         by_c[r["concealment"]].append(r)
     for c, rs in sorted(by_c.items()):
         print(f"  {c:12s}: named top-1 {np.mean([r['predicted'] == r['effect'] for r in rs]):.0%}, "
-              f"top-3 {np.mean([r['effect'] in r['top3'] for r in rs]):.0%} of {len(rs)}")
+              f"top-3 {np.mean([r['effect'] in r['top3'] for r in rs]):.0%} of {len(rs)}" + _of_identifiable(rs))
     if eff_rows:
         errs = [r["param_error"] for r in eff_rows if "param_error" in r]
         cov = [r["covered"] for r in eff_rows if "covered" in r]
         ious = [r["iou"] for r in eff_rows if "iou" in r]
         named = [r for r in eff_rows if r["predicted"] == r["effect"]]
+        print(f"  all effects{_of_identifiable(eff_rows)}")
         print(f"  all effects: top-1 {np.mean([r['predicted'] == r['effect'] for r in eff_rows]):.0%}, "
               f"top-3 {np.mean([r['effect'] in r['top3'] for r in eff_rows]):.0%}; median parameter error "
               f"{np.median(errs) if errs else float('nan'):.2f} ({len(errs)}), 95 % interval covers the truth "
@@ -178,10 +193,30 @@ def _table(rows: list[dict], title: str) -> None:
         fa = [r for r in clean if r["predicted"] != "none"]
         print(f"  false alarms on effect-free recordings: {len(fa)} of {len(clean)}"
               + (f" ({', '.join(r['predicted'] for r in fa)})" if fa else ""))
+        judged = [r for r in clean if "identifiable" in r]
+        if judged:  # the oracle's own check: with no effect, the truth has nothing the refit lacks
+            print(f"  oracle on effect-free recordings: the truth accepted over the nominal refit on "
+                  f"{sum(r['identifiable'] for r in judged)} of {len(judged)} (should be 0)")
     walls = [r["wall_s"] for r in rows]
     cpus = [r["cpu_s"] for r in rows]
     print(f"  diagnose per recording: wall median {np.median(walls):.1f} s, max {max(walls):.1f} s; CPU median "
           f"{np.median(cpus):.1f} s, max {max(cpus):.1f} s")
+
+
+def _of_identifiable(rows: list[dict]) -> str:
+    """'; named top-1 of identifiable: X of Y (Z %), the unidentifiable named as none: A of B' for effect rows that
+    carry the oracle's verdict (proof/oracle.py); '' when none does (--no-oracle)."""
+    judged = [r for r in rows if "identifiable" in r]
+    if not judged:
+        return ""
+    ident = [r for r in judged if r["identifiable"]]
+    named = sum(r["predicted"] == r["effect"] for r in ident)
+    share = f" ({named / len(ident):.0%})" if ident else ""
+    rest = [r for r in judged if not r["identifiable"]]
+    quiet = sum(r["predicted"] in ("none", "not_identifiable") for r in rest)
+    named_rest = sum(r["predicted"] == r["effect"] for r in rest)
+    return (f"; named top-1 of identifiable: {named} of {len(ident)}{share}; not identifiable: {len(rest)} "
+            f"(answered none/not_identifiable {quiet}, named anyway {named_rest})")
 
 
 def speed(duration_s: float = 60.0) -> None:
@@ -216,6 +251,8 @@ def main() -> None:
     ap.add_argument("--set", choices=("dev", "heldout"), default="dev", help="which seed set (default: dev)")
     ap.add_argument("--quick", action="store_true", help="plain cases and 4 effect-free runs only")
     ap.add_argument("--only", default=None, help="effect ids (comma-separated) to run, and no effect-free runs")
+    ap.add_argument("--seeds", default=None, help="effect seeds (comma-separated) instead of the set's")
+    ap.add_argument("--clean", default=None, help="effect-free seeds (comma-separated) instead of the set's")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers (0: no Ray, in this process)")
     ap.add_argument("--local", action="store_true", help="local processes instead of Ray (Ray runs its workers niced)")
     ap.add_argument("--address", default=None, help="Ray cluster address (default: a local one)")
@@ -226,6 +263,9 @@ def main() -> None:
     ap.add_argument("--resume", action="store_true", help="skip the recordings already in the --json OUT + 'l' file")
     ap.add_argument("--table", action="store_true", help="only print the table of the rows in --json OUT + 'l'")
     ap.add_argument("--speed", action="store_true", help="only the 60 s speed figure")
+    ap.add_argument("--oracle", action=argparse.BooleanOptionalAction, default=True,
+                    help="judge each effect recording identifiable or not with the truth (proof/oracle.py; "
+                         "about a third of a diagnosis's CPU time more per recording)")
     ap.add_argument("--spindle", action="store_true",
                     help="also the spindle effects' tables (bench_diagnose_spindle.py, in this process)")
     args = ap.parse_args()
@@ -242,6 +282,8 @@ def main() -> None:
     conc = ("plain",) if args.quick else CONCEALMENTS
     seeds, clean = (DEV_SEEDS, DEV_CLEAN) if args.set == "dev" else (HELDOUT_SEEDS, HELDOUT_CLEAN)
     clean = clean[:4] if args.quick else clean
+    seeds = [int(x) for x in args.seeds.split(",")] if args.seeds else seeds
+    clean = [int(x) for x in args.clean.split(",")] if args.clean else clean
     effects = tuple(args.only.split(",")) if args.only else EFFECTS
     if args.only:
         clean = []
@@ -262,7 +304,7 @@ def main() -> None:
     t0 = time.perf_counter()
     if args.workers == 0 and not args.address:  # in this process, one after the other (no Ray)
         with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
-            rows = [run_case(c, work, args.rate) for c in cases]
+            rows = [run_case(c, work, args.rate, args.oracle) for c in cases]
     else:
         os.environ["NUMBA_NUM_THREADS"] = "1"  # one recording per worker, one plant thread each
         rows = None
@@ -283,7 +325,7 @@ def main() -> None:
         else:
             task = ray.remote(num_cpus=1)(run_case)
             with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work:
-                rows = ray.get([task.remote(c, work, args.rate) for c in cases])
+                rows = ray.get([task.remote(c, work, args.rate, args.oracle) for c in cases])
             ray.shutdown()
         if rows is None:
             from concurrent.futures import ProcessPoolExecutor
@@ -291,7 +333,8 @@ def main() -> None:
             rows = []
             with tempfile.TemporaryDirectory(prefix="rw_diag_bench_") as work, \
                     ProcessPoolExecutor(max_workers=args.workers) as pool:
-                for row in pool.map(run_case, cases, [work] * len(cases), [args.rate] * len(cases)):
+                for row in pool.map(run_case, cases, [work] * len(cases), [args.rate] * len(cases),
+                                    [args.oracle] * len(cases)):
                     rows.append(row)
                     if args.json:  # each row as it comes (a sweep cut short keeps what it did)
                         with open(args.json + "l", "a") as f:

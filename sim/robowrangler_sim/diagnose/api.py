@@ -32,6 +32,39 @@ ALPHA = 0.01
 
 
 @dataclass
+class NominalBasis:
+    """The refitted nominal model's score on one recording, with what scoring any other prediction of the same
+    observations by the same rule needs (the weights, fit samples, held-out blocks and sample counts the
+    candidates are judged with). The diagnose proof's identifiability oracle scores the truth plant with it."""
+
+    data: DriveData = field(repr=False)
+    replay: DriveReplay = field(repr=False)
+    weights: dict[str, np.ndarray] = field(repr=False)
+    fit_mask: np.ndarray = field(repr=False)
+    block_id: np.ndarray = field(repr=False)
+    heldout_blocks: np.ndarray = field(repr=False)
+    n_eff: dict[str, float] = field(repr=False)
+    valid: dict[str, np.ndarray] = field(repr=False)
+    score: ModelScore = field(repr=False)
+    residuals: dict[str, np.ndarray] = field(repr=False)
+    theta: np.ndarray = field(repr=False)
+    """The refitted nominal model's theta row (N_THETA,)."""
+    theta_ref: np.ndarray = field(repr=False)
+    """The model as given (the row the refit's relative bounds refer to)."""
+
+    def score_prediction(self, name: str, prediction: dict[str, np.ndarray], n_params: int
+                         ) -> tuple[ModelScore, bool, dict[str, float], dict[str, np.ndarray]]:
+        """Score a prediction (channel -> (S,) on the recording's observations) as a candidate counted with
+        n_params parameters is scored: (its ModelScore, accepted over the refitted nominal model, the evidence
+        (select.accepted's: delta_bic, the held-out statistics), its residuals)."""
+        r = _residuals(self.data, prediction)
+        sc = score_model(name, n_params, r, self.weights, self.fit_mask, self.block_id, self.heldout_blocks,
+                         self.n_eff, valid=self.valid)
+        ok, ev = accepted(sc, self.score)
+        return sc, ok, ev, r
+
+
+@dataclass
 class DiagnosisResult:
     """What diagnose found. ``report`` is the report.json document (see protocol/recording/diagnosis_report.md)."""
 
@@ -51,6 +84,8 @@ class DiagnosisResult:
     """The spindle half's section of report.json (spindle_stage.SpindleDiagnosis.section)."""
     closed_loop: dict | None = None
     """Closed-loop before/after (closed_loop.py) when diagnose ran it: RMS per channel, model as given vs fitted."""
+    nominal_basis: NominalBasis | None = field(repr=False, default=None)
+    """The refitted nominal model's score and how to score another prediction against it (NominalBasis)."""
 
     @property
     def first_line(self) -> str:
@@ -150,6 +185,8 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     n_eff = effective_counts(r_nom, fit_mask, valid=valid)
     score_nom = score_model("nominal_refit", len(NOMINAL_REFIT), r_nom, weights, fit_mask, block_id, heldout_blocks,
                             n_eff, valid=valid)
+    basis = NominalBasis(data, replay, weights, fit_mask, block_id, heldout_blocks, n_eff, valid, score_nom, r_nom,
+                         nominal.theta_, theta_base)
     timings["nominal_refit_s"] = time.perf_counter() - t1
 
     # --- locate
@@ -319,7 +356,8 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                 "nominal_battery_v": pred0["battery_v"][0], "refit_battery_v": nominal.prediction_["battery_v"],
                 "after_battery_v": chosen_fit.prediction_["battery_v"],
                 "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"],
-                "telemetry": data.tel.copy(), "speed_valid": valid["rope_speed_mps"].copy()})
+                "telemetry": data.tel.copy(), "speed_valid": valid["rope_speed_mps"].copy()},
+        nominal_basis=basis)
     _progress(progress, "spindle channels")
     merge_spindle(result, diagnose_spindle(data.path, base=base.spindle_params, candidates=spindle_cands,
                                            progress=progress))

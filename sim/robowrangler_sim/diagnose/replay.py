@@ -59,11 +59,34 @@ class DriveReplay:
         if self._encoder:
             x = np.zeros_like(v)
             x[:, 1:] = np.cumsum(0.5 * (v[:, 1:] + v[:, :-1]), axis=1) * 1e-3
-            x0 = x[:, self._i0] + (x[:, self._i0 + 1] - x[:, self._i0]) * self._f0
-            x1 = x[:, self._i1] + (x[:, self._i1 + 1] - x[:, self._i1]) * self._f1
-            speed = np.abs(x1 - x0) / self._span_s
+            speed = self._edge_speed(x)
         else:
             speed = out["measured_speed_mps"][:, self._at]
         r = self.consts[db.C_R_WHEEL]
         return {"rope_speed_mps": speed, "motor_rpm": speed / r * RAD_S_TO_RPM,
                 "battery_v": out["battery_v"][:, self._at], "true_speed_mps": v[:, self._at]}
+
+    def _edge_speed(self, x: np.ndarray) -> np.ndarray:
+        """(B, S) mean speed between each observation's edge times of positions x (B, T) per tick (linear inside
+        a tick)."""
+        x0 = x[:, self._i0] + (x[:, self._i0 + 1] - x[:, self._i0]) * self._f0
+        x1 = x[:, self._i1] + (x[:, self._i1 + 1] - x[:, self._i1]) * self._f1
+        return np.abs(x1 - x0) / self._span_s
+
+    def observe(self, position_m: np.ndarray, battery_v: np.ndarray) -> dict[str, np.ndarray]:
+        """The recorded channels (S,) of a trajectory given per tick of the replay's grid, from outside the model
+        (the diagnose proof's truth plant): position_m, battery_v (T,), tick i at (i - preroll_ticks) ms from the
+        first telemetry record. Observed as predict observes the model's own: the mean speed between the recorded
+        edge times (position linear inside a tick), the volts at the observation's tick. Encoder recordings only
+        (a filtered speed observes the firmware's filter, not a position): ValueError otherwise."""
+        if not self._encoder:
+            raise ValueError(f"{self.data.path}: speed_source is {self.data.speed_source!r}; observing a trajectory "
+                             "needs the encoder's edge times")
+        n = self.data.pulse_us.size
+        x, b = np.asarray(position_m, dtype=float), np.asarray(battery_v, dtype=float)
+        if x.shape != (n,) or b.shape != (n,):
+            raise ValueError(f"position_m, battery_v: expected ({n},) per tick of the replay grid, got "
+                             f"{x.shape} and {b.shape}")
+        speed = self._edge_speed(x[None, :])[0]
+        r = self.consts[db.C_R_WHEEL]
+        return {"rope_speed_mps": speed, "motor_rpm": speed / r * RAD_S_TO_RPM, "battery_v": b[self._at]}

@@ -49,6 +49,32 @@ PARAM_FIELDS = {sb.SP_NO_LOAD_RPM: "no_load_speed_rpm", sb.SP_RESPONSE_S: "respo
 
 
 @dataclass
+class SpindleBasis:
+    """The refitted nominal spindle model's score on one recording, with what scoring another prediction of the
+    spindle channels by the same rule needs (api.NominalBasis's counterpart; the proof's oracle uses it)."""
+
+    replay: SpindleReplay = field(repr=False)
+    weights: dict[str, float] = field(repr=False)
+    fit_mask: np.ndarray = field(repr=False)
+    block_id: np.ndarray = field(repr=False)
+    heldout_blocks: np.ndarray = field(repr=False)
+    n_eff: dict[str, float] = field(repr=False)
+    score: object = field(repr=False)
+    residuals: dict[str, np.ndarray] = field(repr=False)
+    theta: np.ndarray = field(repr=False)
+    theta_ref: np.ndarray = field(repr=False)
+
+    def score_prediction(self, name: str, prediction: dict[str, np.ndarray], n_params: int):
+        """(ModelScore, accepted over the refitted nominal model, evidence, residuals) of a prediction (channel ->
+        (S,) of the spindle CHANNELS), counted with n_params parameters."""
+        r = _residuals(self.replay, prediction)
+        sc = score_model(name, n_params, r, self.weights, self.fit_mask, self.block_id, self.heldout_blocks,
+                         self.n_eff)
+        ok, ev = accepted(sc, self.score)
+        return sc, ok, ev, r
+
+
+@dataclass
 class SpindleDiagnosis:
     """What the spindle half found. status: "diagnosed" or "not_testable" (reason says why)."""
 
@@ -69,6 +95,7 @@ class SpindleDiagnosis:
     unexplained_fraction: float = 1.0
     timings_s: dict[str, float] = field(default_factory=dict)
     series: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+    nominal_basis: SpindleBasis | None = field(repr=False, default=None)
 
     def section(self) -> dict:
         """The report.json "spindle" section."""
@@ -147,6 +174,8 @@ def diagnose_spindle_data(data: SpindleData, *, base: SpindleParams, candidates:
     n_eff = effective_counts(r_nom, fit_mask)
     score_nom = score_model("nominal_refit", len(SPINDLE_REFIT), r_nom, weights, fit_mask, block_id,
                             heldout_blocks, n_eff)
+    basis = SpindleBasis(replay, weights, fit_mask, block_id, heldout_blocks, n_eff, score_nom, r_nom,
+                         nominal.theta_, theta_base)
     timings["spindle_refit_s"] = time.perf_counter() - t0
 
     loc = Locator().fit(data.time_s, r_nom)
@@ -242,7 +271,8 @@ def diagnose_spindle_data(data: SpindleData, *, base: SpindleParams, candidates:
                 "after_guide_mm": chosen_fit.prediction_["guide_position_mm"],
                 "nominal_load_permille": pred0["spindle_load_permille"][0],
                 "refit_load_permille": nominal.prediction_["spindle_load_permille"],
-                "after_load_permille": chosen_fit.prediction_["spindle_load_permille"], "heldout": ~fit_mask})
+                "after_load_permille": chosen_fit.prediction_["spindle_load_permille"], "heldout": ~fit_mask},
+        nominal_basis=basis)
 
 
 def _fit_pair(fits, ids, replay, weights, fit_mask, block_id, heldout_blocks, n_eff, theta_base, rows, progress):

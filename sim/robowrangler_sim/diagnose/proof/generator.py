@@ -45,6 +45,13 @@ class TruthCase:
     params: DriveParams
     duration_s: float
     truth_spans_s: tuple[tuple[float, float], ...]
+    effect: TruthEffect | None = dataclasses.field(default=None, repr=False, compare=False)
+    """The truth effect object the recording was made with (for the oracle's replay of the truth plant)."""
+    tick_truth: dict[str, np.ndarray] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    """The truth plant's state at each 1 ms tick k (time k ms, where the records of tick k are taken), for the
+    identifiability oracle (proof/oracle.py): rope_position_m (the wheel's travel, r x shaft angle),
+    rope_speed_mps, battery_v (terminal volts, before the ADC's noise and step), esc_command_us (the pulse the
+    speed loop commanded for the tick, before the effect)."""
 
 
 def perturbed_params(rng: np.random.Generator, *, low: float = 0.03, high: float = 0.10) -> DriveParams:
@@ -222,6 +229,55 @@ def _burst_frames(burst_id: int, start_tick: int, samples: list[tuple[int, int, 
     return out
 
 
+class _TruthStep:
+    """One 1 ms step of the truth plant with its effect: the effect's pulse, rope force and sag applied through the
+    plant's seams (truth_effects.py), then the plant stepped. Construction resets the effect (its generator from
+    the seed) and, for a drag that replaces the plant's own, switches that off."""
+
+    def __init__(self, plant: DrivePlant, effect: TruthEffect | None, seed: int) -> None:
+        self.plant = plant
+        self.effect = effect
+        self.sag_v = 0.0
+        self.base_aux = plant.battery_aux_current_a
+        if effect is not None:
+            effect.reset(np.random.default_rng([seed, 0x7E]))
+            if effect.replaces_drag:
+                plant.rope_exposed_length_m = 0.0
+
+    def step(self, cmd_us: float, t_s: float) -> None:
+        plant, effect, params = self.plant, self.effect, self.plant.params
+        applied = cmd_us
+        if effect is not None:
+            applied = effect.pulse(applied, t_s, plant)
+            v = plant.rope_speed_mps
+            f = effect.force_n(t_s, v) if effect.regime(t_s, abs(v)) else 0.0
+            if effect.replaces_drag and not effect.regime(t_s, abs(v)):
+                f = params.rope_drag_coeff_n_s2_per_m2 * v * v
+            plant.external_rope_load_n = max(0.0, f)
+            i_motors = plant.battery_current_a - plant.battery_aux_current_a
+            new_sag = effect.sag_v(t_s, i_motors + self.base_aux, 1e-3) if effect.regime(t_s, abs(v)) else 0.0
+            if new_sag != self.sag_v:
+                self.sag_v = new_sag
+                plant.battery_aux_current_a = (self.base_aux + max(0.0, new_sag)
+                                               / params.battery_internal_resistance_ohm)
+        plant.step_us(esc_pulse_us=min(max(applied, 0.0), params.esc_frame_us), dt_us=1000)
+
+
+def run_truth(params: DriveParams, effect: TruthEffect | None, seed: int, pulse_us: np.ndarray) -> dict[str, np.ndarray]:
+    """The truth plant (params, effect, seed as a recording was generated with) driven open loop by pulse_us per
+    1 ms tick from power-up: per tick k (time k ms, before its step) rope_position_m, rope_speed_mps, battery_v
+    (as TruthCase.tick_truth)."""
+    plant = DrivePlant(params, seed=seed)
+    truth_step = _TruthStep(plant, effect, seed)
+    n = len(pulse_us)
+    x, v, b = np.empty(n), np.empty(n), np.empty(n)
+    r_wheel = params.wheel_radius_m
+    for k in range(n):
+        x[k], v[k], b[k] = plant.shaft_angle_rad * r_wheel, plant.rope_speed_mps, plant.battery_v
+        truth_step.step(float(pulse_us[k]), plant.time_us * 1e-6)
+    return {"rope_position_m": x, "rope_speed_mps": v, "battery_v": b}
+
+
 def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: int, duration_s: float = 12.0,
                        params: DriveParams | None = None, pulse_us: np.ndarray | None = None,
                        truth_spans_s: tuple[tuple[float, float], ...] = (), telemetry_hz: float = 100.0,
@@ -250,18 +306,13 @@ def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: in
     else:
         n_ticks = pulse_us.size
     plant = DrivePlant(params, seed=seed)
-    if effect is not None:
-        effect.reset(np.random.default_rng([seed, 0x7E]))
-        if effect.replaces_drag:
-            plant.rope_exposed_length_m = 0.0
+    truth_step = _TruthStep(plant, effect, seed)
     mt = _MtEstimator(params.encoder_counts_per_rev, params.wheel_radius_m, SPEED_FILTER_TAU_S)
     loop = _SpeedLoop(DriveParams())  # the firmware's configured kv and wheel (class values, not the truth's)
     device_params = {"speed_filter_tau_s": str(SPEED_FILTER_TAU_S), "wheel_radius_m": "0.015",
                      "encoder_counts_per_rev": "64", "motor_kv_rpm_per_v": "1250", "esc_min_us": "1000",
                      "tov_mps": str(TOV_MPS), "telemetry_rate_hz": str(int(telemetry_hz))}
     burst_at = {} if program is None or not bursts else {b: i for i, b in enumerate(program.burst_starts)}
-    sag_v = 0.0
-    base_aux = plant.battery_aux_current_a
     with RecordingWriter(path, source="simulator", seed=seed, time_base="simulation",
                          clock_ns=lambda: plant.time_us * 1000,
                          description="diagnose proof generator (truth model, not for diagnosis: "
@@ -270,8 +321,11 @@ def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: in
         seq = 0
         meas = 0.0
         burst: tuple[int, int, list] | None = None
+        r_wheel = params.wheel_radius_m
+        true_x, true_v, true_batt, true_cmd = (np.empty(n_ticks) for _ in range(4))
         for k in range(n_ticks):
             t_s = plant.time_us * 1e-6
+            true_x[k], true_v[k], true_batt[k] = plant.shaft_angle_rad * r_wheel, plant.rope_speed_mps, plant.battery_v
             meas = mt.step(plant.encoder_counts, plant.encoder_last_edge_us, plant.time_us, 1e-3 if k else 0.0)
             if program is None:
                 cmd = float(pulse_us[k])
@@ -301,20 +355,10 @@ def generate_recording(path: str | Path, *, effect: TruthEffect | None, seed: in
                                              "battery_v": plant.battery_v,
                                              "external_rope_load_n": plant.external_rope_load_n})
                 seq += 1
-            applied = cmd
-            if effect is not None:
-                applied = effect.pulse(applied, t_s, plant)
-                v = plant.rope_speed_mps
-                f = effect.force_n(t_s, v) if effect.regime(t_s, abs(v)) else 0.0
-                if effect.replaces_drag and not effect.regime(t_s, abs(v)):
-                    f = params.rope_drag_coeff_n_s2_per_m2 * v * v
-                plant.external_rope_load_n = max(0.0, f)
-                i_motors = plant.battery_current_a - plant.battery_aux_current_a
-                new_sag = effect.sag_v(t_s, i_motors + base_aux, 1e-3) if effect.regime(t_s, abs(v)) else 0.0
-                if new_sag != sag_v:
-                    sag_v = new_sag
-                    plant.battery_aux_current_a = base_aux + max(0.0, sag_v) / params.battery_internal_resistance_ohm
-            plant.step_us(esc_pulse_us=min(max(applied, 0.0), params.esc_frame_us), dt_us=1000)
+            true_cmd[k] = cmd
+            truth_step.step(cmd, t_s)
     return TruthCase(path=path, seed=seed, effect_id=effect.effect_id if effect else None,
                      truth=dict(effect.truth) if effect else {}, params=params, duration_s=duration_s,
-                     truth_spans_s=tuple(truth_spans_s))
+                     truth_spans_s=tuple(truth_spans_s), effect=effect,
+                     tick_truth={"rope_position_m": true_x, "rope_speed_mps": true_v, "battery_v": true_batt,
+                                 "esc_command_us": true_cmd})

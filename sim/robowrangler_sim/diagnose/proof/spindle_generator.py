@@ -41,6 +41,36 @@ class SpindleTruthCase:
     params: SpindleParams
     duration_s: float
     truth_spans_s: tuple[tuple[float, float], ...]
+    plant_truth: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    """SpindleTruthPlant's keyword arguments the recording was made with (empty: effect-free)."""
+    program: np.ndarray | None = dataclasses.field(default=None, repr=False, compare=False)
+    """The moving-speed register per 1 ms tick from the first (after the spin-up second)."""
+    sample_truth: dict[str, np.ndarray] = dataclasses.field(default_factory=dict, repr=False, compare=False)
+    """At each telemetry record, before the registers' noise: guide_position_mm, load_permille (the motor's torque
+    over the stall torque, x 1000). For the identifiability oracle (proof/spindle_oracle.py)."""
+
+
+SPINUP_TICKS = 1000  # one second of drive spin-up first, the spindle still
+
+
+def _truth_sample(sp: SpindleTruthPlant) -> tuple[float, float]:
+    return sp.guide_position_mm, sp.torque_nm / sp.params.stall_torque_nm * 1000.0
+
+
+def run_spindle_truth(params: SpindleParams, plant_truth: dict | None, seed: int,
+                      program: np.ndarray) -> dict[str, np.ndarray]:
+    """The truth spindle (SpindleTruthPlant with plant_truth's effect, or none) driven by program as the generator
+    drives it: per telemetry record, guide_position_mm and load_permille before the registers' noise (as
+    SpindleTruthCase.sample_truth)."""
+    sp = SpindleTruthPlant(params, seed=seed, **(plant_truth or {}))
+    guide, load = [], []
+    for k in range(-SPINUP_TICKS, program.size):
+        if k % TELEMETRY_PERIOD_TICKS == 0:
+            g, f = _truth_sample(sp)
+            guide.append(g)
+            load.append(f)
+        sp.update(SpindleInputs(moving_speed_raw=int(program[k]) if k >= 0 else 0), 1e-3)
+    return {"guide_position_mm": np.asarray(guide), "load_permille": np.asarray(load)}
 
 
 def perturbed_spindle_params(rng: np.random.Generator, *, low: float = 0.03, high: float = 0.10,
@@ -126,13 +156,17 @@ def generate_spindle_recording(path: str | Path, *, truth: dict[str, float] | No
                                           "encoder_counts_per_rev": "64", "esc_min_us": "1000",
                                           "telemetry_rate_hz": "50"})
         seq = 0
-        for k in range(-1000, n):  # one second of spin-up first, the spindle still
+        true_guide, true_load = [], []
+        for k in range(-SPINUP_TICKS, n):  # one second of spin-up first, the spindle still
             pulse = 1000.0 if k < -600 else DRIVE_PULSE_US
             raw = int(program[k]) if k >= 0 else 0
             t_s = drive.time_us * 1e-6
             meas += (drive.rope_speed_mps - meas) * (1e-3 / (SPEED_FILTER_TAU_S + 1e-3))
             if k % TELEMETRY_PERIOD_TICKS == 0:
                 o = sp.outputs()
+                g, f = _truth_sample(sp)
+                true_guide.append(g)
+                true_load.append(f)
                 noisy_mm = o.guide_position_mm + rng.normal(0.0, params.position_noise_units) * MM_PER_POSITION_UNIT
                 w.write("/device/telemetry", _telemetry(t_s, seq, meas, pulse, drive.battery_adc_v, noisy_mm,
                                                         _signed_load(o.load_raw), raw))
@@ -143,4 +177,7 @@ def generate_spindle_recording(path: str | Path, *, truth: dict[str, float] | No
             drive.step_us(esc_pulse_us=pulse, dt_us=1000)
             sp.update(SpindleInputs(moving_speed_raw=raw), 1e-3)
     return SpindleTruthCase(path=path, seed=seed, effect_id=effect_id, truth=dict(truth_for_scoring or {}),
-                            params=params, duration_s=duration_s, truth_spans_s=tuple(truth_spans_s))
+                            params=params, duration_s=duration_s, truth_spans_s=tuple(truth_spans_s),
+                            plant_truth=dict(truth or {}), program=program,
+                            sample_truth={"guide_position_mm": np.asarray(true_guide),
+                                          "load_permille": np.asarray(true_load)})

@@ -12,6 +12,7 @@ lowers the source voltage as a sag would). ``regime`` gates an effect to one par
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -48,6 +49,11 @@ class TruthEffect:
     def sag_v(self, t_s: float, i_batt_a: float, dt_s: float) -> float:
         return 0.0
 
+    def systematic(self) -> TruthEffect:
+        """The effect without its random part (what a model of it can predict; the identifiability oracle's
+        truth): itself, for an effect with none."""
+        return self
+
 
 @dataclass
 class DragTruth(TruthEffect):
@@ -70,20 +76,47 @@ class LatencyTruth(TruthEffect):
 
     delay_s: float = 0.0
     jitter_s: float = 0.0
+    averaged: bool = False
+    """True: the expected delayed pulse over the jitter's distribution instead of one draw per tick."""
     _hist: list = field(default_factory=list)
     _rng: np.random.Generator | None = None
+    _w: np.ndarray | None = None
 
     def reset(self, rng: np.random.Generator) -> None:
         self._hist = []
         self._rng = rng
+        self._w = self._weights() if self.averaged else None
+
+    def _weights(self) -> np.ndarray:
+        """P(the delay, rounded to whole ticks and at least 0, is k ticks) for k = 0..K."""
+        if self.jitter_s <= 0.0:
+            w = np.zeros(max(0, round(self.delay_s * 1000.0)) + 1)
+            w[-1] = 1.0
+            return w
+        from scipy import stats
+
+        top = int(math.ceil((self.delay_s + 6.0 * self.jitter_s) * 1000.0)) + 1
+        edges = (np.arange(top + 1) + 0.5) * 1e-3  # tick k takes delays in [k - 0.5, k + 0.5) ms
+        cdf = stats.norm.cdf(edges, loc=self.delay_s, scale=self.jitter_s)
+        return np.diff(np.concatenate(([0.0], cdf)))  # k = 0 takes every delay below 0.5 ms
 
     def pulse(self, pulse_us: float, t_s: float, plant: DrivePlant) -> float:
         self._hist.append(pulse_us)
         if not self.regime(t_s, plant.rope_speed_mps):
             return pulse_us
+        if self.averaged:
+            w = self._w
+            past = [self._hist[len(self._hist) - 1 - k] if len(self._hist) - 1 - k >= 0 else 0.0
+                    for k in range(w.size)]
+            return float(np.dot(w, past))
         d = self.delay_s + self.jitter_s * float(self._rng.standard_normal())
         k = len(self._hist) - 1 - max(0, round(d * 1000.0))
         return self._hist[k] if k >= 0 else 0.0
+
+    def systematic(self) -> LatencyTruth:
+        """The jitter's expectation instead of its draws (a fresh copy, same regime): the pulse averaged over the
+        delay's distribution, weights P(delay rounded to ticks = k)."""
+        return dataclasses.replace(self, averaged=True, _hist=[], _rng=None, _w=None)
 
 
 @dataclass
