@@ -38,9 +38,10 @@ import numpy as np
 
 DEV_SEEDS = [1, 7001]
 DEV_CLEAN = list(range(101, 111)) + list(range(7101, 7111))
-HELDOUT_SEEDS = [49937, 92867]  # drawn at random (secrets.randbelow(10**5)) for this round, run once on the final engine
-HELDOUT_CLEAN = list(range(56566, 56586))  # 20 effect-free recordings (start drawn the same way)
-# the earlier held-out seeds (52907, 61343, effect-free 83011-83030) were run and looked at: never held out again
+HELDOUT_SEEDS = [23691, 41532]  # drawn at random (secrets.randbelow(10**5)) for this round, run once on the final engine
+HELDOUT_CLEAN = list(range(82146, 82166))  # 20 effect-free recordings (start drawn the same way)
+# earlier held-out seeds, run and looked at, never held out again: 52907, 61343, effect-free 83011-83030;
+# 49937, 92867, effect-free 56566-56585
 
 
 def _sindy_baseline(res) -> dict:

@@ -31,8 +31,9 @@ from robowrangler_sim.diagnose.loop.proof import LoopScript, LoopTruth, generate
 
 CF0 = 0.08478874859262518
 DEV_SEEDS = [1, 2, 3]
-HELDOUT_SEEDS = [18193, 76096, 89490]
-"""Drawn at random (secrets.randbelow) for the final engine, never used before; 901-903 were the previous, now looked-at set."""
+HELDOUT_SEEDS = [19909, 37709, 86444]
+"""Drawn at random (secrets.randbelow) for the final engine, never used before; 18193, 76096, 89490 and 901-903
+were earlier held-out sets, now looked at."""
 
 
 def _cases(seed: int):
