@@ -24,6 +24,15 @@ class _SignalledWhileFinalized:
         time.sleep(0.05)  # the handler runs here, inside the finalizer
 
 
+@pytest.fixture
+def foreground_sigint():
+    """Ctrl-C as at a terminal, even when the suite runs as a shell's background job (SIGINT ignored there)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+@pytest.mark.usefixtures("foreground_sigint")
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # the dropped interrupt
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_whose_interrupt_python_dropped_still_stops_the_loop(sig: int) -> None:
@@ -38,6 +47,7 @@ def test_a_signal_whose_interrupt_python_dropped_still_stops_the_loop(sig: int) 
     assert passes == 0 and stop.requested
 
 
+@pytest.mark.usefixtures("foreground_sigint")
 def test_handlers_are_restored_after_the_block() -> None:
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
     with sigterm_as_interrupt() as stop:

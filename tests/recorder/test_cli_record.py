@@ -127,7 +127,10 @@ def _recorder_process(url: str, out: Path, sig: int, *, lines: int,
         [sys.executable, "-c", "from robowrangler.cli.main import entry_point; entry_point()",
          "--url", url, "record", str(out), "--no-params"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
-        env={**os.environ, "ROBOWRANGLER_KEY_FILE": str(key_file)})
+        env={**os.environ, "ROBOWRANGLER_KEY_FILE": str(key_file)},
+        # a foreground recorder, as a user at a terminal runs it, even when the suite itself runs as a background
+        # job (which inherits an ignored SIGINT; the recorder rightly keeps an ignored SIGINT ignored)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     progress = []  # "wrangler: killed.mcap:    2.0 s, 100 telemetry, ..." every 2 s
     try:
         for line in proc.stderr:
