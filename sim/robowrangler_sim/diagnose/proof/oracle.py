@@ -84,13 +84,18 @@ class OracleVerdict:
                 "oracle_noise": self.noise, "oracle_effect_rms": self.effect_rms}
 
 
-def effect_param_count(effect_id: str | None) -> int:
+def param_count(effect_id: str | None, library: dict, refit: tuple) -> int:
     """Parameters a candidate for effect_id is counted with: the nominal refit's plus the library law's (an id the
-    library has no law for: its key parameter, one)."""
+    library has no law for: its key parameter, one; effect-free: the refit's)."""
     if effect_id is None:
-        return len(NOMINAL_REFIT)
-    law = LIBRARY.get(effect_id)
-    return len(NOMINAL_REFIT) + (len(law().params) if law is not None else 1)
+        return len(refit)
+    law = library.get(effect_id)
+    return len(refit) + (len(law().params) if law is not None else 1)
+
+
+def effect_param_count(effect_id: str | None) -> int:
+    """Parameters a drive candidate for effect_id is counted with (param_count over LIBRARY and NOMINAL_REFIT)."""
+    return param_count(effect_id, LIBRARY, NOMINAL_REFIT)
 
 
 def _observe_run(replay, run: dict[str, np.ndarray], k0: int) -> dict[str, np.ndarray]:
@@ -150,16 +155,19 @@ def truth_runs(case: TruthCase, replay) -> tuple[dict[str, np.ndarray], dict[str
     return _observe_run(replay, run_truth(case.params, case.effect.systematic(), case.seed, pulse), k0), without
 
 
-class _Corrected:
-    """The engine's replay with a fixed correction added to its channels (ModelFitter fits through predict)."""
+class CorrectedReplay:
+    """A replay (the drive's or the spindle's) with a fixed correction added to its predicted channels; everything
+    else (data, what it measured) is the replay's own. The fitters fit through predict."""
 
     def __init__(self, replay, added: dict[str, np.ndarray]) -> None:
         self.replay = replay
-        self.data = replay.data
         self.added = added
 
-    def predict(self, theta: np.ndarray, *, load_mask: np.ndarray | None = None) -> dict[str, np.ndarray]:
-        out = self.replay.predict(theta, load_mask=load_mask)
+    def __getattr__(self, name: str):
+        return getattr(self.replay, name)
+
+    def predict(self, theta: np.ndarray, **kwargs) -> dict[str, np.ndarray]:
+        out = self.replay.predict(theta, **kwargs)
         return {c: v + self.added[c][None, :] if c in self.added else v for c, v in out.items()}
 
 
@@ -181,7 +189,7 @@ def judge(case: TruthCase, result) -> OracleVerdict:
         # parameters refitted around it as every candidate's are (started from the truth's and the refit's)
         fix = {c: run[c] - batch_truth[c] for c in CHANNELS}
         return ModelFitter(list(NOMINAL_REFIT), weights=basis.weights).fit(
-            _Corrected(replay, fix), basis.theta, fit_mask=basis.fit_mask, starts=starts, start_columns=cols,
+            CorrectedReplay(replay, fix), basis.theta, fit_mask=basis.fit_mask, starts=starts, start_columns=cols,
             bounds_ref=basis.theta_ref)
 
     n_params = effect_param_count(case.effect_id)

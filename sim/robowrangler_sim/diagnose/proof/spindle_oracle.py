@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from robowrangler_sim.diagnose.candidates import SPINDLE_LIBRARY
-from robowrangler_sim.diagnose.proof.oracle import OracleVerdict
+from robowrangler_sim.diagnose.proof.oracle import CorrectedReplay, OracleVerdict, param_count
 from robowrangler_sim.diagnose.proof.spindle_generator import (TELEMETRY_PERIOD_TICKS, SpindleTruthCase,
                                                                run_spindle_truth)
 from robowrangler_sim.diagnose.residuals import noise_sigma
@@ -30,11 +30,8 @@ TICK_S = 1e-3
 
 
 def spindle_param_count(effect_id: str | None) -> int:
-    """The nominal spindle refit's parameters plus the library law's for effect_id (none: the refit's)."""
-    if effect_id is None:
-        return len(SPINDLE_REFIT)
-    law = SPINDLE_LIBRARY.get(effect_id)
-    return len(SPINDLE_REFIT) + (len(law().params) if law is not None else 1)
+    """The nominal spindle refit's parameters plus the library law's for effect_id (param_count)."""
+    return param_count(effect_id, SPINDLE_LIBRARY, SPINDLE_REFIT)
 
 
 def _at_samples(run: dict[str, np.ndarray], data) -> dict[str, np.ndarray]:
@@ -46,20 +43,6 @@ def _at_samples(run: dict[str, np.ndarray], data) -> dict[str, np.ndarray]:
         raise ValueError(f"{data.path}: the truth run has {run['guide_position_mm'].size} records, the recording "
                          f"{idx[-1] + 1}")
     return {"guide_step_mm": steps(run["guide_position_mm"][idx]), "spindle_load_permille": run["load_permille"][idx]}
-
-
-class _Corrected:
-    """The spindle replay with a fixed correction added to its compared channels."""
-
-    def __init__(self, replay, added: dict[str, np.ndarray]) -> None:
-        self.replay = replay
-        self.data = replay.data
-        self.measured = replay.measured
-        self.added = added
-
-    def predict(self, theta: np.ndarray) -> dict[str, np.ndarray]:
-        out = self.replay.predict(theta)
-        return {c: v + self.added[c][None, :] if c in self.added else v for c, v in out.items()}
 
 
 def judge_spindle(case: SpindleTruthCase, result) -> OracleVerdict:
@@ -83,7 +66,7 @@ def judge_spindle(case: SpindleTruthCase, result) -> OracleVerdict:
     def refit(run: dict[str, np.ndarray]) -> SpindleFitter:
         fix = {c: run[c] - batch_truth[c] for c in CHANNELS}
         return SpindleFitter(list(SPINDLE_REFIT), weights=basis.weights).fit(
-            _Corrected(replay, fix), basis.theta, fit_mask=basis.fit_mask,
+            CorrectedReplay(replay, fix), basis.theta, fit_mask=basis.fit_mask,
             starts=np.array([truth_theta[cols], basis.theta[cols]]), start_columns=cols, bounds_ref=basis.theta_ref)
 
     n_params = spindle_param_count(case.effect_id)
