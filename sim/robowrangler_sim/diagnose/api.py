@@ -279,9 +279,9 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
             _progress(progress, f"fitting {cand.effect_id} {g.description}")
             theta_c = cand.apply_neutral(nominal.theta_)
             tg = db.TickGate(tick_on, tuple(s.column for s in cand.params), nominal.theta_)
-            # from the refit, with only the law's own parameters and its look-alikes free: outside the regime the
-            # refitted model stands, and the fit may not buy a better regime with worse other channels
-            fitter = ModelFitter(_look_alikes(cand) + list(cand.params), weights=weights).fit(
+            # as everywhere: every nominal parameter free too, from the refit (which absorbed what it could of the
+            # effect, also outside the regime)
+            fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
                 replay, theta_c, fit_mask=fit_mask, gate=tg, starts=cand.start_grid(theta_c)[1],
                 start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
             r_c = _residuals(data, fitter.prediction_)
