@@ -16,18 +16,21 @@ neutral value leaves the nominal chain unchanged. Effect laws (all in the table'
     wind:       relative air speed v - w t_x along the rope (t_x: x share of the flow direction; first order in w)
                 plus the normal drag tilt delta = atan(0.5 x 0.5 rho C_n d w |w| / (lambda g)): R(delta) S(phi - delta)
     rotation:   phi_eff = phi - tau_n dphi/dt - k_g v dphi/dt   (normal drag lag; Coriolis on the running rope)
-    bending:    tangent angle along the arc smoothed over l_b (Gaussian), end error spread linearly along the arc
+    bending:    the running rope's Euler-Bernoulli balance B theta'' = t x F about the table's (string) shape, at
+                the rope's stiffness B instead of the table rope's B0 (moving_elastica.py)
     dynamics:   wave speed c = 0: first-order lag tau (the chain); c > 0: each point follows the target with the
                 transport delay s / c, s its arc distance from the exit (a disturbance carried along the rope)
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
+from threadpoolctl import threadpool_limits
 
+from robowrangler_sim.diagnose.loop.moving_elastica import bending_displacement_m
 from robowrangler_sim.rope import GRAVITY_MPS2, STANDARD_AIR_DENSITY_KG_PER_M3, RopeParams
 from robowrangler_sim.shape_table import ShapeTable, resample_by_arc_length
 
@@ -36,12 +39,16 @@ TH_LEN_SCALE = 1
 TH_SPEED_GAIN = 2
 TH_CF = 3
 TH_ROT_LAG_S = 4
-TH_BEND_LEN_M = 5
+TH_BEND_N_M2 = 5
 TH_WAVE_MPS = 6
 TH_WIND_MPS = 7
 TH_GYRO_S2_PER_M = 8
 N_THETA = 9
 PHI_STEP_DEG = 0.25
+BEND_KEY_M = 0.002
+"""Contours that agree to 2 mm (and speeds to 0.05 m/s) share one bending solve."""
+BEND_KEY_MPS = 0.05
+BEND_CACHE_SIZE = 20000
 WIND_NORMAL_SHARE = 0.5
 WIND_AXIAL_SHARE = 1.0
 """Mean of sin^2 of the angle between a uniform wind and the rope round a loop: the share of w|w| that is normal."""
@@ -72,12 +79,14 @@ class LoopShapeModel:
                 c = resample_by_arc_length(cs[g], self.n_points)
                 grid[s, g] = c / float(np.sum(np.linalg.norm(np.diff(c, axis=0), axis=1)))
         self.grid = grid  # (S, G, K, 2) per metre of loop
+        self._bend_cache: dict[tuple, np.ndarray] = {}
 
     def theta0(self) -> np.ndarray:
         th = np.zeros(N_THETA)
         th[TH_TAU_S] = self.tau0_s
         th[TH_LEN_SCALE] = 1.0
         th[TH_CF] = self.rope.skin_friction_coeff
+        th[TH_BEND_N_M2] = self.rope.bending_stiffness_n_m2
         return th
 
     # ------------------------------------------------------------------------------------------------------------
@@ -131,27 +140,41 @@ class LoopShapeModel:
             cd, sd = np.cos(delta)[..., None], np.sin(delta)[..., None]  # (B, 1, 1)
             x, z = shape[..., 0], shape[..., 1]
             shape = np.stack([cd * x - sd * z, sd * x + cd * z], axis=-1)
-        lb = theta[:, TH_BEND_LEN_M]
-        if np.any(lb > 0):
-            shape = self._bend(shape, lb)
         scale = (loop_length_m[None, :] * col(TH_LEN_SCALE))[..., None, None]
-        return shape * scale
+        shape = shape * scale
+        bend = theta[:, TH_BEND_N_M2]
+        b0 = self.rope.bending_stiffness_n_m2
+        if np.any(np.abs(bend - b0) > 1e-9 * b0):
+            shape = self._bend(shape, theta, speed_mps)
+        return shape
 
-    def _bend(self, shape: np.ndarray, lb_m: np.ndarray) -> np.ndarray:
-        """Smooth the tangent angle over the bending length (per metre of loop: the shapes are unit length)."""
-        out = shape.copy()
-        d = np.diff(shape, axis=-2)
-        ang = np.unwrap(np.arctan2(d[..., 1], d[..., 0]), axis=-1)
-        seg = np.linalg.norm(d, axis=-1)
-        ds = 1.0 / (self.n_points - 1)
-        for b in np.flatnonzero(lb_m > 0):
-            sig = float(lb_m[b]) / 2.0 / ds  # bending length per 2 m loop -> points of the unit contour
-            a = gaussian_filter1d(ang[b], sig, axis=-1, mode="nearest")
-            steps = seg[b][..., None] * np.stack([np.cos(a), np.sin(a)], axis=-1)
-            pts = np.concatenate([shape[b][..., :1, :], shape[b][..., :1, :] + np.cumsum(steps, axis=-2)], axis=-2)
-            err = pts[..., -1:, :] - shape[b][..., -1:, :]
-            frac = np.linspace(0.0, 1.0, self.n_points)[:, None]
-            out[b] = pts - frac * err
+    def _bend(self, shape_m: np.ndarray, theta: np.ndarray, speed_mps: np.ndarray) -> np.ndarray:
+        """The running rope's bending (diagnose/loop/moving_elastica.py) on the contours (B, F, K, 2), metres: each row
+        at its stiffness B (TH_BEND_N_M2) and skin friction; frames whose contours agree to BEND_KEY_M and speeds to
+        BEND_KEY_MPS share one solve (a steady hold: one), and solves are kept across calls (the fit re-evaluates the
+        same rows). The small dense solves run on one BLAS thread (threaded BLAS on a loaded machine is 50x slower)."""
+        out = shape_m.copy()
+        b0 = self.rope.bending_stiffness_n_m2
+        with threadpool_limits(limits=1, user_api="blas"):
+            for b in np.flatnonzero(np.abs(theta[:, TH_BEND_N_M2] - b0) > 1e-9 * b0):
+                rope = dataclasses.replace(self.rope, skin_friction_coeff=float(theta[b, TH_CF]))
+                bend = float(theta[b, TH_BEND_N_M2])
+                groups: dict[tuple, list[int]] = {}
+                for f in range(shape_m.shape[1]):
+                    key = (np.round(shape_m[b, f] / BEND_KEY_M).astype(np.int32).tobytes(),
+                           round(float(speed_mps[f]) / BEND_KEY_MPS))
+                    groups.setdefault(key, []).append(f)
+                for key, frames in groups.items():
+                    ck = (key, bend, rope.skin_friction_coeff)
+                    disp = self._bend_cache.get(ck)
+                    if disp is None:
+                        f0 = frames[0]
+                        disp = bending_displacement_m(shape_m[b, f0], speed_mps=float(speed_mps[f0]),
+                                                      bending_stiffness_n_m2=bend, rope=rope)
+                        if len(self._bend_cache) >= BEND_CACHE_SIZE:
+                            self._bend_cache.clear()
+                        self._bend_cache[ck] = disp
+                    out[b, frames] += disp
         return out
 
     def follow(self, theta: np.ndarray, targets: np.ndarray, *, time_s: np.ndarray, segment: np.ndarray,
