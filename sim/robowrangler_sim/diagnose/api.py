@@ -15,7 +15,7 @@ from robowrangler_sim.diagnose.candidates import LIBRARY, Candidate
 from robowrangler_sim.diagnose.errors import ModelMismatchError, UnknownEffectError
 from robowrangler_sim.diagnose.findings import EffectFinding, effect_finding, effect_params, nominal_refit_table
 from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
-from robowrangler_sim.diagnose.gates import GATES, RegimeGate, concentrated, tick_speed
+from robowrangler_sim.diagnose.gates import RegimeGate, tick_speed, uneven_split
 from robowrangler_sim.diagnose.locate import Locator, spans_mask
 from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
 from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
@@ -30,7 +30,6 @@ from robowrangler_sim.plants import drive_batch as db
 BLOCK_S = 0.5
 HELDOUT_EVERY = 3  # every third 1 s block is held out of every fit
 ALPHA = 0.01
-GATES_TRIED = 2  # regimes (gates.py) each gateable candidate is also fitted confined to
 
 
 @dataclass
@@ -273,6 +272,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                                      if p.name in {s.name for s in cand.params}}})
     # the same laws confined to the regimes where the refit's residual concentrates (an effect of one regime)
     gates = _gates_to_try(data, r_nom, weights, fit_tel)
+    unit_top = {s.column: s.bounds(theta_base[s.column])[1] for s in NOMINAL_REFIT}
     for g, tick_on in gates:
         for f in [f for f in list(fits.values()) if f.cand.gateable and f.gate is None]:
             cand = f.cand
@@ -281,7 +281,8 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
             tg = db.TickGate(tick_on, tuple(s.column for s in cand.params), nominal.theta_)
             # as everywhere: every nominal parameter free too, from the refit (which absorbed what it could of the
             # effect, also outside the regime)
-            fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.gated_params(nominal.theta_)), weights=weights).fit(
+            fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.gated_params(nominal.theta_, unit_top)),
+                                 weights=weights).fit(
                 replay, theta_c, fit_mask=fit_mask, gate=tg, starts=cand.start_grid(theta_c)[1],
                 start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
             r_c = _residuals(data, fitter.prediction_)
@@ -358,7 +359,8 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     if verdict == "missing_physics":
         _progress(progress, "refitting the chosen model with every parameter free")
         chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in
-                                              (fits[eid].cand.gated_params(nominal.theta_) if fits[eid].gate
+                                              (fits[eid].cand.gated_params(nominal.theta_, unit_top)
+                                               if fits[eid].gate
                                                else fits[eid].cand.params)]
         final = ModelFitter(chosen_specs, weights=weights).fit(replay, chosen_fit.theta_, fit_mask=fit_mask,
                                                                load_mask=chosen_mask, gate=chosen_gate,
@@ -437,14 +439,13 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
 
 def _gates_to_try(data: DriveData, r_nom: dict[str, np.ndarray], weights: dict[str, np.ndarray],
                   fit_tel: np.ndarray) -> list[tuple[RegimeGate, np.ndarray]]:
-    """The GATES_TRIED regimes (gates.GATES) where the refit's weighted speed residual concentrates on the fit
-    samples, each with its mask on the replay's ticks."""
+    """Both sides of the speed split (gates.uneven_split) that divides the refit's weighted speed residual most
+    unevenly on the fit samples, each with its mask on the replay's ticks."""
     v_tick = tick_speed(data)
     at = data.sample_ticks.clip(max=v_tick.size - 1)[fit_tel]
     w = np.broadcast_to(weights["rope_speed_mps"], r_nom["rope_speed_mps"].shape)[fit_tel]
-    z2 = (r_nom["rope_speed_mps"][fit_tel] * w) ** 2
-    on = {g: g.on(v_tick[at]) for g in GATES}
-    return [(g, g.on(v_tick)) for g in concentrated(GATES, on, z2, n=GATES_TRIED)]
+    sides = uneven_split(v_tick[at], (r_nom["rope_speed_mps"][fit_tel] * w) ** 2)
+    return [] if sides is None else [(g, g.on(v_tick)) for g in sides]
 
 
 def _look_alikes(cand: Candidate) -> list:

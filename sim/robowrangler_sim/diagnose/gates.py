@@ -5,9 +5,10 @@ A gate is a condition on the rope's speed, so a fitted model carries it to a new
 plant's speed every tick, sil_effects.py): rope speed at least / below a band edge of regimes.SPEED_BANDS_MPS. On a
 recording it is the mask of the replay's ticks where the recorded speed satisfies it. Gates on the transients'
 sign were tried and left out: confined to the spin-ups, any law turns into a generic transient correction (a drag
-switched off during spin-ups was "found" on an effect-free recording). The gates a diagnosis tries are the few
-where the refitted nominal model's residual concentrates (``concentrated``): a gated candidate is one more model,
-counted with one parameter more (the gate's choice), judged by the same rule as every other (select.accepted).
+switched off during spin-ups was "found" on an effect-free recording). The gates a diagnosis tries are the two sides
+of the speed that splits the refitted nominal model's residual most unevenly (``uneven_split``): a gated candidate
+is one more model, counted with one parameter more (the gate's choice), judged by the same rule as every other
+(select.accepted).
 """
 
 from __future__ import annotations
@@ -67,9 +68,8 @@ class RegimeGate:
 
 GATE_TERMS = ("gate_speed_min_mps", "gate_speed_max_mps")
 
-GATES: tuple[RegimeGate, ...] = (RegimeGate(speed_min_mps=2.0), RegimeGate(speed_min_mps=5.0),
-                                 RegimeGate(speed_min_mps=8.0), RegimeGate(speed_max_mps=2.0))
-"""The gates a diagnosis may try: the speed bands' edges (regimes.SPEED_BANDS_MPS)."""
+SPLITS_MPS = (2.0, 5.0, 8.0)
+"""The speeds a gate may start or end at: the speed bands' edges (regimes.SPEED_BANDS_MPS) above rest."""
 
 
 def tick_speed(data) -> np.ndarray:
@@ -79,18 +79,18 @@ def tick_speed(data) -> np.ndarray:
     return np.interp(t_tick, data.tel_time_s, data.tel_speed_mps)
 
 
-def concentrated(gates, on_samples: dict[RegimeGate, np.ndarray], z2: np.ndarray, *, n: int = 2) -> list[RegimeGate]:
-    """The n gates that split the mean squared weighted residual z2 most unevenly between their samples and the
-    rest, either way (each with at least MIN_SHARE of the samples in and out). Either way, because the refit moves
-    what it cannot explain: an effect above 5 m/s that the refit's drag and friction half absorb leaves its
-    residual below 5 m/s."""
-    scored = []
-    for g in gates:
-        m = on_samples[g]
-        share = m.mean() if m.size else 0.0
-        if not MIN_SHARE <= share <= 1.0 - MIN_SHARE:
+def uneven_split(speed_mps: np.ndarray, z2: np.ndarray) -> tuple[RegimeGate, RegimeGate] | None:
+    """The two sides (at and above, below) of the split speed (SPLITS_MPS) that divides the mean squared weighted
+    residual z2 most unevenly between them, either way, with at least MIN_SHARE of the samples on each side; None
+    when no split leaves that many. Either way, because the refit moves what it cannot explain: an effect above
+    5 m/s that the refit's drag and friction half absorb leaves its residual below 5 m/s. Both sides are tried."""
+    best, best_score = None, -1.0
+    v = np.abs(speed_mps)
+    for x in SPLITS_MPS:
+        m = v >= x
+        if not MIN_SHARE <= m.mean() <= 1.0 - MIN_SHARE:
             continue
-        ratio = max(z2[m].mean(), 1e-12) / max(z2[~m].mean(), 1e-12)
-        scored.append((abs(np.log(ratio)), g))
-    scored.sort(key=lambda x: -x[0])
-    return [g for _, g in scored[:n]]
+        score = abs(np.log(max(z2[m].mean(), 1e-12) / max(z2[~m].mean(), 1e-12)))
+        if score > best_score:
+            best, best_score = x, score
+    return None if best is None else (RegimeGate(speed_min_mps=best), RegimeGate(speed_max_mps=best))

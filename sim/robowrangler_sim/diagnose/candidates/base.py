@@ -53,13 +53,20 @@ class Candidate(ABC):
     """Whether the law may act in one regime only (gates.py): the diagnosis then also fits it confined to the
     regimes where the residual concentrates."""
     gated_floor: tuple[str, ...] = ()
-    """Parameters (the effect's size) that, confined to a regime, may not fall below their value outside it: an
-    effect there is more of it (a delay of 0 above 5 m/s, with the ESC's own delay below, is not a latency)."""
+    """Parameters (the effect's size) that, confined to a regime, may not fall below their value outside it nor
+    below what the nominal model allows as a unit property: an effect there is more of it (a delay of 0 above
+    5 m/s with the ESC's own delay below is not a latency, nor is an ESC delay that varies within its 0-3 ms)."""
 
-    def gated_params(self, off_row: np.ndarray) -> tuple[ParamSpec, ...]:
-        """This law's parameters for a fit confined to a regime, the gated_floor ones bounded below by off_row."""
-        return tuple(replace(s, lo=min(max(s.lo, float(off_row[s.column])), s.hi)) if s.name in self.gated_floor
-                     else s for s in self.params)
+    def gated_params(self, off_row: np.ndarray, unit_top: dict[int, float]) -> tuple[ParamSpec, ...]:
+        """This law's parameters for a fit confined to a regime: the gated_floor ones bounded below by off_row and
+        by unit_top (theta column -> the nominal refit's upper bound there, for the columns it refits)."""
+        out = []
+        for s in self.params:
+            if s.name in self.gated_floor:
+                lo = max(s.lo, float(off_row[s.column]), unit_top.get(s.column, s.lo))
+                s = replace(s, lo=min(lo, s.hi))
+            out.append(s)
+        return tuple(out)
     needs_regimes: tuple[str, ...] = ()
     """Regime labels (regimes.py, "kind:label") of which the recording must visit at least one for the effect to
     show; a recording that visits none cannot test it (reported under coverage)."""
