@@ -39,6 +39,30 @@ def test_batched_plant_matches_the_per_tick_plant():
     assert max(speed) > 5.0
 
 
+def test_a_gated_effect_acts_only_on_its_ticks():
+    """TickGate: a 20 ms delay confined to the second half equals the ungated model up to the gate's edge, and
+    the fully delayed one's response to the step inside the gate; a gate on every tick is no gate."""
+    p = DriveParams()
+    pulse = np.full(4000, 1000.0)
+    pulse[300:1500], pulse[2500:] = 1300.0, 1200.0
+    off = db.theta_from_params(p)
+    on = off.copy()
+    on[db.TH_LATENCY] = 0.020
+    consts, ticks = db.consts_from_params(p), np.arange(pulse.size + 1)
+    plain = db.simulate_drive_batch(np.stack([off, on]), consts, pulse, ticks)["rope_speed_mps"]
+    half = np.arange(pulse.size) >= 2000
+    gate = db.TickGate(half, (db.TH_LATENCY,), off)
+    gated = db.simulate_drive_batch(on, consts, pulse, ticks, gate=gate)["rope_speed_mps"][0]
+    np.testing.assert_array_equal(gated[:2001], plain[0, :2001])  # no delay before the gate
+    assert np.max(np.abs(gated[2530:2600] - plain[0, 2530:2600])) > 0.05  # the step at 2.5 s arrives late
+    np.testing.assert_allclose(gated[2530:2600], plain[1, 2530:2600], atol=0.02)
+    everywhere = db.TickGate(np.ones(pulse.size, bool), (db.TH_LATENCY,), off)
+    np.testing.assert_array_equal(db.simulate_drive_batch(on, consts, pulse, ticks, gate=everywhere)
+                                  ["rope_speed_mps"][0], plain[1])
+    with pytest.raises(ValueError, match="gate.mask_on"):
+        db.simulate_drive_batch(on, consts, pulse, ticks, gate=db.TickGate(half[:10], (db.TH_LATENCY,), off))
+
+
 @pytest.fixture(scope="module")
 def recordings(tmp_path_factory):
     d = tmp_path_factory.mktemp("diag")
@@ -147,6 +171,43 @@ def test_a_load_on_one_stretch_is_located_there(tmp_path):
     found = res.effects[0]
     assert found.effect_id == "external_rope_load"
     assert iou_s([tuple(x) for x in found.spans_s], list(spans)) >= 0.5
+
+
+def test_a_latency_only_at_high_speed_is_named_with_its_regime(tmp_path):
+    case = _dev_case("esc_latency/one_regime/1")  # the ESC late only above 5 m/s: everywhere, the law fails
+    truth, _ = case.truth_effect()
+    rec = tmp_path / "latency_fast.mcap"
+    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
+    res = diagnose(rec, effects=["esc_latency", "rope_drag_law"])
+    assert res.verdict == "missing_physics", res.first_line
+    found = res.effects[0]
+    assert found.effect_id == "esc_latency"
+    assert "m/s and above" in found.regime["acts"]
+    assert found.heldout_rms_after["rope_speed_mps"] < 0.8 * found.heldout_rms_before["rope_speed_mps"]
+    plain = next(c for c in res.candidates if c["id"] == "esc_latency")
+    gated = next(c for c in res.candidates if c.get("effect") == "esc_latency" and c["status"] == "accepted")
+    assert gated["delta_bic"] < plain["delta_bic"] - 10  # confined, the law explains much more than everywhere
+    terms = res.model.effects["esc_latency"]
+    assert terms["gate_speed_min_mps"] >= 2.0 and 0.004 < terms["delay_s"] < 0.03
+    back = load_model(res.model.save(tmp_path / "model.json"))
+    assert back.gated_effects()["esc_latency"].speed_min_mps == terms["gate_speed_min_mps"]
+    with pytest.raises(ModelMismatchError, match="one regime"):
+        diagnose(rec, model=back, effects=["esc_latency"])
+
+
+def test_sil_applies_a_gated_effect_only_in_its_regime(tmp_path):
+    from robowrangler_sim.sil import SilSession
+
+    def first_1200(gate: dict) -> int:
+        model = DiagnosedModel(DriveParams(), {"esc_latency": {"delay_s": 0.006, **gate}})
+        sil = SilSession(model=model.save(tmp_path / "gated.json"), speedup=None)
+        return [sil.actuator_filters[0](u) for u in [1000] * 3 + [1200] * 10].index(1200)
+    assert first_1200({"gate_speed_min_mps": 5.0}) == 3  # the rope at rest: out of the regime, not delayed
+    assert first_1200({"gate_speed_max_mps": 2.0}) == 3 + 6  # in the regime: six 1 ms ticks late
+    bad = DiagnosedModel(DriveParams(), {"esc_latency": {"delay_s": 0.006, "gate_speed_min_mps": 5.0,
+                                                         "gate_speed_max_mps": 2.0}})
+    with pytest.raises(ModelMismatchError, match="gate_speed_min_mps"):
+        load_model(bad.save(tmp_path / "bad.json"))
 
 
 def test_sil_session_loads_the_model_file(recordings, tmp_path):

@@ -12,9 +12,10 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from robowrangler_sim.diagnose.candidates import LIBRARY, Candidate
-from robowrangler_sim.diagnose.errors import UnknownEffectError
+from robowrangler_sim.diagnose.errors import ModelMismatchError, UnknownEffectError
 from robowrangler_sim.diagnose.findings import EffectFinding, effect_finding, effect_params, nominal_refit_table
 from robowrangler_sim.diagnose.fit import ModelFitter, jackknife_intervals
+from robowrangler_sim.diagnose.gates import GATES, RegimeGate, concentrated, tick_speed
 from robowrangler_sim.diagnose.locate import Locator, spans_mask
 from robowrangler_sim.diagnose.model_file import DiagnosedModel, load_model
 from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
@@ -29,6 +30,23 @@ from robowrangler_sim.plants import drive_batch as db
 BLOCK_S = 0.5
 HELDOUT_EVERY = 3  # every third 1 s block is held out of every fit
 ALPHA = 0.01
+GATES_TRIED = 2  # regimes (gates.py) each gateable candidate is also fitted confined to
+
+
+@dataclass
+class _Fit:
+    """One fitted model of the candidate stage: a candidate, everywhere or confined to a regime (gate)."""
+
+    cand: Candidate
+    fitter: ModelFitter
+    score: ModelScore
+    load_mask: np.ndarray | None
+    gate: RegimeGate | None = None
+    tick_gate: db.TickGate | None = None
+
+    @property
+    def effect_id(self) -> str:
+        return self.cand.effect_id
 
 
 @dataclass
@@ -86,6 +104,8 @@ class DiagnosisResult:
     """Closed-loop before/after (closed_loop.py) when diagnose ran it: RMS per channel, model as given vs fitted."""
     nominal_basis: NominalBasis | None = field(repr=False, default=None)
     """The refitted nominal model's score and how to score another prediction against it (NominalBasis)."""
+    noise_rms: dict[str, float] = field(default_factory=dict)
+    """The recorded channels' own noise on the telemetry (residuals.channel_noise), what held-out errors compare to."""
 
     @property
     def first_line(self) -> str:
@@ -150,6 +170,9 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     else:
         base = load_model(model)
     base.check_fits(data)
+    if base.gated_effects():
+        raise ModelMismatchError(f"model: {', '.join(base.gated_effects())} act(s) in one regime only; a diagnosis "
+                                 "replays a model with effects everywhere: diagnose against the model without it")
     replay = DriveReplay(data, base.drive_params)
     theta_base = base.theta()
     n = data.time_s.size
@@ -206,7 +229,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
 
     # --- candidates
     t1 = time.perf_counter()
-    fits: dict[str, tuple[Candidate, ModelFitter, ModelScore, np.ndarray | None]] = {}
+    fits: dict[str, _Fit] = {}
     not_ident: list[dict] = []
     untested: list[dict] = []
     cov = coverage(tel_labels)
@@ -243,47 +266,78 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         sc = score_model(cand.effect_id, len(NOMINAL_REFIT) + len(cand.params), r_c, weights, fit_mask,
                          block_id, heldout_blocks, n_eff, valid=valid)
         ok, ev = accepted(sc, score_nom)
-        fits[cand.effect_id] = (cand, fitter, sc, load_mask)
+        fits[cand.effect_id] = _Fit(cand, fitter, sc, load_mask)
         cand_rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
                           "heldout_rms": sc.heldout_rms,
                           "params": {p.name: round(p.value, 6) for p in fitter.params_
                                      if p.name in {s.name for s in cand.params}}})
+    # the same laws confined to the regimes where the refit's residual concentrates (an effect of one regime)
+    gates = _gates_to_try(data, r_nom, weights, fit_tel)
+    for g, tick_on in gates:
+        for f in [f for f in list(fits.values()) if f.cand.gateable and f.gate is None]:
+            cand = f.cand
+            _progress(progress, f"fitting {cand.effect_id} {g.description}")
+            theta_c = cand.apply_neutral(nominal.theta_)
+            tg = db.TickGate(tick_on, tuple(s.column for s in cand.params), nominal.theta_)
+            # as everywhere: every nominal parameter free too, from the refit (which absorbed what it could of the
+            # effect, also outside the regime)
+            fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
+                replay, theta_c, fit_mask=fit_mask, gate=tg, starts=cand.start_grid(theta_c)[1],
+                start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
+            r_c = _residuals(data, fitter.prediction_)
+            vid = f"{cand.effect_id}@{g.key}"
+            sc = score_model(vid, len(NOMINAL_REFIT) + len(cand.params) + 1, r_c, weights, fit_mask, block_id,
+                             heldout_blocks, n_eff, valid=valid)
+            ok, ev = accepted(sc, score_nom)
+            fits[vid] = _Fit(cand, fitter, sc, None, g, tg)
+            cand_rows.append({"id": vid, "effect": cand.effect_id, "gate": g.description,
+                              "status": "accepted" if ok else "rejected", **ev, "heldout_rms": sc.heldout_rms,
+                              "params": {p.name: round(p.value, 6) for p in fitter.params_
+                                         if p.name in {s.name for s in cand.params}}})
     timings["candidates_s"] = time.perf_counter() - t1
 
     # --- select
     t1 = time.perf_counter()
     ok_ids = [row["id"] for row in cand_rows if row["status"] == "accepted"]
-    ok_ids.sort(key=lambda i: fits[i][2].block_sse.sum())
+    ok_ids.sort(key=lambda i: fits[i].score.block_sse.sum())
     verdict = "none"
     chosen: list[str] = []
     chosen_fit: ModelFitter = nominal
     chosen_score = score_nom
     chosen_mask = None
+    chosen_gate = None
     if ok_ids:
         best = ok_ids[0]
+        # a law confined to a regime that does no better than the same law everywhere is that law everywhere
+        plain = fits[best].effect_id
+        if fits[best].gate is not None and plain in ok_ids and equivalent(fits[best].score, fits[plain].score):
+            best = plain
         rivals = []
-        for other in ok_ids[1:]:
-            if equivalent(fits[best][2], fits[other][2]):
+        for other in ok_ids:
+            if fits[other].effect_id != fits[best].effect_id and fits[other].effect_id not in \
+                    {fits[r].effect_id for r in rivals} and equivalent(fits[best].score, fits[other].score):
                 rivals.append(other)
         chosen = [best]
-        chosen_fit, chosen_score, chosen_mask = fits[best][1], fits[best][2], fits[best][3]
+        chosen_fit, chosen_score, chosen_mask = fits[best].fitter, fits[best].score, fits[best].load_mask
+        chosen_gate = fits[best].tick_gate
         if rivals:
             verdict = "not_identifiable"
-            names = [best] + rivals
+            names = [fits[i].effect_id for i in [best] + rivals]
             not_ident.insert(0, {"id": " / ".join(names), "reason": "these candidates explain the recording equally "
                                  "well on held-out spans", "separating_measurement":
-                                 "; ".join(f"{i}: {fits[i][0].separating_measurement}" for i in names),
-                                 "candidates": names})
+                                 "; ".join(f"{fits[i].effect_id}: {fits[i].cand.separating_measurement}"
+                                           for i in [best] + rivals), "candidates": names})
         else:
             verdict = "missing_physics"
-            if pairs and len(ok_ids) > 1:
-                second = ok_ids[1]
-                cand2 = fits[second][0]
-                if not (cand2.uses_located_spans and fits[best][0].uses_located_spans):
-                    mask2 = fits[second][3] if fits[second][3] is not None else chosen_mask
+            others = [i for i in ok_ids if fits[i].effect_id != fits[best].effect_id and fits[i].gate is None]
+            if pairs and others and fits[best].gate is None:
+                second = others[0]
+                cand2 = fits[second].cand
+                if not (cand2.uses_located_spans and fits[best].cand.uses_located_spans):
+                    mask2 = fits[second].load_mask if fits[second].load_mask is not None else chosen_mask
                     theta_p = cand2.apply_neutral(chosen_fit.theta_)
                     _progress(progress, f"fitting {best} + {second}")
-                    pair = ModelFitter(_look_alikes(fits[best][0]) + _look_alikes(cand2) + list(fits[best][0].params)
+                    pair = ModelFitter(_look_alikes(fits[best].cand) + _look_alikes(cand2) + list(fits[best].cand.params)
                                        + list(cand2.params), weights=weights).fit(replay, theta_p, fit_mask=fit_mask, load_mask=mask2,
                                                             starts=cand2.start_grid(theta_p)[1],
                                                             start_columns=cand2.start_grid(theta_p)[0],
@@ -303,22 +357,23 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     # effects' parameters widened by a jackknife over the fit samples
     if verdict == "missing_physics":
         _progress(progress, "refitting the chosen model with every parameter free")
-        chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in fits[eid][0].params]
+        chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in fits[eid].cand.params]
         final = ModelFitter(chosen_specs, weights=weights).fit(replay, chosen_fit.theta_, fit_mask=fit_mask,
-                                                               load_mask=chosen_mask, bounds_ref=theta_base)
+                                                               load_mask=chosen_mask, gate=chosen_gate,
+                                                               bounds_ref=theta_base)
         r_f = _residuals(data, final.prediction_)
-        s_f = score_model("+".join(chosen), len(chosen_specs), r_f, weights, fit_mask, block_id, heldout_blocks,
-                          n_eff, valid=valid)
+        s_f = score_model("+".join(chosen), len(chosen_specs) + (chosen_gate is not None), r_f, weights, fit_mask,
+                          block_id, heldout_blocks, n_eff, valid=valid)
         if s_f.block_sse.sum() <= chosen_score.block_sse.sum():
             chosen_fit, chosen_score = final, s_f
         _progress(progress, "intervals (jackknife)")
-        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid][0].params}, student_t=True)
+        jackknife_intervals(chosen_fit, {s.name for eid in chosen for s in fits[eid].cand.params}, student_t=True)
     r_after = _residuals(data, chosen_fit.prediction_)
     effects_out: list[EffectFinding] = []
     load_spans: list = [(a, b) for a, b in below] if "external_rope_load" in chosen else []
     if verdict == "missing_physics":
         for eid in chosen:
-            cand = fits[eid][0]
+            cand = fits[eid].cand
             params = effect_params(chosen_fit, cand)
             spans = _improvement_spans(data, r_nom, r_after, weights, on_tel)
             if cand.uses_located_spans:
@@ -332,13 +387,16 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                 load_spans = spans
             effects_out.append(effect_finding(cand, params, spans_s=spans, labels=labels, time_s=data.time_s,
                                               rows=cand_rows, before=score_nom.heldout_rms,
-                                              after=chosen_score.heldout_rms))
+                                              after=chosen_score.heldout_rms, row_id=eid, gate=fits[eid].gate))
     nominal_refit = nominal_refit_table(nominal, NOMINAL_REFIT, theta_base)
     sse_before = score_nom.block_sse.sum()
     unexplained = float(chosen_score.block_sse.sum() / sse_before) if sse_before > 0 else 0.0
     final_theta = chosen_fit.theta_
-    model_out = base.extended(final_theta, effects=chosen if verdict == "missing_physics" else [],
-                              load_spans_s=load_spans, recording=str(data.path))
+    model_out = base.extended(final_theta, effects=[fits[i].effect_id for i in chosen]
+                              if verdict == "missing_physics" else [], load_spans_s=load_spans,
+                              recording=str(data.path),
+                              gates={fits[i].effect_id: (fits[i].gate, nominal.theta_) for i in chosen
+                                     if verdict == "missing_physics" and fits[i].gate is not None})
     result = DiagnosisResult(
         recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
         nominal_refit=nominal_refit, unexplained_fraction=unexplained,
@@ -357,7 +415,8 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                 "after_battery_v": chosen_fit.prediction_["battery_v"],
                 "heldout": ~fit_mask, "speed_band": labels["speed_band"], "motion": labels["motion"],
                 "telemetry": data.tel.copy(), "speed_valid": valid["rope_speed_mps"].copy()},
-        nominal_basis=basis)
+        nominal_basis=basis,
+        noise_rms={c: float(noise[c].get(int(data.kind[data.tel][0]), np.nan)) for c in ("rope_speed_mps", "battery_v")})
     _progress(progress, "spindle channels")
     merge_spindle(result, diagnose_spindle(data.path, base=base.spindle_params, candidates=spindle_cands,
                                            progress=progress))
@@ -372,6 +431,18 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     result.timings_s["total_s"] = time.perf_counter() - t0
     result.timings_s["cpu_s"] = time.process_time() - cpu0  # this process's CPU time (all its threads)
     return result
+
+
+def _gates_to_try(data: DriveData, r_nom: dict[str, np.ndarray], weights: dict[str, np.ndarray],
+                  fit_tel: np.ndarray) -> list[tuple[RegimeGate, np.ndarray]]:
+    """The GATES_TRIED regimes (gates.GATES) where the refit's weighted speed residual concentrates on the fit
+    samples, each with its mask on the replay's ticks."""
+    v_tick = tick_speed(data)
+    at = data.sample_ticks.clip(max=v_tick.size - 1)[fit_tel]
+    w = np.broadcast_to(weights["rope_speed_mps"], r_nom["rope_speed_mps"].shape)[fit_tel]
+    z2 = (r_nom["rope_speed_mps"][fit_tel] * w) ** 2
+    on = {g: g.on(v_tick[at]) for g in GATES}
+    return [(g, g.on(v_tick)) for g in concentrated(GATES, on, z2, n=GATES_TRIED)]
 
 
 def _look_alikes(cand: Candidate) -> list:

@@ -39,13 +39,17 @@ def effect_params(fitter, cand) -> dict[str, dict]:
 
 def effect_finding(cand, params: dict[str, dict], *, spans_s: list[list[float]], labels: dict[str, np.ndarray],
                    time_s: np.ndarray, rows: list[dict], before: dict[str, float],
-                   after: dict[str, float]) -> EffectFinding:
-    """The finding of a chosen candidate: its regime is the dominant one (labels on time_s) over spans_s; its
-    evidence the candidate's row of the selection (rows: the candidate table, one dict with "id" per fit)."""
-    ev = next(r for r in rows if r["id"] == cand.effect_id)
+                   after: dict[str, float], row_id: str | None = None, gate=None) -> EffectFinding:
+    """The finding of a chosen candidate: its regime is the dominant one (labels on time_s) over spans_s, and the
+    gate's (gates.RegimeGate) when the law was confined to one; its evidence the candidate's row of the selection
+    (rows: the candidate table, one dict with "id" per fit; row_id: that row's id, default the effect id)."""
+    ev = next(r for r in rows if r["id"] == (row_id or cand.effect_id))
+    regime = dominant_regime(labels, spans_mask(time_s, [tuple(s) for s in spans_s]))
+    if gate is not None:
+        regime = {"acts": gate.description, **regime}
     return EffectFinding(
         effect_id=cand.effect_id, params=params, channels=list(cand.channels), spans_s=spans_s,
-        regime=dominant_regime(labels, spans_mask(time_s, [tuple(s) for s in spans_s])),
+        regime=regime,
         heldout_rms_before=before, heldout_rms_after=after,
         evidence={"delta_bic": ev["delta_bic"], "heldout_lr": ev["heldout_lr"], "heldout_p": ev["heldout_p"]}, law=cand.law)
 

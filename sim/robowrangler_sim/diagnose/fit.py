@@ -149,13 +149,15 @@ class ModelFitter(ParamRowsFitter):
         return np.concatenate(parts, axis=1)
 
     def fit(self, replay, theta_base: np.ndarray, *, fit_mask: np.ndarray, load_mask: np.ndarray | None = None,
-            starts: np.ndarray | None = None, start_columns: list[int] | None = None,
+            gate=None, starts: np.ndarray | None = None, start_columns: list[int] | None = None,
             bounds_ref: np.ndarray | None = None) -> ModelFitter:
-        """fit_mask: (S,) samples in the fit; load_mask: (T,) external-load weight per tick; starts: (G, k) grid of
+        """fit_mask: (S,) samples in the fit; load_mask: (T,) external-load weight per tick; gate: an effect confined
+        to one regime (drive_batch.TickGate; None: none); starts: (G, k) grid of
         start values for the theta columns start_columns (evaluated in one batch, the best one starts the
         solver); bounds_ref: the theta row relative bounds refer to (the model as given; default theta_base)."""
         ref = theta_base if bounds_ref is None else bounds_ref
         data = replay.data
+        extra = {} if gate is None else {"gate": gate}
         # a replay with other channels (the loop's contours) says what it measured
         measured = (replay.measured() if hasattr(replay, "measured")
                     else {"rope_speed_mps": data.speed_mps, "battery_v": data.battery_v})
@@ -164,7 +166,7 @@ class ModelFitter(ParamRowsFitter):
 
         def simulate(xs: np.ndarray) -> np.ndarray:
             self.evaluations_ += xs.shape[0]
-            pred = replay.predict(self._rows(theta_base, xs), load_mask=load_mask)
+            pred = replay.predict(self._rows(theta_base, xs), load_mask=load_mask, **extra)
             return self._resid(pred, measured, fit_mask)
 
         if starts is not None and len(starts):
@@ -189,7 +191,7 @@ class ModelFitter(ParamRowsFitter):
         sd, col = spread.sd, spread.col_norm
         self.jac_col_norm_ = col
         self.sd_ = sd
-        self._ci_inputs = (replay, theta_base, fit_mask, load_mask, ref, lo, hi, scales)
+        self._ci_inputs = (replay, theta_base, fit_mask, load_mask, gate, ref, lo, hi, scales)
         theta = self._rows(theta_base, x[None, :])[0]
         self.theta_ = theta
         self.x_ = x
@@ -198,7 +200,7 @@ class ModelFitter(ParamRowsFitter):
                                      float(min(hi[j], x[j] + 1.96 * sd[j]) * s.scale)),
                                     float(x_start[j] * s.scale))
                         for j, s in enumerate(self.specs)]
-        pred = replay.predict(theta[None, :], load_mask=load_mask)
+        pred = replay.predict(theta[None, :], load_mask=load_mask, **extra)
         self.prediction_ = {c: v[0] for c, v in pred.items()}
         self.cost_ = float(np.sum(huber(fun(x), self.huber_scale)))
         self.n_fit_ = n
@@ -213,7 +215,7 @@ def jackknife_intervals(fitter: ModelFitter, names: set[str], *, parts: int = 4,
     estimated from `parts` refits is itself uncertain: 3.18 for 4 parts). The jackknife sees what the
     Gauss-Newton interval cannot: a loss that is bumpy in the parameter or a law that fits some steps better
     than others. Updates fitter.params_ in place."""
-    replay, theta_base, fit_mask, load_mask, ref, lo, hi, scales = fitter._ci_inputs
+    replay, theta_base, fit_mask, load_mask, gate, ref, lo, hi, scales = fitter._ci_inputs
     idx = np.flatnonzero(fit_mask)
     estimates = []
     for k in range(parts):
@@ -221,7 +223,7 @@ def jackknife_intervals(fitter: ModelFitter, names: set[str], *, parts: int = 4,
         block = (np.arange(idx.size) // 25) % parts == k
         mask[idx[block]] = False
         sub = ModelFitter(fitter.specs, weights=fitter.weights, max_nfev=max_nfev, huber_scale=fitter.huber_scale)
-        sub.fit(replay, fitter.theta_, fit_mask=mask, load_mask=load_mask, bounds_ref=ref)
+        sub.fit(replay, fitter.theta_, fit_mask=mask, load_mask=load_mask, gate=gate, bounds_ref=ref)
         estimates.append(sub.x_)
     est = np.asarray(estimates)
     sd_jack = np.sqrt((parts - 1) / parts * np.sum((est - est.mean(axis=0)) ** 2, axis=0))

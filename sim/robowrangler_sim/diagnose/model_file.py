@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from robowrangler_sim.diagnose.errors import ModelMismatchError
+from robowrangler_sim.diagnose.gates import GATE_TERMS, RegimeGate
 from robowrangler_sim.plants import DriveParams, DriveParamsError
 from robowrangler_sim.plants import drive_batch as db
 from robowrangler_sim.plants.spindle import SpindleParams, SpindleParamsError
@@ -42,6 +43,11 @@ EFFECT_COLUMNS = {
     "low_speed_friction": {"stribeck_force_n": db.TH_STRIBECK_N, "stribeck_speed_mps": db.TH_STRIBECK_V},
     "external_rope_load": {"external_load_n": db.TH_EXT_LOAD},
 }
+GATED_COLUMNS = {
+    "esc_deadband": {"deadband_us": db.TH_DEADBAND},
+    "rope_drag_law": {"rope_drag_coeff_n_s2_per_m2": db.TH_DRAG_K},
+}
+"""An effect confined to one regime (gates.py) also carries these, which the drive parameters hold otherwise."""
 SPINDLE_EFFECT_FIELDS = {
     "screw_backlash": {"backlash_mm": "screw_backlash_mm"},
     "servo_deadband": {"deadband_raw": "servo_deadband_raw", "hysteresis_raw": "servo_deadband_hysteresis_raw"},
@@ -87,9 +93,22 @@ class DiagnosedModel:
     def nominal(cls) -> DiagnosedModel:
         return cls(DriveParams())
 
-    def theta(self) -> np.ndarray:
-        th = db.theta_from_params(self.drive_params)
+    def gated_effects(self) -> dict[str, RegimeGate]:
+        """The effects confined to one regime, with their gates."""
+        out = {}
         for eid, values in self.effects.items():
+            g = RegimeGate.from_json(values)
+            if g is not None:
+                out[eid] = g
+        return out
+
+    def theta(self) -> np.ndarray:
+        """The model's row of the batched plant (an effect confined to a regime is not in it: gated_effects)."""
+        th = db.theta_from_params(self.drive_params)
+        gated = self.gated_effects()
+        for eid, values in self.effects.items():
+            if eid in gated:
+                continue
             for name, col in EFFECT_COLUMNS.get(eid, {}).items():
                 if name in values:
                     th[col] = values[name]
@@ -106,12 +125,22 @@ class DiagnosedModel:
                 raise ModelMismatchError(f"model does not fit {data.path.name}: the recording's device has "
                                          f"{name} = {dp[name]:g}, the model {model_value:g}")
 
-    def extended(self, theta: np.ndarray, *, effects: list[str], load_spans_s, recording: str) -> DiagnosedModel:
-        """This model with theta's refitted parameters and the given effects' terms."""
+    def extended(self, theta: np.ndarray, *, effects: list[str], load_spans_s, recording: str,
+                 gates: dict | None = None) -> DiagnosedModel:
+        """This model with theta's refitted parameters and the given effects' terms. gates: effect id ->
+        (gates.RegimeGate, the theta row without the effect) for an effect confined to one regime: its terms carry
+        the gate and its own values; the drive parameters take the row's values (what acts outside the regime)."""
         eff = {}
+        base_theta = np.array(theta, dtype=float)
         for eid in effects:
             eff[eid] = {name: float(theta[col]) for name, col in EFFECT_COLUMNS.get(eid, {}).items()}
-        return DiagnosedModel(params_from_theta(self.drive_params, theta), eff,
+            if gates and eid in gates:
+                gate, off_row = gates[eid]
+                eff[eid].update({name: float(theta[col]) for name, col in GATED_COLUMNS.get(eid, {}).items()})
+                eff[eid].update(gate.to_json())
+                for col in {**EFFECT_COLUMNS.get(eid, {}), **GATED_COLUMNS.get(eid, {})}.values():
+                    base_theta[col] = off_row[col]
+        return DiagnosedModel(params_from_theta(self.drive_params, base_theta), eff,
                               [(float(a), float(b)) for a, b in load_spans_s], recording, self.spindle_params)
 
     def to_json(self) -> dict:
@@ -179,12 +208,19 @@ def load_model(path: str | Path) -> DiagnosedModel:
     for eid, values in effects.items():
         if eid not in known_effects:
             raise ModelMismatchError(f"model file {path}: unknown effect {eid!r}; known: {', '.join(known_effects)}")
-        bad = sorted(set(values) - set(known_effects[eid]))
+        allowed = set(known_effects[eid])
+        if eid in EFFECT_COLUMNS:
+            allowed |= set(GATED_COLUMNS.get(eid, {})) | set(GATE_TERMS)
+        bad = sorted(set(values) - allowed)
         if bad:
             raise ModelMismatchError(f"model file {path}: effect {eid}: unknown parameters {', '.join(bad)}")
         for k, v in values.items():
             if not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ModelMismatchError(f"model file {path}: effect {eid}.{k}: expected a finite number, got {v!r}")
+        try:
+            RegimeGate.from_json(values)
+        except ValueError as err:
+            raise ModelMismatchError(f"model file {path}: effect {eid}: {err}") from err
     spans = [tuple(map(float, s)) for s in doc.get("external_load_spans_s", [])]
     sp = doc.get("spindle_params", {})
     sp_known = {f.name for f in dataclasses.fields(SpindleParams)}

@@ -56,12 +56,14 @@ class DriveReplay:
         else:
             self._ticks, self._at = np.unique(data.sample_ticks, return_inverse=True)
 
-    def predict(self, theta: np.ndarray, *, load_mask: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    def predict(self, theta: np.ndarray, *, load_mask: np.ndarray | None = None,
+                gate: db.TickGate | None = None) -> dict[str, np.ndarray]:
         """Model channels (B, S) for parameter rows theta (B, N_THETA): rope_speed_mps (observed as the recording
-        observes it), motor_rpm, battery_v, true_speed_mps (the model's speed at the observation's tick)."""
+        observes it), motor_rpm, battery_v, true_speed_mps (the model's speed at the observation's tick).
+        gate: an effect confined to one regime (drive_batch.TickGate on the replay's tick grid)."""
         theta = np.atleast_2d(theta)
         out = db.simulate_drive_batch(theta, self.consts, self.data.pulse_us, self._ticks,
-                                      load_mask=load_mask, latch="box")
+                                      load_mask=load_mask, gate=gate, latch="box")
         self.simulations += theta.shape[0]
         v = out["rope_speed_mps"]
         if self._encoder:

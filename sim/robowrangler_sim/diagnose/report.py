@@ -21,11 +21,24 @@ def _fmt(value: float, unit: str) -> tuple[str, str]:
     return f"{value:.3g}", unit
 
 
+MISS_OVER_NOISE = 3.0
+"""A held-out error beyond this many times the recorded noise is not "none beyond noise", even with no effect of
+the library to name (the first line says so)."""
+
+
 def first_line(result) -> str:
     """One line in plain words: what is left out (with its interval), where, and the held-out error."""
     if result.verdict == "none":
+        held = result.candidates[0]["heldout_rms"]["rope_speed_mps"]
+        noise = result.noise_rms.get("rope_speed_mps", float("nan"))
+        if held > MISS_OVER_NOISE * noise and result.located:
+            worst = max(result.located, key=lambda d: d["significance"])
+            return (f"none of the library: no effect beats the refitted nominal model on held-out spans, yet it "
+                    f"misses by {held * 1e3:.0f} mm/s against a noise of {noise * 1e3:.0f} mm/s (most at "
+                    f"{worst['span_s'][0]:.1f}-{worst['span_s'][1]:.1f} s): physics outside the library, or a nominal "
+                    "parameter beyond its bounds")
         return ("none beyond noise: the refitted nominal model explains the recording "
-                f"(held-out speed error {_mmps(result.candidates[0]['heldout_rms'])} mm/s)")
+                f"(held-out speed error {held * 1e3:.0f} mm/s, noise {noise * 1e3:.0f} mm/s)")
     if result.verdict == "not_identifiable":
         d = result.not_identifiable[0]
         return f"not identifiable from these channels: {d['id']}; would separate them: {d['separating_measurement']}"
@@ -75,7 +88,8 @@ def report_json(result) -> dict:
                      "spans_s": e.spans_s, "regime": e.regime, "heldout_rms_before": e.heldout_rms_before,
                      "heldout_rms_after": e.heldout_rms_after, "evidence": e.evidence} for e in result.effects],
         "not_identifiable": result.not_identifiable, "nominal_refit": result.nominal_refit,
-        "unexplained_fraction": result.unexplained_fraction, "coverage": result.coverage,
+        "unexplained_fraction": result.unexplained_fraction, "noise_rms": result.noise_rms,
+        "coverage": result.coverage,
         "located": result.located, "candidates": result.candidates, "timings_s": result.timings_s,
         "spindle": getattr(result, "spindle", {}), "closed_loop": getattr(result, "closed_loop", None),
     })

@@ -29,6 +29,7 @@ true speed, the firmware's M/T estimate and filter), battery terminal voltage V.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -151,8 +152,17 @@ def _cum_at(cum, t_us):
     return cum[k] + (cum[k + 1] - cum[k]) * (x - k)
 
 
+@numba.njit(cache=True)
+def _gated(theta, gate_off, gate_cols, bi, col, gate_on):
+    """Column col of row bi, or gate_off's value where the gate is off and col is a gated column."""
+    if gate_on or gate_cols[col] < 0.5:
+        return theta[bi, col]
+    return gate_off[col]
+
+
 @numba.njit(cache=True, parallel=True)
-def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v, out_meas, out_vb):
+def _simulate(theta, consts, pulse_us, cum, load_mask, gate_mask, gate_off, gate_cols, sample_ticks, box, out_v,
+              out_meas, out_vb):
     n_b = theta.shape[0]
     n_ticks = pulse_us.shape[0]
     n_s = sample_ticks.shape[0]
@@ -185,26 +195,19 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
         rb = theta[bi, TH_BATT_R]
         ocv0 = theta[bi, TH_BATT_OCV]
         lag = theta[bi, TH_ESC_LAG]
-        dead = theta[bi, TH_DEADBAND]
-        n_exp = theta[bi, TH_DRAG_EXP]
-        delay_us = theta[bi, TH_LATENCY] * 1e6
-        hyst = theta[bi, TH_HYST]
-        pol_r = theta[bi, TH_POL_R]
-        pol_tau = theta[bi, TH_POL_TAU]
-        strib_n = theta[bi, TH_STRIBECK_N]
-        strib_v = theta[bi, TH_STRIBECK_V]
         ext_n = theta[bi, TH_EXT_LOAD]
         ext_t0 = theta[bi, TH_EXT_T0]
         ext_t1 = theta[bi, TH_EXT_T1]
         windowed = ext_t1 > ext_t0
         ext_w = 0.0
-        zero_top = p_min + dead
-        span = p_max - zero_top
         lag_decay = math.exp(-h / lag) if lag > 0.0 else 0.0
         lag_mean = (1.0 - lag_decay) * lag / h if lag > 0.0 else 1.0
-        pol_decay = math.exp(-h / pol_tau) if pol_tau > 0.0 else 0.0
         n_kt = n_mot * kt
-        drag_scale = k_drag * V_REF_MPS * V_REF_MPS
+        # the effect terms, (re)read at the first tick and at every change of the gate: where gate_mask is 0, the
+        # gated columns take gate_off's values (an effect acting in one regime only)
+        gate_on = not (gate_mask[0] > 0.5)
+        dead = hyst = n_exp = k_drag = delay_us = pol_r = pol_tau = strib_n = strib_v = 0.0
+        zero_top = span = pol_decay = drag_scale = 0.0
         # state
         omega = 0.0
         duty = 0.0
@@ -230,6 +233,21 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
                     si += 1
             if s == n_sub:
                 break
+            if s % sub_per_tick == 0 and (gate_mask[tick] > 0.5) != gate_on:  # first tick: always
+                gate_on = not gate_on
+                dead = _gated(theta, gate_off, gate_cols, bi, TH_DEADBAND, gate_on)
+                hyst = _gated(theta, gate_off, gate_cols, bi, TH_HYST, gate_on)
+                n_exp = _gated(theta, gate_off, gate_cols, bi, TH_DRAG_EXP, gate_on)
+                k_drag = _gated(theta, gate_off, gate_cols, bi, TH_DRAG_K, gate_on)
+                delay_us = _gated(theta, gate_off, gate_cols, bi, TH_LATENCY, gate_on) * 1e6
+                pol_r = _gated(theta, gate_off, gate_cols, bi, TH_POL_R, gate_on)
+                pol_tau = _gated(theta, gate_off, gate_cols, bi, TH_POL_TAU, gate_on)
+                strib_n = _gated(theta, gate_off, gate_cols, bi, TH_STRIBECK_N, gate_on)
+                strib_v = _gated(theta, gate_off, gate_cols, bi, TH_STRIBECK_V, gate_on)
+                zero_top = p_min + dead
+                span = p_max - zero_top
+                pol_decay = math.exp(-h / pol_tau) if pol_tau > 0.0 else 0.0
+                drag_scale = k_drag * V_REF_MPS * V_REF_MPS
             t_us = s * h_us
             ocv = ocv0 - slope * charge_ah
             if ocv < empty_v:
@@ -391,8 +409,36 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, sample_ticks, box, out_v,
         _ = i_batt_motors
 
 
+@dataclass(frozen=True)
+class TickGate:
+    """An effect confined to one regime: on the ticks where ``mask_on`` is False, the theta ``columns`` take the
+    values of ``off_row`` (the model without the effect there) instead of the batch row's own.
+
+    mask_on: (T,) bool per tick; columns: theta column indices of the gated effect; off_row: (N_THETA,).
+    """
+
+    mask_on: np.ndarray
+    columns: tuple[int, ...]
+    off_row: np.ndarray
+
+    def arrays(self, n_ticks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        m = np.asarray(self.mask_on)
+        off = np.asarray(self.off_row, dtype=np.float64)
+        if m.shape != (n_ticks,):
+            raise ValueError(f"gate.mask_on: expected shape ({n_ticks},), got {m.shape}")
+        if off.shape != (N_THETA,):
+            raise ValueError(f"gate.off_row: expected shape ({N_THETA},), got {off.shape}")
+        cols = np.zeros(N_THETA)
+        for c in self.columns:
+            if not 0 <= c < N_THETA:
+                raise ValueError(f"gate.columns: expected theta columns in [0, {N_THETA}), got {c}")
+            cols[c] = 1.0
+        return np.ascontiguousarray(m, dtype=np.float64), np.ascontiguousarray(off), cols
+
+
 def simulate_drive_batch(theta: np.ndarray, consts: np.ndarray, pulse_us: np.ndarray, sample_ticks: np.ndarray, *,
-                         load_mask: np.ndarray | None = None, latch: str = "box") -> dict[str, np.ndarray]:
+                         load_mask: np.ndarray | None = None, gate: TickGate | None = None,
+                         latch: str = "box") -> dict[str, np.ndarray]:
     """Simulate B parameter sets over one pulse record.
 
     Args:
@@ -401,6 +447,8 @@ def simulate_drive_batch(theta: np.ndarray, consts: np.ndarray, pulse_us: np.nda
         pulse_us: (T,) ESC pulse per 1 ms tick, us (0 = no signal).
         sample_ticks: (S,) non-decreasing tick indices in [0, T] to report.
         load_mask: (T,) weight of the external-load term per tick (None: zeros).
+        gate: an effect acting in one regime only (TickGate): its columns take the gate's off values on the
+            ticks outside the regime (None: every effect everywhere).
         latch: "exact" (DrivePlant's frame latching) or "box" (frame-mean latching; smooth in the delay).
     Returns: dict of (B, S) arrays rope_speed_mps, measured_speed_mps, battery_v.
     Raises ValueError naming the argument for wrong shapes or values.
@@ -422,6 +470,10 @@ def simulate_drive_batch(theta: np.ndarray, consts: np.ndarray, pulse_us: np.nda
     load_mask = np.ascontiguousarray(load_mask, dtype=np.float64)
     if load_mask.shape != pulse_us.shape:
         raise ValueError(f"load_mask: expected shape {pulse_us.shape}, got {load_mask.shape}")
+    if gate is None:
+        gate_mask, gate_off, gate_cols = np.ones(pulse_us.size), np.zeros(N_THETA), np.zeros(N_THETA)
+    else:
+        gate_mask, gate_off, gate_cols = gate.arrays(pulse_us.size)
     if latch not in ("exact", "box"):
         raise ValueError(f"latch: expected 'exact' or 'box', got {latch!r}")
     cum = np.concatenate(([0.0], np.cumsum(pulse_us * TICK_US)))
@@ -429,5 +481,6 @@ def simulate_drive_batch(theta: np.ndarray, consts: np.ndarray, pulse_us: np.nda
     out_v = np.empty((n_b, n_s))
     out_m = np.empty((n_b, n_s))
     out_vb = np.empty((n_b, n_s))
-    _simulate(theta, consts, pulse_us, cum, load_mask, ticks, latch == "box", out_v, out_m, out_vb)
+    _simulate(theta, consts, pulse_us, cum, load_mask, gate_mask, gate_off, gate_cols, ticks, latch == "box", out_v,
+              out_m, out_vb)
     return {"rope_speed_mps": out_v, "measured_speed_mps": out_m, "battery_v": out_vb}

@@ -49,6 +49,9 @@ class Candidate(ABC):
     separating_measurement: str = ""
     confused_with: tuple[str, ...] = ()
     uses_located_spans: bool = False
+    gateable: bool = False
+    """Whether the law may act in one regime only (gates.py): the diagnosis then also fits it confined to the
+    regimes where the residual concentrates."""
     needs_regimes: tuple[str, ...] = ()
     """Regime labels (regimes.py, "kind:label") of which the recording must visit at least one for the effect to
     show; a recording that visits none cannot test it (reported under coverage)."""

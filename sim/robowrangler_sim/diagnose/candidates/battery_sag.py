@@ -20,6 +20,7 @@ class BatterySag(Candidate):
               ParamSpec("polarisation_time_constant_s", db.TH_POL_TAU, "s", 0.02, 30.0, 1.0))
     neutral = {db.TH_POL_R: 0.0, db.TH_POL_TAU: 1.0}
     needs_regimes = ("motion:accelerating",)
+    gateable = True
     separating_measurement = "battery current (a shunt) with the voltage during a load step"
     confused_with = ("battery_internal_resistance_ohm", "battery_open_circuit_v")
 

@@ -20,6 +20,7 @@ class EscDeadband(Candidate):
               ParamSpec("hysteresis_us", db.TH_HYST, "us", 0.0, 80.0, 10.0))
     neutral = {db.TH_HYST: 0.0}
     needs_regimes = ("speed_band:rest",)
+    gateable = True
     separating_measurement = "a slow pulse ramp up from the minimum and back down (throttle sweep at rest)"
     confused_with = ("coulomb_friction_n", "low_speed_friction")
 

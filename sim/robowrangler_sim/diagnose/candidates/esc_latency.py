@@ -17,6 +17,7 @@ class EscLatency(Candidate):
     params = (ParamSpec("delay_s", db.TH_LATENCY, "s", 0.0, 0.05, 0.005),)
     neutral = {db.TH_LATENCY: 0.0}
     needs_regimes = ("motion:accelerating", "motion:decelerating")
+    gateable = True
     separating_measurement = "ESC pulse and motor speed at 1 kHz around a step (the recordings' 1 kHz bursts)"
     confused_with = ("esc_lag_s", "inertia_kg_m2")
 

@@ -20,6 +20,7 @@ class RopeDragLaw(Candidate):
               ParamSpec("drag_exponent", db.TH_DRAG_EXP, "1", 0.5, 4.0, 2.0))
     neutral = {db.TH_DRAG_EXP: 2.0}
     needs_regimes = ("speed_band:5-8 m/s", "speed_band:> 8 m/s")
+    gateable = True
     separating_measurement = "steady holds at several well-spaced speeds (speed sweep), or rope tension at the guide"
     confused_with = ("viscous_friction_n_s_per_m", "low_speed_friction")
 
