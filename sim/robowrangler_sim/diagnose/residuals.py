@@ -89,8 +89,7 @@ def channel_weights(data, residuals: dict[str, np.ndarray] | None, noise: dict[s
                     fit_mask: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """channel -> (S,) 1 / sigma per observation, 0 where the channel is not observed. sigma per kind: the
     larger of the noise and the residual's robust scale on the fit samples (when residuals are given), plus the
-    timing term (sample_sigma, per kind) and the observation's own floor (speed_floor_mps); the records of one
-    stop share one record's weight (censored_copies)."""
+    timing term (sample_sigma, per kind) and the observation's own floor (speed_floor_mps)."""
     valid = observed(data)
     meas = _measured(data)
     out = {}
@@ -106,27 +105,9 @@ def channel_weights(data, residuals: dict[str, np.ndarray] | None, noise: dict[s
             if m.sum() >= 2:
                 sigma[m] = sample_sigma(data.time_s[m], meas[c][m], scale)
         if c == "rope_speed_mps":
-            sigma = np.sqrt(sigma ** 2 + np.asarray(data.speed_floor_mps) ** 2) * np.sqrt(censored_copies(data))
+            sigma = np.sqrt(sigma ** 2 + np.asarray(data.speed_floor_mps) ** 2)
         out[c] = np.where(valid[c] & np.isfinite(sigma), 1.0 / sigma, 0.0)
     return out
-
-
-def censored_copies(data) -> np.ndarray:
-    """(S,) how many records observe the same "less than one edge since" as this one (1 for every other record).
-    The records that saw no new edge after one edge (telemetry and burst alike) all say where the rope stopped
-    between that edge and the next: one inequality, the latest record's implying the earlier ones' (the rope does
-    not run backwards). Each weighs 1/n of a record (sigma x sqrt(n)), so a stop counts as one observation
-    however long the recording stays at rest, not as the 100-1000 records a second of rest makes."""
-    n = np.ones(data.time_s.size)
-    upper = getattr(data, "speed_upper_mps", None)
-    if upper is None:
-        return n
-    cens = np.flatnonzero(np.isfinite(upper) & np.asarray(data.speed_valid, dtype=bool))
-    if cens.size:
-        _, inverse, counts = np.unique(np.round(data.edge_ticks[cens, 0], 6), return_inverse=True,
-                                       return_counts=True)
-        n[cens] = counts[inverse]
-    return n
 
 
 TIMING_SIGMA_S = 2.5e-3 / np.sqrt(12.0)
