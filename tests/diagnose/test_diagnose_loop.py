@@ -103,6 +103,29 @@ def test_uniform_wind_is_named(recs):
     assert res.effects[0].params["wind_speed_mps"]["value"] > 0  # blowing out along the launch direction
 
 
+def test_a_stiff_rope_is_named_tip_bending_stiffness_with_its_stiffness(tmp_path):
+    # the string shooter's rope 20 times stiffer (B = 1e-5 N m^2), a steady hold at 4 m/s: the tip rounds, waves
+    # stand on the compressed upper branch, the lower branch lifts (bench/bench_loop_stiff_rope.py)
+    b_true = 20.0 * 5.0e-7
+    case = generate_loop_recording(tmp_path / "stiff.mcap", truth=LoopTruth("tip_bending_stiffness",
+                                                                            bending_factor=20.0),
+                                   script=LoopScript(4.0, ((0.0, 4.0),), ((0.0, 0.0),)), seed=17)
+    res = diagnose_loop(case.path)
+    assert res.verdict == "missing_physics", res.first_line
+    e = res.effects[0]
+    assert e.effect_id == "tip_bending_stiffness", res.first_line
+    assert e.heldout_rms_mm_after < 0.6 * e.heldout_rms_mm_before  # 18 -> 8.6 mm here
+    b = e.params["bending_stiffness_n_m2"]["value"]
+    assert 0.4 * b_true < b < 2.5 * b_true  # a stiffer rope than the table's (5e-7), of the right size
+    assert e.params["bending_stiffness_n_m2"]["ci95"][0] < b < e.params["bending_stiffness_n_m2"]["ci95"][1]
+    # the extended model carries B and bakes the bent loop into the chain's shape table
+    model = LoopModel.load(write_loop_report(res, tmp_path / "rep")["model"])
+    assert model.effects["tip_bending_stiffness"]["bending_stiffness_n_m2"] == pytest.approx(b)
+    moved = np.abs(model.shape_table().contour(0.0, rope_speed_mps=4.0)
+                   - LoopModel().shape_table().contour(0.0, rope_speed_mps=4.0)).max()
+    assert moved > 0.005
+
+
 def test_two_effects_are_named_together_when_one_does_not_suffice(tmp_path):
     """C_f raised by 20 %, flown at the table's 4 and 5 m/s and between them (where the truth's continuous speed
     dependence shows too): neither law alone explains the contours; the two together do."""

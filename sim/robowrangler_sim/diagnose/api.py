@@ -281,7 +281,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
             tg = db.TickGate(tick_on, tuple(s.column for s in cand.params), nominal.theta_)
             # as everywhere: every nominal parameter free too, from the refit (which absorbed what it could of the
             # effect, also outside the regime)
-            fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
+            fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.gated_params(nominal.theta_)), weights=weights).fit(
                 replay, theta_c, fit_mask=fit_mask, gate=tg, starts=cand.start_grid(theta_c)[1],
                 start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
             r_c = _residuals(data, fitter.prediction_)
@@ -357,7 +357,9 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     # effects' parameters widened by a jackknife over the fit samples
     if verdict == "missing_physics":
         _progress(progress, "refitting the chosen model with every parameter free")
-        chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in fits[eid].cand.params]
+        chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in
+                                              (fits[eid].cand.gated_params(nominal.theta_) if fits[eid].gate
+                                               else fits[eid].cand.params)]
         final = ModelFitter(chosen_specs, weights=weights).fit(replay, chosen_fit.theta_, fit_mask=fit_mask,
                                                                load_mask=chosen_mask, gate=chosen_gate,
                                                                bounds_ref=theta_base)

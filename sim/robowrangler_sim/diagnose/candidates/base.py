@@ -13,7 +13,7 @@ Issue 15's rope-loop contours plug in here: a loop candidate subclasses Candidat
 from __future__ import annotations
 
 from abc import ABC
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -52,6 +52,14 @@ class Candidate(ABC):
     gateable: bool = False
     """Whether the law may act in one regime only (gates.py): the diagnosis then also fits it confined to the
     regimes where the residual concentrates."""
+    gated_floor: tuple[str, ...] = ()
+    """Parameters (the effect's size) that, confined to a regime, may not fall below their value outside it: an
+    effect there is more of it (a delay of 0 above 5 m/s, with the ESC's own delay below, is not a latency)."""
+
+    def gated_params(self, off_row: np.ndarray) -> tuple[ParamSpec, ...]:
+        """This law's parameters for a fit confined to a regime, the gated_floor ones bounded below by off_row."""
+        return tuple(replace(s, lo=min(max(s.lo, float(off_row[s.column])), s.hi)) if s.name in self.gated_floor
+                     else s for s in self.params)
     needs_regimes: tuple[str, ...] = ()
     """Regime labels (regimes.py, "kind:label") of which the recording must visit at least one for the effect to
     show; a recording that visits none cannot test it (reported under coverage)."""

@@ -21,6 +21,7 @@ class BatterySag(Candidate):
     neutral = {db.TH_POL_R: 0.0, db.TH_POL_TAU: 1.0}
     needs_regimes = ("motion:accelerating",)
     gateable = True
+    gated_floor = ("polarisation_resistance_ohm",)
     separating_measurement = "battery current (a shunt) with the voltage during a load step"
     confused_with = ("battery_internal_resistance_ohm", "battery_open_circuit_v")
 

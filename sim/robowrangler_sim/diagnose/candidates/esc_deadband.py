@@ -21,6 +21,7 @@ class EscDeadband(Candidate):
     neutral = {db.TH_HYST: 0.0}
     needs_regimes = ("speed_band:rest",)
     gateable = True
+    gated_floor = ("deadband_us",)
     separating_measurement = "a slow pulse ramp up from the minimum and back down (throttle sweep at rest)"
     confused_with = ("coulomb_friction_n", "low_speed_friction")
 

@@ -18,6 +18,7 @@ class EscLatency(Candidate):
     neutral = {db.TH_LATENCY: 0.0}
     needs_regimes = ("motion:accelerating", "motion:decelerating")
     gateable = True
+    gated_floor = ("delay_s",)
     separating_measurement = "ESC pulse and motor speed at 1 kHz around a step (the recordings' 1 kHz bursts)"
     confused_with = ("esc_lag_s", "inertia_kg_m2")
 

@@ -21,6 +21,7 @@ class LowSpeedFriction(Candidate):
     neutral = {db.TH_STRIBECK_N: 0.0, db.TH_STRIBECK_V: 0.5}
     needs_regimes = ("speed_band:0.3-2 m/s",)
     gateable = True
+    gated_floor = ("stribeck_force_n",)
     separating_measurement = "slow steady holds below 1 m/s at several speeds (friction curve)"
     confused_with = ("coulomb_friction_n", "esc_deadband")
 

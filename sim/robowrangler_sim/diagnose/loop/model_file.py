@@ -39,7 +39,7 @@ EFFECT_COLUMNS = {
     "loop_speed_dependence": {"speed_shape_gain": sm.TH_SPEED_GAIN},
     "axial_drag_coefficient": {"skin_friction_coeff": sm.TH_CF},
     "normal_drag_coefficient": {"normal_drag_lag_s": sm.TH_ROT_LAG_S},
-    "tip_bending_stiffness": {"tip_bending_length_m": sm.TH_BEND_LEN_M},
+    "tip_bending_stiffness": {"bending_stiffness_n_m2": sm.TH_BEND_N_M2},
     "transient_wave_dynamics": {"wave_speed_mps": sm.TH_WAVE_MPS},
     "uniform_wind": {"wind_speed_mps": sm.TH_WIND_MPS},
     "gyroscopic_base_rotation": {"coriolis_gain_s2_per_m": sm.TH_GYRO_S2_PER_M},

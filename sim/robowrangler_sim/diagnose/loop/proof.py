@@ -51,8 +51,8 @@ class LoopScript:
 @dataclass(frozen=True)
 class LoopTruth:
     """The change made to the string shooter. effect_id None: none. Values in the law's own units where the law has
-    a counterpart: skin_friction_coeff (C_f), wind_speed_mps; others (bending stiffness, wave dynamics) have no
-    one-to-one parameter in the chain's terms and are scored on naming only."""
+    a counterpart: skin_friction_coeff (C_f), wind_speed_mps, bending_stiffness_n_m2 (bending_factor x the rope's
+    5e-7 N m^2); the wave dynamics have no one-to-one parameter in the chain's terms and are scored on naming only."""
 
     effect_id: str | None
     cf_factor: float = 1.0

@@ -16,18 +16,21 @@ neutral value leaves the nominal chain unchanged. Effect laws (all in the table'
     wind:       relative air speed v - w t_x along the rope (t_x: x share of the flow direction; first order in w)
                 plus the normal drag tilt delta = atan(0.5 x 0.5 rho C_n d w |w| / (lambda g)): R(delta) S(phi - delta)
     rotation:   phi_eff = phi - tau_n dphi/dt - k_g v dphi/dt   (normal drag lag; Coriolis on the running rope)
-    bending:    tangent angle along the arc smoothed over l_b (Gaussian), end error spread linearly along the arc
+    bending:    the running rope's Euler-Bernoulli balance B theta'' = t x F about the table's (string) shape, at
+                the rope's stiffness B instead of the table rope's B0 (moving_elastica.py)
     dynamics:   wave speed c = 0: first-order lag tau (the chain); c > 0: each point follows the target with the
                 transport delay s / c, s its arc distance from the exit (a disturbance carried along the rope)
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
+from threadpoolctl import threadpool_limits
 
+from robowrangler_sim.diagnose.loop.moving_elastica import bending_displacement_m
 from robowrangler_sim.rope import GRAVITY_MPS2, STANDARD_AIR_DENSITY_KG_PER_M3, RopeParams
 from robowrangler_sim.shape_table import ShapeTable, resample_by_arc_length
 
@@ -36,12 +39,17 @@ TH_LEN_SCALE = 1
 TH_SPEED_GAIN = 2
 TH_CF = 3
 TH_ROT_LAG_S = 4
-TH_BEND_LEN_M = 5
+TH_BEND_N_M2 = 5
 TH_WAVE_MPS = 6
 TH_WIND_MPS = 7
 TH_GYRO_S2_PER_M = 8
 N_THETA = 9
 PHI_STEP_DEG = 0.25
+BEND_PHI_STEP_DEG = 1.0
+BEND_SPEED_STEP_MPS = 0.1
+BEND_LENGTH_STEP_M = 0.01
+"""The bending law's solve grid (interpolated in phi and speed, nearest in loop length)."""
+BEND_CACHE_SIZE = 50000
 WIND_NORMAL_SHARE = 0.5
 WIND_AXIAL_SHARE = 1.0
 """Mean of sin^2 of the angle between a uniform wind and the rope round a loop: the share of w|w| that is normal."""
@@ -72,12 +80,14 @@ class LoopShapeModel:
                 c = resample_by_arc_length(cs[g], self.n_points)
                 grid[s, g] = c / float(np.sum(np.linalg.norm(np.diff(c, axis=0), axis=1)))
         self.grid = grid  # (S, G, K, 2) per metre of loop
+        self._bend_cache: dict[tuple, np.ndarray] = {}
 
     def theta0(self) -> np.ndarray:
         th = np.zeros(N_THETA)
         th[TH_TAU_S] = self.tau0_s
         th[TH_LEN_SCALE] = 1.0
         th[TH_CF] = self.rope.skin_friction_coeff
+        th[TH_BEND_N_M2] = self.rope.bending_stiffness_n_m2
         return th
 
     # ------------------------------------------------------------------------------------------------------------
@@ -111,10 +121,26 @@ class LoopShapeModel:
         w = col(TH_WIND_MPS)
         f_w = WIND_NORMAL_SHARE * 0.5 * STANDARD_AIR_DENSITY_KG_PER_M3 * rope.normal_drag_coeff * rope.diameter_m * w * np.abs(w)
         delta = np.arctan2(f_w, rope.linear_density_kg_per_m * GRAVITY_MPS2)  # (B, 1)
-        c_w = np.sqrt(np.cos(delta))
         phi_eff = (phi_rad[None, :] - col(TH_ROT_LAG_S) * phidot_rad_s[None, :]
                    - col(TH_GYRO_S2_PER_M) * v * phidot_rad_s[None, :] - delta)
         phi_deg = np.rad2deg(phi_eff)
+        shape = self._steady_unit(theta, phi_deg, v)
+        b0 = self.rope.bending_stiffness_n_m2
+        length_m = np.broadcast_to(loop_length_m[None, :] * col(TH_LEN_SCALE), phi_deg.shape)
+        for b in np.flatnonzero(np.abs(theta[:, TH_BEND_N_M2] - b0) > 1e-9 * b0):
+            shape[b] += self._bend_unit(theta[b], phi_deg[b], v[b], length_m[b])
+        scale = (loop_length_m[None, :] * col(TH_LEN_SCALE))[..., None, None]
+        return shape * scale
+
+    def _steady_unit(self, theta: np.ndarray, phi_deg: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Unit-length steady contours (B, M, K, 2) for rows theta (B, N_THETA) at effective inclinations phi_deg and
+        rope speeds v (B, M): the table with the speed, C_f and wind laws (not the bending)."""
+        col = lambda c: theta[:, c][:, None]  # noqa: E731
+        rope = self.rope
+        w = col(TH_WIND_MPS)
+        f_w = WIND_NORMAL_SHARE * 0.5 * STANDARD_AIR_DENSITY_KG_PER_M3 * rope.normal_drag_coeff * rope.diameter_m * w * np.abs(w)
+        delta = np.arctan2(f_w, rope.linear_density_kg_per_m * GRAVITY_MPS2)  # (B, 1)
+        c_w = np.sqrt(np.cos(delta))
         snap = self._snap(v, phi_deg)
         lin_v = self._lin(v, phi_deg)
         shape = snap + col(TH_SPEED_GAIN)[..., None, None] * (lin_v - snap)
@@ -131,28 +157,40 @@ class LoopShapeModel:
             cd, sd = np.cos(delta)[..., None], np.sin(delta)[..., None]  # (B, 1, 1)
             x, z = shape[..., 0], shape[..., 1]
             shape = np.stack([cd * x - sd * z, sd * x + cd * z], axis=-1)
-        lb = theta[:, TH_BEND_LEN_M]
-        if np.any(lb > 0):
-            shape = self._bend(shape, lb)
-        scale = (loop_length_m[None, :] * col(TH_LEN_SCALE))[..., None, None]
-        return shape * scale
+        return shape
 
-    def _bend(self, shape: np.ndarray, lb_m: np.ndarray) -> np.ndarray:
-        """Smooth the tangent angle over the bending length (per metre of loop: the shapes are unit length)."""
-        out = shape.copy()
-        d = np.diff(shape, axis=-2)
-        ang = np.unwrap(np.arctan2(d[..., 1], d[..., 0]), axis=-1)
-        seg = np.linalg.norm(d, axis=-1)
-        ds = 1.0 / (self.n_points - 1)
-        for b in np.flatnonzero(lb_m > 0):
-            sig = float(lb_m[b]) / 2.0 / ds  # bending length per 2 m loop -> points of the unit contour
-            a = gaussian_filter1d(ang[b], sig, axis=-1, mode="nearest")
-            steps = seg[b][..., None] * np.stack([np.cos(a), np.sin(a)], axis=-1)
-            pts = np.concatenate([shape[b][..., :1, :], shape[b][..., :1, :] + np.cumsum(steps, axis=-2)], axis=-2)
-            err = pts[..., -1:, :] - shape[b][..., -1:, :]
-            frac = np.linspace(0.0, 1.0, self.n_points)[:, None]
-            out[b] = pts - frac * err
-        return out
+    def _bend_unit(self, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray, length_m: np.ndarray) -> np.ndarray:
+        """The running rope's bending (diagnose/loop/moving_elastica.py) for one row at its stiffness B (TH_BEND_N_M2):
+        the displacement (F, K, 2) of the unit contours, solved on a grid of BEND_PHI_STEP_DEG x BEND_SPEED_STEP_MPS
+        (loop length to BEND_LENGTH_STEP_M) and interpolated bilinearly in phi and speed; grid solves are kept across
+        calls (the fit re-evaluates the same rows) and batched, on one BLAS thread (threaded BLAS on a loaded
+        machine is 50x slower for these small systems)."""
+        bend = float(theta_row[TH_BEND_N_M2])
+        rope = dataclasses.replace(self.rope, skin_friction_coeff=float(theta_row[TH_CF]))
+        sig = (bend, float(theta_row[TH_CF]), float(theta_row[TH_SPEED_GAIN]), float(theta_row[TH_WIND_MPS]))
+        pn, vn = phi_deg / BEND_PHI_STEP_DEG, v / BEND_SPEED_STEP_MPS
+        p0, q0 = np.floor(pn).astype(np.int64), np.floor(vn).astype(np.int64)
+        wp, wq = (pn - p0)[:, None, None], (vn - q0)[:, None, None]
+        ln = np.round(length_m / BEND_LENGTH_STEP_M).astype(np.int64)
+        corners = np.stack([np.stack([p0 + dp, q0 + dq, ln], axis=-1) for dp, dq in ((0, 0), (1, 0), (0, 1), (1, 1))])
+        keys, inverse = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+        missing = [k for k in range(keys.shape[0]) if (sig, *keys[k]) not in self._bend_cache]
+        if missing:
+            km = keys[missing]
+            phis = km[:, 0] * BEND_PHI_STEP_DEG
+            speeds = np.maximum(km[:, 1] * BEND_SPEED_STEP_MPS, BEND_SPEED_STEP_MPS)
+            lengths = np.maximum(km[:, 2] * BEND_LENGTH_STEP_M, BEND_LENGTH_STEP_M)
+            unit = self._steady_unit(theta_row[None, :], phis[None, :], speeds[None, :])[0]
+            with threadpool_limits(limits=1, user_api="blas"):
+                disp = bending_displacement_m(unit * lengths[:, None, None], speed_mps=speeds,
+                                              bending_stiffness_n_m2=bend, rope=rope) / lengths[:, None, None]
+            if len(self._bend_cache) + len(missing) > BEND_CACHE_SIZE:
+                self._bend_cache.clear()
+            for j, k in enumerate(missing):
+                self._bend_cache[(sig, *keys[k])] = disp[j]
+        table = np.stack([self._bend_cache[(sig, *k)] for k in keys])
+        d = table[inverse.reshape(4, -1)]  # (4, F, K, 2)
+        return (1 - wp) * (1 - wq) * d[0] + wp * (1 - wq) * d[1] + (1 - wp) * wq * d[2] + wp * wq * d[3]
 
     def follow(self, theta: np.ndarray, targets: np.ndarray, *, time_s: np.ndarray, segment: np.ndarray,
                loop_length_m: np.ndarray) -> np.ndarray:
