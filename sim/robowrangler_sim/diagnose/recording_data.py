@@ -7,7 +7,11 @@ present. What the engine compares (the *observations*, one axis in time order):
   and every 1 ms sample of a burst), the mean rope speed over exactly the edges counted between two records
   (edges x 2 pi r / counts_per_rev over the time between their latest edges): unfiltered, and exact up to the
   1 us edge clock, so the model is compared on the rope's travel between two edge times. Without encoder
-  fields (an outside writer that has none), the telemetry's filtered ``rope_speed_mps``.
+  fields (an outside writer that has none), the telemetry's filtered ``rope_speed_mps``. A record that saw no
+  new edge for REST_GAP_S or more (the rope at or near rest) observes an interval, not a value: the rope
+  travelled less than the distance to the next edge since its last one, so the mean speed since that edge lies in
+  [0, ``speed_upper_mps``] (the replay observes the model through the same encoder: no residual while the model
+  also stays short of the next edge).
 * battery volts at every record (telemetry and burst samples).
 
 The ESC pulse per tick: the bursts' 1 kHz samples where there are bursts; between telemetry records,
@@ -37,6 +41,8 @@ MIN_ENCODER_INTERVALS = 50  # fewer intervals with new edges than this: use the 
 REST_GAP_S = 0.02  # no edge for this long: the record observes a rope (nearly) at rest
 HELD_PULSE_SHARE = 0.6  # records with an unchanged pulse while the rope moves, above this share: a held program
 
+_LOW16_US = 65536  # a burst sample's edge time: the low 16 bits of the device's us clock
+
 KIND_TELEMETRY = 0
 KIND_BURST = 1
 
@@ -56,6 +62,9 @@ class DriveData:
         speed_floor_mps: (S,) a known lower bound of the speed observation's sigma (less than one edge seen).
         edge_ticks: (S, 2) the interval [first, last] edge time, in fractional ticks, the speed is the mean over
             (speed_source "encoder"); NaN rows for "filtered".
+        speed_upper_mps: (S,) for a record that saw no new edge for REST_GAP_S or more: the mean speed since the
+            last edge is in [0, speed_upper_mps] (the distance to the next edge over the time since the last one;
+            speed_mps is the midpoint); NaN for every other record.
         speed_source: "encoder" (mean speed between edge times) or "filtered" (telemetry rope_speed_mps).
         pulse_us: (T,) ESC pulse per 1 ms tick (pre-roll first).
         pulse_source: how pulse_us was made ("fine+bursts", "fine", "whole us", with "held"/"interpolated").
@@ -89,6 +98,7 @@ class DriveData:
     preroll_ticks: int
     truncated: bool
     notes: list[str] = field(default_factory=list)
+    speed_upper_mps: np.ndarray | None = None
     encoder_pattern: np.ndarray | None = None
     """The encoder's edge pattern calibrated on this recording (encoder_pattern.py; pitches per count mod
     counts_per_rev), None without 1 kHz bursts; the speeds are taken over the corrected edge positions."""
@@ -108,17 +118,23 @@ class DriveData:
         return self.kind == KIND_TELEMETRY
 
 
-def _encoder_speed(time_s, counts, edge_s, group, step_m):
+def _encoder_speed(time_s, counts, edge_s, group, step_m, next_pitch=None):
     """Mean speed over the edges counted since the group's previous record with a new edge.
 
-    Returns (S,) speed, (S, 2) [first, last] edge times, (S,) sigma floor. A record with no new edge whose last
-    edge is REST_GAP_S old or more observes "less than one edge since": speed half an edge over that time, with
-    the uniform spread of [0, one edge) as its sigma floor. Other records without a new edge: NaN.
+    Returns (S,) speed, (S, 2) [first, last] edge times, (S,) sigma floor, (S,) upper bound. A record with no new
+    edge whose last edge is REST_GAP_S old or more observes "less than one edge since": the rope's travel since
+    that edge is in [0, next_pitch) pitches (next_pitch (S,): the distance from each record's latest edge to the
+    next edge, in pitches; 1 when not given), so its mean speed over [last edge, record] is in [0, upper]; speed is
+    the midpoint, with the uniform spread of that interval as its sigma floor. Other records without a new edge:
+    NaN (upper NaN for every record that saw an edge).
     """
     n = time_s.size
     speed = np.full(n, np.nan)
     edges = np.full((n, 2), np.nan)
     floor = np.zeros(n)
+    upper = np.full(n, np.nan)
+    if next_pitch is None:
+        next_pitch = np.ones(n)
     last: dict[int, int] = {}
     for i in range(n):
         g = int(group[i])
@@ -132,16 +148,17 @@ def _encoder_speed(time_s, counts, edge_s, group, step_m):
         if dn <= 0:
             gap = time_s[i] - edge_s[j]
             if gap >= REST_GAP_S:
-                speed[i] = 0.5 * step_m / gap
+                upper[i] = next_pitch[j] * step_m / gap
+                speed[i] = 0.5 * upper[i]
                 edges[i] = (edge_s[j], time_s[i])
-                floor[i] = step_m / gap / np.sqrt(12.0)
+                floor[i] = upper[i] / np.sqrt(12.0)
             continue
         dt = edge_s[i] - edge_s[j]
         if dt > 0:
             speed[i] = dn * step_m / dt
             edges[i] = (edge_s[j], edge_s[i])
         last[g] = i
-    return speed, edges, floor
+    return speed, edges, floor, upper
 
 
 def _burst_count_offset(b_time_s: np.ndarray, b_counts: np.ndarray, tel_t: np.ndarray,
@@ -157,6 +174,24 @@ def _burst_count_offset(b_time_s: np.ndarray, b_counts: np.ndarray, tel_t: np.nd
         return None
     values, n = np.unique(np.round(tel_counts[k[same]] - b_counts[same]), return_counts=True)
     return float(values[np.argmax(n)])
+
+
+def _unalias_burst_edges(b_counts: np.ndarray, b_edge_s: np.ndarray, tel_counts: np.ndarray,
+                         tel_edge_s: np.ndarray) -> np.ndarray:
+    """A burst sample carries its latest edge's time in 16 bits of us: an edge more than 65.536 ms old (a burst
+    that starts with the rope at rest) reads as a recent one. A telemetry record with the same absolute count saw
+    the same latest edge, with its 32-bit time: take that one where it differs by whole wraps."""
+    ok = np.isfinite(tel_counts) & np.isfinite(tel_edge_s)
+    if not ok.any():
+        return b_edge_s
+    tc, te = tel_counts[ok], tel_edge_s[ok]
+    order = np.argsort(tc, kind="stable")
+    tc, te = tc[order], te[order]
+    k = np.clip(np.searchsorted(tc, b_counts), 0, tc.size - 1)
+    same = np.isfinite(b_counts) & (tc[k] == b_counts)
+    wraps = (b_edge_s - te[k]) / (_LOW16_US * 1e-6)
+    fix = same & (np.round(wraps) >= 1) & (np.abs(wraps - np.round(wraps)) < 0.01)
+    return np.where(fix, te[k], b_edge_s)
 
 
 def load_drive_data(path: str | Path) -> DriveData:
@@ -255,7 +290,10 @@ def load_drive_data(path: str | Path) -> DriveData:
         offset = _burst_count_offset(b.time_s[present], b.encoder_counts[present], tel_t, counts_list[0])
         counts_list.append(b.encoder_counts[present] + (offset if offset is not None else 0.0))
         absolute_list.append(np.full(int(present.sum()), offset is not None))
-        edge_list.append(b.start_time_s + b.encoder_edge_s[present])
+        edge_s_b = b.start_time_s + b.encoder_edge_s[present]
+        if offset is not None:
+            edge_s_b = _unalias_burst_edges(counts_list[-1], edge_s_b, counts_list[0], edge_list[0])
+        edge_list.append(edge_s_b)
     time_s = np.concatenate(t_list)
     order = np.argsort(time_s, kind="stable")
     time_s = time_s[order]
@@ -273,9 +311,12 @@ def load_drive_data(path: str | Path) -> DriveData:
     # the encoder's own edge pattern (encoder_pattern.py), calibrated on this recording: speeds over the
     # corrected edge positions
     pattern = estimate_edge_pattern(np.where(absolute, edge_s, np.nan), np.where(absolute, counts, np.nan), cpr)
+    next_pitch = np.ones(time_s.size)
     if pattern is not None:
+        ok = absolute & np.isfinite(counts)
+        next_pitch[ok] = corrected_counts(counts[ok] + 1.0, pattern) - corrected_counts(counts[ok], pattern)
         counts = np.where(absolute, corrected_counts(counts, pattern), counts)
-    enc_speed, enc_edges, enc_floor = _encoder_speed(time_s, counts, edge_s, group, step_m)
+    enc_speed, enc_edges, enc_floor, enc_upper = _encoder_speed(time_s, counts, edge_s, group, step_m, next_pitch)
     t0 = float(tel_t[0])
     preroll = int(round(PREROLL_S / TICK_S))
     ticks_all = preroll + np.round((time_s - t0) / TICK_S).astype(np.int64)
@@ -313,12 +354,14 @@ def load_drive_data(path: str | Path) -> DriveData:
         speed = np.where(valid, enc_speed, 0.0)
         edges[~valid] = np.column_stack([ticks_all, ticks_all + 1.0])[~valid].clip(max=n_ticks - 1)
         floor = np.where(valid, enc_floor, 0.0)
+        upper = np.where(valid, enc_upper, np.nan)
         source = "encoder"
     else:
         valid = tel_m.copy()
         speed = np.where(valid, np.interp(time_s, tel_t, tel_speed), 0.0)
         edges = np.column_stack([ticks_all, ticks_all]).astype(float)
         floor = np.zeros(time_s.size)
+        upper = np.full(time_s.size, np.nan)
         source = "filtered"
         notes.append("no encoder counts/edge times: compared on the filtered rope speed")
     if not n_bursts:
@@ -331,7 +374,7 @@ def load_drive_data(path: str | Path) -> DriveData:
     r_wheel = r_m
     return DriveData(path=path, time_s=time_s, kind=kind, sample_ticks=ticks_all,
                      speed_mps=speed, rpm=speed / (2 * np.pi * r_wheel) * 60.0, battery_v=battery,
-                     speed_valid=valid, speed_floor_mps=floor, edge_ticks=edges, speed_source=source, pulse_us=pulse, pulse_source=pulse_source,
+                     speed_valid=valid, speed_floor_mps=floor, speed_upper_mps=upper, edge_ticks=edges, speed_source=source, pulse_us=pulse, pulse_source=pulse_source,
                      tel_time_s=tel_t, tel_speed_mps=tel_speed, state=states, device_params=params,
                      telemetry_hz=telemetry_hz, bursts=n_bursts, burst_s=burst_s, preroll_ticks=preroll,
                      truncated=bool(rec.truncated), notes=notes, encoder_pattern=pattern)

@@ -3,8 +3,12 @@ grid; predictions at the observations (recording_data.DriveData), in the recorde
 
 Rope speed from the encoder (speed_source "encoder"): the model's rope travel between the two edge times the
 observation spans, over that time (its position is the integral of its speed, sampled every tick, linear
-inside a tick). From the filtered telemetry (speed_source "filtered"): the model's speed through the
-firmware's low-pass (its time constant from /device/params) and the M/T estimate's half-tick delay.
+inside a tick). A record that saw no edge for a while (recording_data.REST_GAP_S: the rope at or near rest)
+observes only that the travel since the last edge is short of the next edge: the model is observed through the
+same encoder, reading what the recording read while its own travel stays in that interval, and off by as much as
+it leaves it (an edge the model passes that the encoder never saw, a model that ran backwards).
+From the filtered telemetry (speed_source "filtered"): the model's speed through the firmware's low-pass (its time
+constant from /device/params) and the M/T estimate's half-tick delay.
 """
 
 from __future__ import annotations
@@ -45,6 +49,10 @@ class DriveReplay:
             self._f0, self._f1 = e[:, 0] - self._i0, e[:, 1] - self._i1
             self._span_s = np.maximum(e[:, 1] - e[:, 0], 1e-6) * 1e-3
             self._at = data.sample_ticks.clip(max=n_ticks - 1)
+            upper = data.speed_upper_mps if data.speed_upper_mps is not None else np.full(data.time_s.size, np.nan)
+            self._censored = np.flatnonzero(np.isfinite(upper) & data.speed_valid)
+            self._upper = upper[self._censored]
+            self._read = data.speed_mps[self._censored]
         else:
             self._ticks, self._at = np.unique(data.sample_ticks, return_inverse=True)
 
@@ -73,7 +81,14 @@ class DriveReplay:
         a tick)."""
         x0 = x[:, self._i0] + (x[:, self._i0 + 1] - x[:, self._i0]) * self._f0
         x1 = x[:, self._i1] + (x[:, self._i1 + 1] - x[:, self._i1]) * self._f1
-        return np.abs(x1 - x0) / self._span_s
+        d = (x1 - x0) / self._span_s
+        speed = np.abs(d)
+        if self._censored.size:
+            # "no edge since": the encoder reads what the recording read while the model's mean speed since the
+            # last edge stays in [0, upper] (its travel short of the next edge), off by how far it leaves it
+            s = d[:, self._censored]
+            speed[:, self._censored] = self._read + (s - np.clip(s, 0.0, self._upper))
+        return speed
 
     def observe(self, position_m: np.ndarray, battery_v: np.ndarray) -> dict[str, np.ndarray]:
         """The recorded channels (S,) of a trajectory given per tick of the replay's grid, from outside the model
