@@ -38,10 +38,10 @@ import numpy as np
 
 DEV_SEEDS = [1, 7001]
 DEV_CLEAN = list(range(101, 111)) + list(range(7101, 7111))
-HELDOUT_SEEDS = [23691, 41532]  # drawn at random (secrets.randbelow(10**5)) for this round, run once on the final engine
-HELDOUT_CLEAN = list(range(82146, 82166))  # 20 effect-free recordings (start drawn the same way)
+HELDOUT_SEEDS = [82584, 39298]  # drawn at random (secrets.randbelow(10**5)) for this round, run once on the final engine
+HELDOUT_CLEAN = list(range(42021, 42041))  # 20 effect-free recordings (start drawn the same way)
 # earlier held-out seeds, run and looked at, never held out again: 52907, 61343, effect-free 83011-83030;
-# 49937, 92867, effect-free 56566-56585
+# 49937, 92867, effect-free 56566-56585; 23691, 41532, effect-free 82146-82165
 
 
 def _sindy_baseline(res) -> dict:
@@ -113,10 +113,11 @@ def run_case(case, workdir: str, rate_hz: float = 100.0, oracle: bool = True) ->
     # the ranking: what diagnose chose first, then the other fitted candidates by their held-out likelihood ratio
     # over the refit
     chosen_ids = [e.effect_id for e in res.effects]
+    # (a law fitted confined to a speed range, id EFFECT@RANGE, ranks as its effect)
     ranked = sorted((c for c in res.candidates if "heldout_lr" in c and "+" not in c["id"]
                      and c.get("plant") != "spindle"),
-                    key=lambda c: (c["id"] not in chosen_ids, -c["heldout_lr"]))
-    top3 = [c["id"] for c in ranked[:3]]
+                    key=lambda c: (c.get("effect", c["id"]) not in chosen_ids, -c["heldout_lr"]))
+    top3 = list(dict.fromkeys(c.get("effect", c["id"]) for c in ranked))[:3]
     nominal = next(c for c in res.candidates if c["id"] == "nominal_refit")
     before = nominal["heldout_rms"]["rope_speed_mps"]
     ours_sindy = _sindy_baseline(res)
