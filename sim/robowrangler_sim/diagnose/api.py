@@ -30,6 +30,7 @@ from robowrangler_sim.plants import drive_batch as db
 BLOCK_S = 0.5
 HELDOUT_EVERY = 3  # every third 1 s block is held out of every fit
 ALPHA = 0.01
+GATED_NFEV = 12  # solver steps of a law's fit confined to a speed range (it starts from the law's fit everywhere)
 
 
 @dataclass
@@ -277,12 +278,12 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         for f in [f for f in list(fits.values()) if f.cand.gateable and f.gate is None]:
             cand = f.cand
             _progress(progress, f"fitting {cand.effect_id} {g.description}")
-            theta_c = cand.apply_neutral(nominal.theta_)
+            # from the law's fit everywhere (the nominal parameters there already undo what the refit absorbed of
+            # the effect), with every nominal parameter free as there; its start grid too, fewer solver steps
+            theta_c = f.fitter.theta_
             tg = db.TickGate(tick_on, tuple(s.column for s in cand.params), nominal.theta_)
-            # as everywhere: every nominal parameter free too, from the refit (which absorbed what it could of the
-            # effect, also outside the regime)
             fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.gated_params(nominal.theta_, unit_top)),
-                                 weights=weights).fit(
+                                 weights=weights, max_nfev=GATED_NFEV).fit(
                 replay, theta_c, fit_mask=fit_mask, gate=tg, starts=cand.start_grid(theta_c)[1],
                 start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
             r_c = _residuals(data, fitter.prediction_)
