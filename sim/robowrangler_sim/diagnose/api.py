@@ -271,7 +271,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                           "heldout_rms": sc.heldout_rms,
                           "params": {p.name: round(p.value, 6) for p in fitter.params_
                                      if p.name in {s.name for s in cand.params}}})
-    # the same laws confined to the regimes where the refit's residual concentrates (an effect of one regime)
+    # the same laws confined to either side of the speed that splits the refit's residual most unevenly
     gates = _gates_to_try(data, r_nom, weights, fit_tel)
     unit_top = {s.column: s.bounds(theta_base[s.column])[1] for s in NOMINAL_REFIT}
     for g, tick_on in gates:
