@@ -146,13 +146,19 @@ def _dev_case(name: str):
     return next(c for c in proof_cases(seeds=[1], clean_seeds=[]) if c.name == name)
 
 
+def _diagnose_dev_case(name: str, tmp_path, effects: list[str]):
+    """Generate a dev case's recording with its truth effect and diagnose it against effects: (result, the truth's
+    spans)."""
+    case = _dev_case(name)
+    truth, spans = case.truth_effect()
+    rec = tmp_path / f"{name.replace('/', '_')}.mcap"
+    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
+    return diagnose(rec, effects=effects), spans
+
+
 @pytest.mark.parametrize("effect_id", list(RIVAL))
 def test_each_candidate_is_recovered_from_a_generated_recording(effect_id, tmp_path):
-    case = _dev_case(f"{effect_id}/plain/1")
-    truth, _ = case.truth_effect()
-    rec = tmp_path / f"{effect_id}.mcap"
-    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
-    res = diagnose(rec, effects=[effect_id, RIVAL[effect_id]])
+    res, _ = _diagnose_dev_case(f"{effect_id}/plain/1", tmp_path, [effect_id, RIVAL[effect_id]])
     assert res.verdict == "missing_physics", res.first_line
     assert res.effects[0].effect_id == effect_id
     e = res.effects[0]
@@ -162,11 +168,8 @@ def test_each_candidate_is_recovered_from_a_generated_recording(effect_id, tmp_p
 
 
 def test_a_load_on_one_stretch_is_located_there(tmp_path):
-    case = _dev_case("external_rope_load/one_regime/1")  # a load acting above 5 m/s within one stretch
-    truth, spans = case.truth_effect()
-    rec = tmp_path / "load.mcap"
-    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
-    res = diagnose(rec, effects=["external_rope_load", "rope_drag_law"])
+    # a load acting above 5 m/s within one stretch
+    res, spans = _diagnose_dev_case("external_rope_load/one_regime/1", tmp_path, ["external_rope_load", "rope_drag_law"])
     assert res.verdict == "missing_physics", res.first_line
     found = res.effects[0]
     assert found.effect_id == "external_rope_load"
@@ -174,11 +177,8 @@ def test_a_load_on_one_stretch_is_located_there(tmp_path):
 
 
 def test_a_latency_only_at_high_speed_is_named_with_its_regime(tmp_path):
-    case = _dev_case("esc_latency/one_regime/1")  # the ESC late only above 5 m/s: everywhere, the law fails
-    truth, _ = case.truth_effect()
-    rec = tmp_path / "latency_fast.mcap"
-    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
-    res = diagnose(rec, effects=["esc_latency", "rope_drag_law"])
+    # the ESC late only above 5 m/s: everywhere, the law fails
+    res, _ = _diagnose_dev_case("esc_latency/one_regime/1", tmp_path, ["esc_latency", "rope_drag_law"])
     assert res.verdict == "missing_physics", res.first_line
     found = res.effects[0]
     assert found.effect_id == "esc_latency"
@@ -192,7 +192,7 @@ def test_a_latency_only_at_high_speed_is_named_with_its_regime(tmp_path):
     back = load_model(res.model.save(tmp_path / "model.json"))
     assert back.gated_effects()["esc_latency"].speed_min_mps == terms["gate_speed_min_mps"]
     with pytest.raises(ModelMismatchError, match="one regime"):
-        diagnose(rec, model=back, effects=["esc_latency"])
+        diagnose(res.recording, model=back, effects=["esc_latency"])
 
 
 def test_sil_applies_a_gated_effect_only_in_its_regime(tmp_path):

@@ -38,6 +38,8 @@ class _Fit:
     """One fitted model of the candidate stage: a candidate, everywhere or confined to a regime (gate)."""
 
     cand: Candidate
+    params: tuple
+    """The law's own ParamSpecs as fitted (confined: with the gated floors, Candidate.gated_params)."""
     fitter: ModelFitter
     score: ModelScore
     load_mask: np.ndarray | None
@@ -235,6 +237,25 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     cov = coverage(tel_labels)
     cand_rows: list[dict] = [{"id": "nominal_refit", "status": "base", "heldout_rms": score_nom.heldout_rms,
                               "fit_rms": score_nom.fit_rms}]
+
+    def fit_law(fid: str, cand: Candidate, own: tuple, theta_c: np.ndarray, *, load_mask=None, gate=None,
+                tick_gate=None, max_nfev: int = 25, row: dict | None = None) -> None:
+        """Fit a law (own parameters and every nominal one free, from theta_c and the law's start grid), score it
+        against the refit (one parameter more when confined to a range), keep it in fits and the candidate table."""
+        cols, grid = cand.start_grid(theta_c)
+        fitter = ModelFitter(list(NOMINAL_REFIT) + list(own), weights=weights, max_nfev=max_nfev).fit(
+            replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, gate=tick_gate, starts=grid,
+            start_columns=cols, bounds_ref=theta_base)
+        sc = score_model(fid, len(NOMINAL_REFIT) + len(own) + (gate is not None),
+                         _residuals(data, fitter.prediction_), weights, fit_mask, block_id, heldout_blocks, n_eff,
+                         valid=valid)
+        ok, ev = accepted(sc, score_nom)
+        fits[fid] = _Fit(cand, own, fitter, sc, load_mask, gate, tick_gate)
+        cand_rows.append({"id": fid, **(row or {}), "status": "accepted" if ok else "rejected", **ev,
+                          "heldout_rms": sc.heldout_rms,
+                          "params": {p.name: round(p.value, 6) for p in fitter.params_
+                                     if p.name in {s.name for s in own}}})
+
     for cand in candidates:
         ident = cand.identifiable(data)
         if not ident.identifiable:
@@ -256,21 +277,9 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                 continue
             load_mask = _tick_mask(data, below)
         _progress(progress, f"fitting {cand.effect_id}")
-        theta_c = cand.apply_neutral(nominal.theta_)
         # the candidate's own parameters and every nominal one, from the refit: what the refit absorbed of the
         # effect (a dead band taken for Coulomb friction and inertia, a drag law for the resistance) is undone
-        fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.params), weights=weights).fit(
-            replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, starts=cand.start_grid(theta_c)[1],
-            start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
-        r_c = _residuals(data, fitter.prediction_)
-        sc = score_model(cand.effect_id, len(NOMINAL_REFIT) + len(cand.params), r_c, weights, fit_mask,
-                         block_id, heldout_blocks, n_eff, valid=valid)
-        ok, ev = accepted(sc, score_nom)
-        fits[cand.effect_id] = _Fit(cand, fitter, sc, load_mask)
-        cand_rows.append({"id": cand.effect_id, "status": "accepted" if ok else "rejected", **ev,
-                          "heldout_rms": sc.heldout_rms,
-                          "params": {p.name: round(p.value, 6) for p in fitter.params_
-                                     if p.name in {s.name for s in cand.params}}})
+        fit_law(cand.effect_id, cand, cand.params, cand.apply_neutral(nominal.theta_), load_mask=load_mask)
     # the same laws confined to either side of the speed that splits the refit's residual most unevenly
     gates = _gates_to_try(data, r_nom, weights, fit_tel)
     unit_top = {s.column: s.bounds(theta_base[s.column])[1] for s in NOMINAL_REFIT}
@@ -280,22 +289,10 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
             _progress(progress, f"fitting {cand.effect_id} {g.description}")
             # from the law's fit everywhere (the nominal parameters there already undo what the refit absorbed of
             # the effect), with every nominal parameter free as there; its start grid too, fewer solver steps
-            theta_c = f.fitter.theta_
-            tg = db.TickGate(tick_on, tuple(s.column for s in cand.params), nominal.theta_)
-            fitter = ModelFitter(list(NOMINAL_REFIT) + list(cand.gated_params(nominal.theta_, unit_top)),
-                                 weights=weights, max_nfev=GATED_NFEV).fit(
-                replay, theta_c, fit_mask=fit_mask, gate=tg, starts=cand.start_grid(theta_c)[1],
-                start_columns=cand.start_grid(theta_c)[0], bounds_ref=theta_base)
-            r_c = _residuals(data, fitter.prediction_)
-            vid = f"{cand.effect_id}@{g.key}"
-            sc = score_model(vid, len(NOMINAL_REFIT) + len(cand.params) + 1, r_c, weights, fit_mask, block_id,
-                             heldout_blocks, n_eff, valid=valid)
-            ok, ev = accepted(sc, score_nom)
-            fits[vid] = _Fit(cand, fitter, sc, None, g, tg)
-            cand_rows.append({"id": vid, "effect": cand.effect_id, "gate": g.description,
-                              "status": "accepted" if ok else "rejected", **ev, "heldout_rms": sc.heldout_rms,
-                              "params": {p.name: round(p.value, 6) for p in fitter.params_
-                                         if p.name in {s.name for s in cand.params}}})
+            fit_law(f"{cand.effect_id}@{g.key}", cand, cand.gated_params(nominal.theta_, unit_top),
+                    f.fitter.theta_, gate=g, max_nfev=GATED_NFEV,
+                    tick_gate=db.TickGate(tick_on, tuple(s.column for s in cand.params), nominal.theta_),
+                    row={"effect": cand.effect_id, "gate": g.description})
     timings["candidates_s"] = time.perf_counter() - t1
 
     # --- select
@@ -339,10 +336,10 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                     mask2 = fits[second].load_mask if fits[second].load_mask is not None else chosen_mask
                     theta_p = cand2.apply_neutral(chosen_fit.theta_)
                     _progress(progress, f"fitting {best} + {second}")
+                    cols2, grid2 = cand2.start_grid(theta_p)
                     pair = ModelFitter(_look_alikes(fits[best].cand) + _look_alikes(cand2) + list(fits[best].cand.params)
                                        + list(cand2.params), weights=weights).fit(replay, theta_p, fit_mask=fit_mask, load_mask=mask2,
-                                                            starts=cand2.start_grid(theta_p)[1],
-                                                            start_columns=cand2.start_grid(theta_p)[0],
+                                                            starts=grid2, start_columns=cols2,
                                                             bounds_ref=theta_base)
                     r_p = _residuals(data, pair.prediction_)
                     sp = score_model(f"{best}+{second}", len(pair.specs), r_p, weights, fit_mask, block_id,
@@ -359,10 +356,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     # effects' parameters widened by a jackknife over the fit samples
     if verdict == "missing_physics":
         _progress(progress, "refitting the chosen model with every parameter free")
-        chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in
-                                              (fits[eid].cand.gated_params(nominal.theta_, unit_top)
-                                               if fits[eid].gate
-                                               else fits[eid].cand.params)]
+        chosen_specs = list(NOMINAL_REFIT) + [p for eid in chosen for p in fits[eid].params]
         final = ModelFitter(chosen_specs, weights=weights).fit(replay, chosen_fit.theta_, fit_mask=fit_mask,
                                                                load_mask=chosen_mask, gate=chosen_gate,
                                                                bounds_ref=theta_base)
