@@ -183,6 +183,7 @@ def test_a_latency_only_at_high_speed_is_named_with_its_regime(tmp_path):
     found = res.effects[0]
     assert found.effect_id == "esc_latency"
     assert "m/s and above" in found.regime["acts"]
+    assert f"esc latency ({found.regime['acts']}) delay_s" in res.first_line
     assert found.heldout_rms_after["rope_speed_mps"] < 0.8 * found.heldout_rms_before["rope_speed_mps"]
     plain = next(c for c in res.candidates if c["id"] == "esc_latency")
     gated = next(c for c in res.candidates if c.get("effect") == "esc_latency" and c["status"] == "accepted")

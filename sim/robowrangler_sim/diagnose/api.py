@@ -281,7 +281,7 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         # effect (a dead band taken for Coulomb friction and inertia, a drag law for the resistance) is undone
         fit_law(cand.effect_id, cand, cand.params, cand.apply_neutral(nominal.theta_), load_mask=load_mask)
     # the same laws confined to either side of the speed that splits the refit's residual most unevenly
-    gates = _gates_to_try(data, r_nom, weights, fit_tel)
+    gates = _gates_to_try(data, r_nom, nominal.prediction_["rope_speed_mps"], weights, fit_tel)
     unit_top = {s.column: s.bounds(theta_base[s.column])[1] for s in NOMINAL_REFIT}
     for g, tick_on in gates:
         for f in [f for f in list(fits.values()) if f.cand.gateable and f.gate is None]:
@@ -432,14 +432,15 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
     return result
 
 
-def _gates_to_try(data: DriveData, r_nom: dict[str, np.ndarray], weights: dict[str, np.ndarray],
+def _gates_to_try(data: DriveData, r_nom: dict[str, np.ndarray], v_nom: np.ndarray, weights: dict[str, np.ndarray],
                   fit_tel: np.ndarray) -> list[tuple[RegimeGate, np.ndarray]]:
     """Both sides of the speed split (gates.uneven_split) that divides the refit's weighted speed residual most
-    unevenly on the fit samples, each with its mask on the replay's ticks."""
+    unevenly on the fit samples where the rope or the refit (v_nom: its speed) moves, each with its mask on the
+    replay's ticks."""
     v_tick = tick_speed(data)
     at = data.sample_ticks.clip(max=v_tick.size - 1)[fit_tel]
     w = np.broadcast_to(weights["rope_speed_mps"], r_nom["rope_speed_mps"].shape)[fit_tel]
-    sides = uneven_split(v_tick[at], (r_nom["rope_speed_mps"][fit_tel] * w) ** 2)
+    sides = uneven_split(v_tick[at], (r_nom["rope_speed_mps"][fit_tel] * w) ** 2, model_speed_mps=v_nom[fit_tel])
     return [] if sides is None else [(g, g.on(v_tick)) for g in sides]
 
 

@@ -79,13 +79,25 @@ def tick_speed(data) -> np.ndarray:
     return np.interp(t_tick, data.tel_time_s, data.tel_speed_mps)
 
 
-def uneven_split(speed_mps: np.ndarray, z2: np.ndarray) -> tuple[RegimeGate, RegimeGate] | None:
+REST_MPS = 0.3
+"""The rest band's top (regimes.SPEED_BANDS_MPS): where the recorded rope and the model both stay below it, the drive
+is off and no law of the library acts."""
+
+
+def uneven_split(speed_mps: np.ndarray, z2: np.ndarray, *, model_speed_mps: np.ndarray | None = None
+                 ) -> tuple[RegimeGate, RegimeGate] | None:
     """The two sides (at and above, below) of the split speed (SPLITS_MPS) that divides the mean squared weighted
     residual z2 most unevenly between them, either way, with at least MIN_SHARE of the samples on each side; None
     when no split leaves that many. Either way, because the refit moves what it cannot explain: an effect above
-    5 m/s that the refit's drag and friction half absorb leaves its residual below 5 m/s. Both sides are tried."""
+    5 m/s that the refit's drag and friction half absorb leaves its residual below 5 m/s. Both sides are tried.
+    The samples where the rope and the model (model_speed_mps, when given) both rest are left out of the
+    comparison: their residual is zero whatever acts elsewhere, and counted they make the lowest split look the
+    most uneven (a run that rests 2 s of 12 puts them all below 2 m/s)."""
     best, best_score = None, -1.0
     v = np.abs(speed_mps)
+    if model_speed_mps is not None:
+        moving = (v >= REST_MPS) | (np.abs(model_speed_mps) >= REST_MPS)
+        v, z2 = v[moving], z2[moving]
     for x in SPLITS_MPS:
         m = v >= x
         if not MIN_SHARE <= m.mean() <= 1.0 - MIN_SHARE:

@@ -49,7 +49,8 @@ def first_line(result) -> str:
     parts = []
     for e in result.effects:
         ps = [_fmt_param(name, p) for name, p in e.params.items()]
-        parts.append(f"{e.effect_id.replace('_', ' ')} " + ", ".join(ps))
+        acts = f" ({e.regime['acts']})" if e.regime.get("acts") else ""
+        parts.append(f"{e.effect_id.replace('_', ' ')}{acts} " + ", ".join(ps))
     e0 = result.effects[0]
     where = f"located in {len(e0.spans_s)} span(s)" if e0.spans_s else "spread over the recording"
     if "rope_speed_mps" not in e0.heldout_rms_before:  # a spindle effect: its own channels
