@@ -11,7 +11,8 @@ Theta columns (TH_*): the nominal chain's own parameters, then one group per loo
 neutral value leaves the nominal chain unchanged. Effect laws (all in the table's frame, on the target shape):
 
     speed:      S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)] + [S_lin(v sqrt(C_f/C_f0) c_w) - S_lin(v c_w)]
-                (S_lin: linear in speed between the table's speeds; g_v speed_shape_gain, C_f skin friction;
+                (S_lin: the table continued in the weight-to-drag ratio (v*/v)^2, linear in 1/v^2 between the
+                table's speeds, quadratic beyond them (_lin); g_v speed_shape_gain, C_f skin friction;
                 c_w = cos(delta)^0.5, the wind's change of effective gravity)
     wind:       relative air speed v - w t_x along the rope (t_x: x share of the flow direction; first order in w)
                 plus the normal drag tilt delta = atan(0.5 x 0.5 rho C_n d w |w| / (lambda g)): R(delta) S(phi - delta)
@@ -103,12 +104,39 @@ class LoopShapeModel:
         return self._at_phi(s, phi_deg)
 
     def _lin(self, v: np.ndarray, phi_deg: np.ndarray) -> np.ndarray:
-        if self.speeds.size == 1:
+        """The table continued in rope speed (S_lin): linear in x = 1 / v^2 between the two tabulated speeds around v,
+        outside them the quadratic in x through the three end speeds, at most one end gap of x beyond the table.
+
+        The steady loop's one speed parameter is the ratio of its weight to its axial drag, lambda g / f_t =
+        (v* / v)^2 (rope.py: f_t = 0.5 rho C_f pi d v^2), and the string-shooter loop is close to linear in it: on
+        effect-free steady truths (phi -0.1 to 0.3 rad) the table interpolated in 1 / v^2 is 0.7-2 mm RMS off at 4.3
+        to 6 m/s where interpolation in v is 7-17 mm off (bench/bench_diagnose_loop.py --only interp). Below the
+        table the trend bends (the loop sags faster towards takeoff): the end quadratic halves the linear
+        extrapolation's error (3.6 m/s: 6 against 13 mm), inside the table it is worse than the neighbours' line."""
+        n = self.speeds.size
+        v, phi_deg = np.broadcast_arrays(np.asarray(v, dtype=float), np.asarray(phi_deg, dtype=float))
+        if n == 1:
             return self._at_phi(np.zeros(v.shape, dtype=int), phi_deg)
-        j = np.clip(np.searchsorted(self.speeds, v, side="right") - 1, 0, self.speeds.size - 2)
-        f = np.clip((v - self.speeds[j]) / (self.speeds[j + 1] - self.speeds[j]), -0.5, 1.5)[..., None, None]
+        xs = 1.0 / self.speeds ** 2  # decreasing
+        x = np.clip(1.0 / np.maximum(np.abs(v), 1e-3) ** 2, xs[-1] - (xs[-2] - xs[-1]), xs[0] + (xs[0] - xs[1]))
+        j = np.clip(np.searchsorted(-xs, -x, side="right") - 1, 0, n - 2)
+        f = ((x - xs[j]) / (xs[j + 1] - xs[j]))[..., None, None]
         a, b = self._at_phi(j, phi_deg), self._at_phi(j + 1, phi_deg)
-        return a + f * (b - a)
+        out = a + f * (b - a)
+        if n >= 3:
+            for outside, nodes in ((x > xs[0], (0, 1, 2)), (x < xs[-1], (n - 3, n - 2, n - 1))):
+                if not np.any(outside):
+                    continue
+                xo, po = x[outside], phi_deg[outside]
+                quad = 0.0
+                for p in nodes:
+                    weight = np.ones_like(xo)
+                    for q in nodes:
+                        if q != p:
+                            weight = weight * (xo - xs[q]) / (xs[p] - xs[q])
+                    quad = quad + weight[:, None, None] * self._at_phi(np.full(xo.shape, p), po)
+                out[outside] = quad
+        return out
 
     def targets(self, theta: np.ndarray, *, phi_rad: np.ndarray, phidot_rad_s: np.ndarray, speed_mps: np.ndarray,
                 loop_length_m: np.ndarray) -> np.ndarray:
