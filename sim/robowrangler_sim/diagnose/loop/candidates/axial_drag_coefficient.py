@@ -2,10 +2,10 @@
 lifts the loop is 0.5 rho C_f pi d v^2 per metre against lambda g, so the shape depends on v^2 C_f: the loop at
 speed v looks like the table's at v sqrt(C_f / C_f0) (and the takeoff speed scales by sqrt(C_f0 / C_f)). S_lin is the
 table continued in that ratio (linear in 1 / v^2, shape_model.LoopShapeModel._lin), so a lower C_f at the table's
-lowest speed reaches below it. The string shooter keeps this similarity within 1-2 mm where C_f is lowered, and where
-it is raised at 4 m/s; raised by 20-30 % at 5 m/s its loop flutters and leaves it by 26-67 mm (the nip pushes the
-rope harder against the same momentum flux lambda v^2: bench_diagnose_loop.py --only interp), which the law does not
-represent."""
+lowest speed reaches below it. The string shooter keeps this similarity within 1-2 mm where C_f is lowered; raised by
+20 % it leaves it by 5 mm at 4 m/s and 26-67 mm at 5 m/s (raised by 20-30 %), where its loop flutters (5-7 mm frame
+to frame: the nip pushes the rope harder against the same momentum flux lambda v^2; bench_diagnose_loop.py --only
+interp), which the law does not represent."""
 
 from __future__ import annotations
 
