@@ -210,6 +210,28 @@ def test_sil_applies_a_gated_effect_only_in_its_regime(tmp_path):
         load_model(bad.save(tmp_path / "bad.json"))
 
 
+def test_the_escs_own_input_delay_reaches_the_sil(tmp_path):
+    """The refit's ESC input delay (no DriveParams field) is carried by the model file and applied by the SIL:
+    alone, and outside the speed range of a confined latency."""
+    from robowrangler_sim.sil import SilSession
+
+    def first_1200(model: DiagnosedModel) -> int:
+        sil = SilSession(model=load_model(model.save(tmp_path / "m.json")), speedup=None)
+        assert sil.actuator_filters, "no actuator filter: the delay was dropped"
+        return [sil.actuator_filters[0](u) for u in [1000] * 3 + [1200] * 10].index(1200)
+
+    assert first_1200(DiagnosedModel(DriveParams(), esc_input_delay_s=0.002)) == 3 + 2
+    confined = {"esc_latency": {"delay_s": 0.006, "gate_speed_min_mps": 5.0}}
+    assert first_1200(DiagnosedModel(DriveParams(), confined, esc_input_delay_s=0.002)) == 3 + 2  # at rest: outside
+    th = DiagnosedModel(DriveParams(), esc_input_delay_s=0.002).theta()
+    assert th[db.TH_LATENCY] == 0.002  # a diagnosis against this model replays it too
+    doc = DiagnosedModel(DriveParams()).to_json()
+    doc["esc_input_delay_s"] = -0.001
+    (tmp_path / "bad.json").write_text(json.dumps(doc))
+    with pytest.raises(ModelMismatchError, match="esc_input_delay_s"):
+        load_model(tmp_path / "bad.json")
+
+
 def test_sil_session_loads_the_model_file(recordings, tmp_path):
     from robowrangler_sim.sil import SilSession
 

@@ -4,12 +4,17 @@
      "drive_params": {DriveParams field: value, ...},           # refitted class estimates folded in
      "effects": {"esc_latency": {"delay_s": 0.0061}, ...},     # library laws, their parameters in SI
      "external_load_spans_s": [[t0, t1], ...],                 # where external_rope_load acts (recording time)
+     "esc_input_delay_s": 0.0012,                              # the ESC's own input delay the refit found
      "spindle_params": {SpindleParams field: value, ...},       # refitted spindle estimates + its diagnosed terms
      "source_recording": "run.mcap"}
 
 The spindle's effects (screw_backlash: backlash_mm; servo_deadband: deadband_raw, hysteresis_raw) are listed under
 "effects" and carried by "spindle_params" (screw_backlash_mm, servo_deadband_raw, servo_deadband_hysteresis_raw),
 which the spindle plant applies; a file without "spindle_params" is the nominal spindle.
+
+"esc_input_delay_s" (0-3 ms, optional, default 0) is the refit's ESC input delay, a unit property DriveParams has no
+field for; the SIL applies it on its actuator seam. An esc_latency effect acting everywhere carries the whole delay
+(the same term), one confined to a speed range acts inside it and this delay outside.
 
 ``load_model(path)`` reads it back (ModelMismatchError naming the field when it is malformed);
 ``DiagnosedModel.sil_drive_params()`` and ``install(session)`` put it into a SilSession
@@ -35,6 +40,7 @@ from robowrangler_sim.rope import RopeParams
 
 FORMAT = "robowrangler.drive_model"
 FORMAT_VERSION = 1
+MAX_INPUT_DELAY_S = 0.05
 EFFECT_COLUMNS = {
     "rope_drag_law": {"drag_exponent": db.TH_DRAG_EXP},
     "esc_latency": {"delay_s": db.TH_LATENCY},
@@ -88,6 +94,8 @@ class DiagnosedModel:
     external_load_spans_s: list[tuple[float, float]] = field(default_factory=list)
     source_recording: str = ""
     spindle_params: SpindleParams = field(default_factory=SpindleParams)
+    esc_input_delay_s: float = 0.0
+    """The ESC's input delay (the refit's unit property; an esc_latency effect everywhere replaces it)."""
 
     @classmethod
     def nominal(cls) -> DiagnosedModel:
@@ -105,6 +113,7 @@ class DiagnosedModel:
     def theta(self) -> np.ndarray:
         """The model's row of the batched plant (an effect confined to a regime is not in it: gated_effects)."""
         th = db.theta_from_params(self.drive_params)
+        th[db.TH_LATENCY] = self.esc_input_delay_s
         gated = self.gated_effects()
         for eid, values in self.effects.items():
             if eid in gated:
@@ -140,14 +149,18 @@ class DiagnosedModel:
                 eff[eid].update(gate.to_json())
                 for col in {**EFFECT_COLUMNS.get(eid, {}), **GATED_COLUMNS.get(eid, {})}.values():
                     base_theta[col] = off_row[col]
+        # the delay column is the ESC's own input delay unless a latency acting everywhere holds it
+        delay = 0.0 if "esc_latency" in effects and not (gates and "esc_latency" in gates) \
+            else float(base_theta[db.TH_LATENCY])
         return DiagnosedModel(params_from_theta(self.drive_params, base_theta), eff,
-                              [(float(a), float(b)) for a, b in load_spans_s], recording, self.spindle_params)
+                              [(float(a), float(b)) for a, b in load_spans_s], recording, self.spindle_params,
+                              delay)
 
     def to_json(self) -> dict:
         return {"format": FORMAT, "format_version": FORMAT_VERSION,
                 "drive_params": dataclasses.asdict(self.drive_params), "effects": self.effects,
                 "external_load_spans_s": [list(s) for s in self.external_load_spans_s],
-                "source_recording": self.source_recording,
+                "source_recording": self.source_recording, "esc_input_delay_s": self.esc_input_delay_s,
                 "spindle_params": dataclasses.asdict(self.spindle_params)}
 
     def save(self, path: str | Path) -> Path:
@@ -222,6 +235,10 @@ def load_model(path: str | Path) -> DiagnosedModel:
         except ValueError as err:
             raise ModelMismatchError(f"model file {path}: effect {eid}: {err}") from err
     spans = [tuple(map(float, s)) for s in doc.get("external_load_spans_s", [])]
+    delay = doc.get("esc_input_delay_s", 0.0)
+    if isinstance(delay, bool) or not isinstance(delay, (int, float)) or not 0.0 <= delay <= MAX_INPUT_DELAY_S:
+        raise ModelMismatchError(f"model file {path}: esc_input_delay_s: expected seconds in 0-{MAX_INPUT_DELAY_S}, "
+                                 f"got {delay!r}")
     sp = doc.get("spindle_params", {})
     sp_known = {f.name for f in dataclasses.fields(SpindleParams)}
     if not isinstance(sp, dict) or set(sp) - sp_known:
@@ -241,4 +258,4 @@ def load_model(path: str | Path) -> DiagnosedModel:
                     raise ModelMismatchError(f"model file {path}: effect {eid}.{name} = {effects[eid][name]!r} but "
                                              f"spindle_params.{fld} = {getattr(spindle, fld)!r}")
     return DiagnosedModel(params, {k: dict(v) for k, v in effects.items()}, spans, str(doc.get("source_recording", "")),
-                          spindle)
+                          spindle, float(delay))

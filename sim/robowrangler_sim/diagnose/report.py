@@ -15,10 +15,14 @@ REPORT_FORMAT = "robowrangler.diagnosis"
 REPORT_VERSION = 1
 
 
-def _fmt(value: float, unit: str) -> tuple[str, str]:
-    if unit == "s" and abs(value) < 1.0:
-        return f"{value * 1e3:.1f}", "ms"
-    return f"{value:.3g}", unit
+def _fmt_param(name: str, p: dict) -> str:
+    """'name value unit (lo-hi)', the value and its interval in one unit: ms for a duration in seconds whose value
+    and interval are all below 1 s, the parameter's own unit otherwise."""
+    lo, hi = p["ci95"]
+    unit, k, fmt = p["unit"], 1.0, ".3g"
+    if unit == "s" and max(abs(p["value"]), abs(lo), abs(hi)) < 1.0:
+        unit, k, fmt = "ms", 1e3, ".1f"
+    return f"{name} {p['value'] * k:{fmt}} {unit} ({lo * k:{fmt}}-{hi * k:{fmt}})"
 
 
 MISS_OVER_NOISE = 3.0
@@ -44,12 +48,7 @@ def first_line(result) -> str:
         return f"not identifiable from these channels: {d['id']}; would separate them: {d['separating_measurement']}"
     parts = []
     for e in result.effects:
-        ps = []
-        for name, p in e.params.items():
-            v, u = _fmt(p["value"], p["unit"])
-            lo, _ = _fmt(p["ci95"][0], p["unit"])
-            hi, _ = _fmt(p["ci95"][1], p["unit"])
-            ps.append(f"{name} {v} {u} ({lo}-{hi})")
+        ps = [_fmt_param(name, p) for name, p in e.params.items()]
         parts.append(f"{e.effect_id.replace('_', ' ')} " + ", ".join(ps))
     e0 = result.effects[0]
     where = f"located in {len(e0.spans_s)} span(s)" if e0.spans_s else "spread over the recording"

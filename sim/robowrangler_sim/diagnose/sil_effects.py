@@ -1,6 +1,7 @@
 """The library's effect laws put into a SilSession through its seams (the model file's effects, in the SIL).
 
-Actuator filter: esc_latency (the pulse of d seconds ago) and esc_deadband's hysteresis (stays at zero throttle
+Actuator filter: esc_latency (the pulse of d seconds ago; the model's esc_input_delay_s where no latency acts)
+and esc_deadband's hysteresis (stays at zero throttle
 until min + w + h once stopped). Tick hook, through the session's ``loads`` (the plant contract's inputs):
 rope_drag_law (the plant's own k v |v| drag switched off by rope_exposed_length_m = 0 and the power law applied
 as external_rope_load_n), low_speed_friction (Stribeck), external_rope_load (over its spans, plant time) and
@@ -31,14 +32,16 @@ def install_effects(session, model) -> None:
         g = gates.get(eid)
         return g is None or bool(g.on(state["v"]))
 
-    if "esc_latency" in eff and eff["esc_latency"].get("delay_s", 0.0) > 0.0:
-        n = max(1, round(eff["esc_latency"]["delay_s"] / tick_s))
-        line: deque[int] = deque([0] * n, maxlen=n)
+    n_in = round(model.esc_input_delay_s / tick_s)  # ticks of the ESC's own input delay
+    lat_s = eff.get("esc_latency", {}).get("delay_s", 0.0)
+    n_lat = max(1, round(lat_s / tick_s)) if lat_s > 0.0 else (0 if "esc_latency" in eff else n_in)
+    if max(n_in, n_lat) > 0:
+        n = max(n_in, n_lat)
+        line: deque[int] = deque([0] * (n + 1), maxlen=n + 1)
 
         def delay(pulse_us: int) -> int:
-            out = line[0]
-            line.append(pulse_us)
-            return out if is_on("esc_latency") else pulse_us
+            line.append(pulse_us)  # line[-1 - k]: the pulse of k ticks ago
+            return line[-1 - (n_lat if is_on("esc_latency") else n_in)]
         session.actuator_filters.append(delay)
     db_terms = eff.get("esc_deadband", {})
     if db_terms and (db_terms.get("hysteresis_us", 0.0) > 0.0 or gates.get("esc_deadband") is not None):
