@@ -24,7 +24,8 @@ crosses zero, is rounded over (B / T_e')^(1/3).
 The law: first order about the table's contour theta_0. R_0 of the table is fitted by least squares, the table's
 defect against the balance at B0 kept as a fixed load, and the linear response to B - B0 solved with the end
 tangents and the end point held (one dense (n + 2) x (n + 2) solve per contour, batched over contours). Not
-monotonic in B: a log ladder of starts.
+monotonic in B: a log ladder of starts. The same system gives the first-order response to an extra load per metre
+(load_displacement_m: the uniform_wind law, wind_load.py).
 """
 
 from __future__ import annotations
