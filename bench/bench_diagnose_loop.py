@@ -7,11 +7,16 @@ confounded with the shape table at a single speed) and effect-free ones, diagnos
     uv run --locked python bench/bench_diagnose_loop.py --only fig6a    # the paper's Fig. 6a, quantitative (PNG)
     uv run --locked python bench/bench_diagnose_loop.py --only speed    # a 60 s recording: diagnosis wall time
     uv run --locked python bench/bench_diagnose_loop.py --only chain    # the fast form vs MuJoCo's chain plant
+    uv run --locked python bench/bench_diagnose_loop.py --only interp   # the table in speed vs the truth; v^2 C_f
+    uv run --locked python bench/bench_diagnose_loop.py --seeds 1 2 3 --cases cf_table_confounded --candidates
 
 Prints per case: truth, verdict, named effect, parameter error, held-out contour error before -> after, the located
 part; then the table: named where identifiable, false alarms, median parameter error, held-out error ratio, and the
 baselines side by side (the chain's own parameters refitted, with and without its shape table; PySINDy's sparse
-regression on the contour residuals). --only chain: the judged fast form against MuJoCo's chain plant.
+regression on the contour residuals). --only chain: the judged fast form against MuJoCo's chain plant. --only
+interp: the laws' speed dependence (the table continued in 1 / v^2) and the interpolation in v it replaced, against
+effect-free steady truths between and below the table's speeds; and whether the truth obeys the v^2 C_f similarity
+the C_f law rests on. --cases restricts the proof to named cases, --candidates prints each candidate table.
 """
 
 from __future__ import annotations
@@ -143,11 +148,13 @@ def _table_refit_baseline(res) -> float:
     return float(np.sqrt(np.mean((resid[held] - corr[held]) ** 2)) * 1e3)
 
 
-def run_proof(seeds: list[int], out_dir: Path) -> None:
+def run_proof(seeds: list[int], out_dir: Path, *, cases: list[str] | None = None, candidates: bool = False) -> None:
     rows = []
     t_gen = t_diag = 0.0
     for seed in seeds:
         for name, truth, script, kw, ident, par in _cases(seed):
+            if cases and name not in cases:
+                continue
             path = out_dir / f"{name}_{seed}.mcap"
             t0 = time.perf_counter()
             case = generate_loop_recording(path, truth=truth, script=script, seed=seed, **kw)
@@ -184,6 +191,8 @@ def run_proof(seeds: list[int], out_dir: Path) -> None:
             print(f"{name:22s} seed {seed:4d}: {res.verdict:17s} named {str(named):46s} param err {pe:>6s}  held-out "
                   f"{before:6.1f} -> {after:6.1f} mm (table refit {table:6.1f}, PySINDy {sindy:6.1f})  part {res.located['part']}  "
                   f"noise {res.noise_mm:.1f} mm  {t2 - t1:.1f} s", flush=True)
+            if candidates:
+                _print_candidates(res, truth, par)
     eff = [r for r in rows if r["truth"] is not None]
     clean = [r for r in rows if r["truth"] is None and r["true_part"] is None]
     bumps = [r for r in rows if r["true_part"] is not None]
@@ -217,6 +226,75 @@ def run_proof(seeds: list[int], out_dir: Path) -> None:
           f"{np.nanmedian([r['sindy'] for r in eff]):.1f}, diagnose {np.nanmedian([r['after'] for r in eff]):.1f}")
     print(f"  located part right for one-branch effects: {sum(r['part'] == r['true_part'] for r in bumps)}/{len(bumps)}")
     print(f"  wall: string shooter {t_gen:.0f} s, diagnosis {t_diag:.0f} s for {len(rows)} recordings")
+
+
+def _print_candidates(res, truth, par) -> None:
+    """The engine's candidate table for one case: status, delta BIC and held-out likelihood ratio against the refitted
+    chain (a pair: against its first effect), held-out contour RMS, fitted parameters; and the truth."""
+    print(f"    truth: {truth.effect_id} {par[0] + ' = ' + format(par[1], '.5g') if par else ''}; not identifiable: "
+          f"{[n['candidates'] for n in res.not_identifiable if 'candidates' in n]}")
+    for r in res.candidates:
+        if r["status"] in ("base", "not_identifiable"):
+            continue
+        cos = f" cos {r['sensitivity_cosine']:+.2f}" if "sensitivity_cosine" in r else ""
+        print(f"    {r['id']:50s} {r['status']:8s} dBIC {r['delta_bic']:8.1f} LR {r['heldout_lr']:8.1f} held-out "
+              f"{r['heldout_rms_mm']:6.2f} mm{cos} {r.get('params', '')}")
+
+
+def run_interp(out_dir: Path) -> None:
+    """The laws' speed dependence against the truth: effect-free steady string-shooter holds (noise-free) at speeds
+    the table (4, 5, 8 m/s) does not hold, the table continued in 1 / v^2 (the laws' S_lin) and interpolated in v (the
+    law before), contour RMS (mm) of the mean contour; then the v^2 C_f similarity the C_f law rests on: the truth at
+    (v, C_f0 f) against the truth at (v sqrt f, C_f0), and each one's frame-to-frame flutter."""
+    from robowrangler.recorder import read_recording
+    from robowrangler_sim.diagnose.loop import shape_model as sm
+    from robowrangler_sim.diagnose.loop.data import load_loop_data
+    from robowrangler_sim.diagnose.loop.model_file import LoopModel
+    from robowrangler_sim.diagnose.loop.replay import LoopReplay
+
+    base = LoopModel.nominal()
+    print("table continued in speed vs the truth (mean contour RMS, mm): in 1/v^2 (the laws) | in v (before)")
+    for phi, v in ((0.1, 3.6), (0.1, 3.8), (0.1, 4.3), (0.1, 4.5), (0.1, 4.7), (0.1, 5.5), (0.1, 6.0), (0.1, 7.0),
+                   (-0.1, 4.5), (0.3, 4.5), (0.3, 5.5)):
+        case = generate_loop_recording(out_dir / f"interp_{phi}_{v}.mcap", truth=LoopTruth(None), seed=7, noise_m=0.0,
+                                       script=LoopScript(2.5, ((0.0, v),), ((0.0, phi),)))
+        data = load_loop_data(case.path, takeoff_speed_mps=base.takeoff_speed_mps(),
+                              loop_length_of_guide=base.loop_length_m)
+        shape = base.shape_model()
+        rp = LoopReplay(data, shape, np.array([base.loop_length_m(g) for g in data.guide_m]))
+        th = base.theta(shape)
+        th[sm.TH_SPEED_GAIN] = 1.0
+        obs = data.points_m.mean(0)
+        nrm = rp.normals.mean(0)
+        law = rp.contours(th[None])[0].mean(0)
+        sp = shape.speeds
+        j = int(np.clip(np.searchsorted(sp, v, side="right") - 1, 0, sp.size - 2))
+        f = float(np.clip((v - sp[j]) / (sp[j + 1] - sp[j]), -0.5, 1.5))
+        ph = np.full(1, np.rad2deg(phi))
+        in_v = ((1 - f) * shape._at_phi(np.full(1, j), ph) + f * shape._at_phi(np.full(1, j + 1), ph))[0]
+        in_v = in_v * rp.loop_length_m.mean()
+
+        def rms(c):
+            return float(np.sqrt(np.mean(np.sum((obs - c) * nrm, -1) ** 2)) * 1e3)
+
+        print(f"  phi {phi:+.2f} rad, {v:.1f} m/s: {rms(law):6.2f} | {rms(in_v):6.2f}", flush=True)
+
+    def truth_mean(tag, phi, v, f):
+        p = out_dir / f"sim_{tag}.mcap"
+        generate_loop_recording(p, truth=LoopTruth("axial_drag_coefficient" if f != 1 else None, cf_factor=f), seed=7,
+                                noise_m=0.0, script=LoopScript(3.0, ((0.0, v),), ((0.0, phi),)))
+        pts = np.array([r.data["points_m"] for r in read_recording(p).records["/loop/observation"]][-45:])
+        return pts.mean(0), float(np.sqrt(np.mean(np.sum((pts - pts.mean(0)) ** 2, -1))) * 1e3)
+
+    print("v^2 C_f similarity: truth at (v, f C_f0) vs truth at (v sqrt f, C_f0), mean contours RMS (mm); flutter of "
+          "each (RMS about its mean, mm)")
+    for phi, v, f in ((0.1, 4.0, 0.81), (0.1, 4.0, 1.2), (0.1, 5.0, 0.8), (0.1, 5.0, 1.2), (0.1, 5.0, 1.3),
+                      (0.3, 5.0, 1.2)):
+        a, ja = truth_mean("a", phi, v, f)
+        b, jb = truth_mean("b", phi, v * math.sqrt(f), 1.0)
+        d = float(np.sqrt(np.mean(np.sum((a - b) ** 2, -1))) * 1e3)
+        print(f"  phi {phi:+.2f} rad, {v:.1f} m/s, C_f x {f:.2f} vs {v * math.sqrt(f):.2f} m/s: {d:6.2f} mm; flutter "
+              f"{ja:.1f} / {jb:.1f} mm", flush=True)
 
 
 def _refit_theta(res) -> np.ndarray:
@@ -350,8 +428,11 @@ def run_speed(out_dir: Path) -> None:
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--heldout", action="store_true", help="run the held-out seeds (once, at the end)")
-    ap.add_argument("--only", choices=("proof", "fig6a", "speed", "chain"), default="proof")
+    ap.add_argument("--only", choices=("proof", "fig6a", "speed", "chain", "interp"), default="proof")
     ap.add_argument("--seeds", type=int, nargs="*", default=None)
+    ap.add_argument("--cases", nargs="*", default=None, help="proof case names to run (default: all), e.g. "
+                    "cf_table_confounded cf_under_noise cf_between_speeds none none_slow_tilt")
+    ap.add_argument("--candidates", action="store_true", help="print each case's candidate table and truth")
     ap.add_argument("--png", type=Path, default=Path("docs/figures/diagnose_loop_fig6a.png"))
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench_loop_") as tmp:
@@ -362,10 +443,12 @@ def main() -> int:
             run_speed(out)
         elif args.only == "chain":
             run_chain(out)
+        elif args.only == "interp":
+            run_interp(out)
         else:
             seeds = args.seeds or (HELDOUT_SEEDS if args.heldout else DEV_SEEDS)
             print(f"seeds {seeds} ({'held-out' if args.heldout else 'development'})")
-            run_proof(seeds, out)
+            run_proof(seeds, out, cases=args.cases, candidates=args.candidates)
     return 0
 
 

@@ -28,8 +28,10 @@ def recs(tmp_path_factory):
     out["none"] = generate_loop_recording(d / "none.mcap", truth=LoopTruth(None), script=STEADY, seed=11)
     out["speed"] = generate_loop_recording(d / "speed.mcap", truth=LoopTruth("loop_speed_dependence"),
                                            script=LoopScript(4.0, ((0.0, 4.5),), ((0.0, 0.1),)), seed=12)
+    # C_f raised at 4 m/s: the truth's loop flies as at 4.5 m/s (raised by 20-30 % at 5 m/s it flutters instead and
+    # leaves the v^2 C_f similarity the law rests on: bench_diagnose_loop.py --only interp)
     out["cf"] = generate_loop_recording(d / "cf.mcap", truth=LoopTruth("axial_drag_coefficient", cf_factor=1.25),
-                                        script=STEADY, seed=13)
+                                        script=LoopScript(4.0, ((0.0, 4.0),), ((0.0, 0.1),)), seed=13)
     out["wave"] = generate_loop_recording(
         d / "wave.mcap", truth=LoopTruth("transient_wave_dynamics"), seed=14,
         script=LoopScript(4.5, ((0.0, 5.0),), ((0.0, 0.0), (1.2, 0.0), (1.7, 0.35), (3.0, 0.35), (3.5, -0.1))))
@@ -86,6 +88,72 @@ def test_skin_friction_is_recovered_with_an_interval(recs, tmp_path):
     assert plant.outputs().lift == 1.0
 
 
+def test_the_table_is_continued_in_speed_as_the_truth_flies_between_and_below_its_speeds(tmp_path):
+    """The laws' speed dependence S_lin against the string shooter at speeds the table (4, 5, 8 m/s) does not hold:
+    the loop's one speed parameter is its weight over its axial drag, (v* / v)^2, and the truth is nearly linear in
+    it (interpolating in v instead was 8.6 mm off at 4.5 m/s and left a lower C_f at 4 m/s beyond the law's reach)."""
+    from robowrangler_sim.diagnose.loop import shape_model as sm
+    from robowrangler_sim.diagnose.loop.data import load_loop_data
+    from robowrangler_sim.diagnose.loop.replay import LoopReplay
+
+    base = LoopModel.nominal()
+    for v, f, limit_mm in ((4.5, 1.0, 3.0), (4.0, 0.86, 6.0)):  # between the table's speeds; C_f 0.86: as at 3.7 m/s
+        case = generate_loop_recording(tmp_path / f"steady_{v}_{f}.mcap", script=LoopScript(2.5, ((0.0, v),),
+                                                                                          ((0.0, 0.1),)),
+                                       truth=LoopTruth("axial_drag_coefficient", cf_factor=f), seed=7, noise_m=0.0)
+        data = load_loop_data(case.path, takeoff_speed_mps=base.takeoff_speed_mps(),
+                              loop_length_of_guide=base.loop_length_m)
+        shape = base.shape_model()
+        replay = LoopReplay(data, shape, np.array([base.loop_length_m(g) for g in data.guide_m]))
+        theta = base.theta(shape)
+        theta[sm.TH_SPEED_GAIN], theta[sm.TH_CF] = 1.0, f * CF0  # the laws at the truth's own values
+        off = np.sum((data.points_m - replay.contours(theta[None])[0]) * replay.normals, axis=-1)
+        assert np.sqrt(np.mean(off ** 2)) * 1e3 < limit_mm, (v, f)
+
+
+def test_the_wind_law_follows_the_truth_and_differs_from_a_skin_friction_change(tmp_path):
+    """A tail wind of 0.4 m/s at 5 m/s: the law (the wind's skin friction and normal drag on the running rope, the
+    string's response about the table's shape) at the truth's wind is within 3 mm of the string shooter's loop (the
+    law before, a tilt of gravity plus a speed shift, was 20 mm off, further than the nominal chain's 13 mm), and no
+    C_f change mimics it: the wind loads the two branches unevenly."""
+    from robowrangler_sim.diagnose.loop import shape_model as sm
+    from robowrangler_sim.diagnose.loop.data import load_loop_data
+    from robowrangler_sim.diagnose.loop.replay import LoopReplay
+
+    base = LoopModel.nominal()
+    case = generate_loop_recording(tmp_path / "wind04.mcap", truth=LoopTruth("uniform_wind", wind_mps=0.4), seed=7,
+                                   script=LoopScript(2.5, ((0.0, 5.0),), ((0.0, 0.1),)), noise_m=0.0)
+    data = load_loop_data(case.path, takeoff_speed_mps=base.takeoff_speed_mps(), loop_length_of_guide=base.loop_length_m)
+    shape = base.shape_model()
+    replay = LoopReplay(data, shape, np.array([base.loop_length_m(g) for g in data.guide_m]))
+    theta0 = base.theta(shape)
+
+    def rms_mm(column, values):
+        rows = np.repeat(theta0[None], len(values), axis=0)
+        rows[:, column] = values
+        off = np.sum((data.points_m[None] - replay.contours(rows)) * replay.normals[None], axis=-1)
+        return np.sqrt(np.mean(off ** 2, axis=(1, 2))) * 1e3
+
+    nominal = rms_mm(sm.TH_WIND_MPS, [0.0])[0]
+    assert rms_mm(sm.TH_WIND_MPS, [0.4])[0] < min(3.0, 0.3 * nominal)
+    assert rms_mm(sm.TH_CF, CF0 * np.linspace(0.8, 1.1, 13)).min() > 2.0 * rms_mm(sm.TH_WIND_MPS, [0.4])[0]
+
+
+def test_a_lower_skin_friction_at_the_lowest_table_speed_is_named_with_its_value(tmp_path):
+    """C_f 18 % low at the table's 4 m/s: the loop flies as at 3.6 m/s, below the table; the law reaches it (the
+    table continued in (v* / v)^2 beyond its end) and the fit finds C_f, not the edge of the law's range (the law
+    before stopped at 0.6 C_f0 here, 27 % off). Below the table the continuation is still about 6 mm off at 3.6 m/s,
+    which a small wind beside C_f may take (named as the pair's second effect)."""
+    case = generate_loop_recording(tmp_path / "cf_low.mcap", truth=LoopTruth("axial_drag_coefficient", cf_factor=0.82),
+                                   script=LoopScript(4.0, ((0.0, 4.0),), ((0.0, 0.1),)), seed=18)
+    res = diagnose_loop(case.path)
+    assert res.verdict == "missing_physics", res.first_line
+    assert res.effects[0].effect_id == "axial_drag_coefficient", res.first_line
+    cf = res.effects[0].params["skin_friction_coeff"]["value"]
+    assert abs(cf - 0.82 * CF0) / (0.82 * CF0) < 0.05, cf
+    assert res.effects[0].heldout_rms_mm_after < 0.2 * res.effects[0].heldout_rms_mm_before
+
+
 def test_transient_wave_dynamics_is_named_on_fast_module_turns(recs):
     res = diagnose_loop(recs["wave"].path)
     assert res.verdict == "missing_physics", res.first_line
@@ -127,16 +195,18 @@ def test_a_stiff_rope_is_named_tip_bending_stiffness_with_its_stiffness(tmp_path
 
 
 def test_two_effects_are_named_together_when_one_does_not_suffice(tmp_path):
-    """C_f raised by 20 %, flown at the table's 4 and 5 m/s and between them (where the truth's continuous speed
-    dependence shows too): neither law alone explains the contours; the two together do."""
+    """C_f lowered by 20 %, flown at the table's 4 and 5 m/s and between them (where the truth's continuous speed
+    dependence shows too): neither law alone explains the contours; the two together do. (Lowered: raised by 20 %,
+    the truth's loop flutters at 5 m/s and leaves the v^2 C_f similarity the law rests on, bench_diagnose_loop.py
+    --only interp.)"""
     script = LoopScript(8.0, ((0.0, 4.0), (3.0, 4.0), (3.3, 4.5), (5.5, 4.5), (5.8, 5.0)), ((0.0, 0.05),))
-    case = generate_loop_recording(tmp_path / "pair.mcap", truth=LoopTruth("axial_drag_coefficient", cf_factor=1.2),
+    case = generate_loop_recording(tmp_path / "pair.mcap", truth=LoopTruth("axial_drag_coefficient", cf_factor=0.8),
                                    script=script, seed=17)
     res = diagnose_loop(case.path)
     assert res.verdict == "missing_physics", res.first_line
     assert {e.effect_id for e in res.effects} == {"axial_drag_coefficient", "loop_speed_dependence"}, res.first_line
     cf = next(e for e in res.effects if e.effect_id == "axial_drag_coefficient").params["skin_friction_coeff"]
-    assert abs(cf["value"] - 1.2 * CF0) / (1.2 * CF0) < 0.15
+    assert abs(cf["value"] - 0.8 * CF0) / (0.8 * CF0) < 0.15
     assert " together with " in res.first_line
     assert set(res.model.effects) == {"axial_drag_coefficient", "loop_speed_dependence"}
     pair = next(c for c in res.candidates if "+" in c["id"] and c["status"] == "accepted")

@@ -24,7 +24,8 @@ crosses zero, is rounded over (B / T_e')^(1/3).
 The law: first order about the table's contour theta_0. R_0 of the table is fitted by least squares, the table's
 defect against the balance at B0 kept as a fixed load, and the linear response to B - B0 solved with the end
 tangents and the end point held (one dense (n + 2) x (n + 2) solve per contour, batched over contours). Not
-monotonic in B: a log ladder of starts.
+monotonic in B: a log ladder of starts. The same system gives the first-order response to an extra load per metre
+(load_displacement_m: the uniform_wind law, wind_load.py).
 """
 
 from __future__ import annotations
@@ -136,10 +137,11 @@ def bending_displacement_m(contour_m: np.ndarray, *, speed_mps, bending_stiffnes
     return out[0] if np.ndim(contour_m) == 2 else out
 
 
-def _solve(c: np.ndarray, v: np.ndarray, b0: float, b1: float, rope: RopeParams, n: int) -> np.ndarray:
-    """The linear response (G, K, 2) to B - B0:
-        B delta'' + eta v delta''' - T_e delta - sin(theta) dF_x + cos(theta) dF_z = -(dB theta0'' + d eta v theta0''')
-    with dF = dR + f_t dp(s), dp(s) = int_0^s (-sin theta, cos theta) delta; delta(0) = delta(L) = 0, dp(L) = 0."""
+def _system(c: np.ndarray, v: np.ndarray, b1: float, rope: RopeParams, n: int):
+    """The linear system (G, n + 2, n + 2) of the contours' first-order response at stiffness b1, unknowns the node
+    angles delta and dR:  B delta'' + eta v delta''' - T_e delta - sin(theta) dF_x + cos(theta) dF_z = rhs with
+    dF = dR + f_t dp(s), dp(s) = int_0^s (-sin theta, cos theta) delta; delta(0) = delta(L) = 0, dp(L) = 0.
+    Returns (matrix, theta (G, n), h (G,), 1 / h^2, eta v / h^3)."""
     cum, d2, d3 = _operators(n)
     th, h, te, f_t, _ = _string_balance(c, v, rope, n)
     g = c.shape[0]
@@ -165,13 +167,51 @@ def _solve(c: np.ndarray, v: np.ndarray, b0: float, b1: float, rope: RopeParams,
     a[:, n, :n] = h[:, None] * cum[-1][None] * -sn
     a[:, n + 1, :n] = h[:, None] * cum[-1][None] * cs
     a[:, n:, n:] = 0.0
-    rhs = np.zeros((g, n + 2))
-    rhs[:, 1:n - 1] = -(b1 - b0) * (c2[:, None] * (th @ d2.T) + c3[:, None] * (th @ d3.T))[:, 1:n - 1]
+    return a, th, h, c2, c3
+
+
+def _displace(a: np.ndarray, rhs: np.ndarray, th: np.ndarray, h: np.ndarray, k: int) -> np.ndarray:
+    """Solve for delta and integrate it to point displacements (G, k, 2) at k points equally spaced in arc length."""
+    n = th.shape[1]
+    cum = _operators(n)[0]
     try:
         delta = np.linalg.solve(a, rhs[..., None])[..., 0][:, :n]
     except np.linalg.LinAlgError:
-        delta = np.stack([np.linalg.lstsq(a[q], rhs[q], rcond=None)[0][:n] for q in range(g)])
+        delta = np.stack([np.linalg.lstsq(a[q], rhs[q], rcond=None)[0][:n] for q in range(a.shape[0])])
+    sn, cs = np.sin(th), np.cos(th)
     moved = np.stack([h[:, None] * ((-sn * delta) @ cum.T), h[:, None] * ((cs * delta) @ cum.T)], axis=-1)  # (G, n, 2)
-    frac_n, frac_k = np.linspace(0.0, 1.0, n), np.linspace(0.0, 1.0, c.shape[1])
+    frac_n, frac_k = np.linspace(0.0, 1.0, n), np.linspace(0.0, 1.0, k)
     return np.stack([_interp_fraction(moved[..., 0], frac_n, frac_k), _interp_fraction(moved[..., 1], frac_n, frac_k)],
                     axis=-1)
+
+
+def _solve(c: np.ndarray, v: np.ndarray, b0: float, b1: float, rope: RopeParams, n: int) -> np.ndarray:
+    """The linear response (G, K, 2) to B - B0: _system at B with rhs -(dB theta0'' + d eta v theta0''')."""
+    _, d2, d3 = _operators(n)
+    a, th, h, c2, c3 = _system(c, v, b1, rope, n)
+    rhs = np.zeros((c.shape[0], n + 2))
+    rhs[:, 1:n - 1] = -(b1 - b0) * (c2[:, None] * (th @ d2.T) + c3[:, None] * (th @ d3.T))[:, 1:n - 1]
+    return _displace(a, rhs, th, h, c.shape[1])
+
+
+def load_displacement_m(contours_m: np.ndarray, *, speed_mps, load, rope: RopeParams,
+                        n_nodes: int = N_NODES) -> np.ndarray:
+    """Displacement, metres, of contours (G, K, 2) (metres, table frame, exit first, equally spaced in arc length)
+    flown at speed_mps ((G,) or scalar) under an extra external load per metre, first order about each contour with
+    the table rope's own B0. load(theta, speed) -> (G, n, 2) newtons per metre at the n solve nodes, given their
+    tangent angles theta (G, n) and the contours' speeds (G,). The internal force gains G(s) = -int_0^s delta f, so
+    the balance's right side is sin(theta) G_x - cos(theta) G_z; the end tangents and the end point are held."""
+    c, v = _check(contours_m, speed_mps)
+    n = int(n_nodes)
+    cum = _operators(n)[0]
+    out = np.zeros_like(c)
+    for a0 in range(0, c.shape[0], BATCH):
+        cb, vb = c[a0:a0 + BATCH], v[a0:a0 + BATCH]
+        a, th, h, _, _ = _system(cb, vb, rope.bending_stiffness_n_m2, rope, n)
+        df = np.asarray(load(th, vb))
+        g_x = -h[:, None] * (df[..., 0] @ cum.T)
+        g_z = -h[:, None] * (df[..., 1] @ cum.T)
+        rhs = np.zeros((cb.shape[0], n + 2))
+        rhs[:, 1:n - 1] = (np.sin(th) * g_x - np.cos(th) * g_z)[:, 1:n - 1]
+        out[a0:a0 + BATCH] = _displace(a, rhs, th, h, c.shape[1])
+    return out

@@ -10,11 +10,12 @@ bench/bench_diagnose_loop.py and tests/diagnose/test_diagnose_loop.py compare it
 Theta columns (TH_*): the nominal chain's own parameters, then one group per loop effect; an effect at its
 neutral value leaves the nominal chain unchanged. Effect laws (all in the table's frame, on the target shape):
 
-    speed:      S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)] + [S_lin(v sqrt(C_f/C_f0) c_w) - S_lin(v c_w)]
-                (S_lin: linear in speed between the table's speeds; g_v speed_shape_gain, C_f skin friction;
-                c_w = cos(delta)^0.5, the wind's change of effective gravity)
-    wind:       relative air speed v - w t_x along the rope (t_x: x share of the flow direction; first order in w)
-                plus the normal drag tilt delta = atan(0.5 x 0.5 rho C_n d w |w| / (lambda g)): R(delta) S(phi - delta)
+    speed:      S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)] + [S_lin(v sqrt(C_f/C_f0)) - S_lin(v)]
+                (S_lin: the table continued in the weight-to-drag ratio (v*/v)^2, linear in 1/v^2 between the
+                table's speeds, quadratic beyond them (_lin); g_v speed_shape_gain, C_f skin friction)
+    wind:       the string's response to a uniform wind's extra load on the running rope about that shape: the
+                skin friction at the relative axial air speed v - w t_x (less on the outgoing branch in a tail wind,
+                more on the returning one) and the normal drag of u_n = -w sin(theta) (wind_load.py)
     rotation:   phi_eff = phi - tau_n dphi/dt - k_g v dphi/dt   (normal drag lag; Coriolis on the running rope)
     bending:    the running rope's Euler-Bernoulli balance B theta'' = t x F about the table's (string) shape, at
                 the rope's stiffness B instead of the table rope's B0 (moving_elastica.py)
@@ -31,7 +32,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from robowrangler_sim.diagnose.loop.moving_elastica import bending_displacement_m
-from robowrangler_sim.rope import GRAVITY_MPS2, STANDARD_AIR_DENSITY_KG_PER_M3, RopeParams
+from robowrangler_sim.diagnose.loop.wind_load import wind_displacement_m
+from robowrangler_sim.rope import RopeParams
 from robowrangler_sim.shape_table import ShapeTable, resample_by_arc_length
 
 TH_TAU_S = 0
@@ -50,9 +52,6 @@ BEND_SPEED_STEP_MPS = 0.1
 BEND_LENGTH_STEP_M = 0.01
 """The bending law's solve grid (interpolated in phi and speed, nearest in loop length)."""
 BEND_CACHE_SIZE = 50000
-WIND_NORMAL_SHARE = 0.5
-WIND_AXIAL_SHARE = 1.0
-"""Mean of sin^2 of the angle between a uniform wind and the rope round a loop: the share of w|w| that is normal."""
 
 
 class LoopShapeModel:
@@ -103,12 +102,39 @@ class LoopShapeModel:
         return self._at_phi(s, phi_deg)
 
     def _lin(self, v: np.ndarray, phi_deg: np.ndarray) -> np.ndarray:
-        if self.speeds.size == 1:
+        """The table continued in rope speed (S_lin): linear in x = 1 / v^2 between the two tabulated speeds around v,
+        outside them the quadratic in x through the three end speeds, at most one end gap of x beyond the table.
+
+        The steady loop's one speed parameter is the ratio of its weight to its axial drag, lambda g / f_t =
+        (v* / v)^2 (rope.py: f_t = 0.5 rho C_f pi d v^2), and the string-shooter loop is close to linear in it: on
+        effect-free steady truths (phi -0.1 to 0.3 rad) the table interpolated in 1 / v^2 is 0.7-2 mm RMS off at 4.3
+        to 6 m/s where interpolation in v is 7-17 mm off (bench/bench_diagnose_loop.py --only interp). Below the
+        table the trend bends (the loop sags faster towards takeoff): the end quadratic halves the linear
+        extrapolation's error (3.6 m/s: 6 against 13 mm), inside the table it is worse than the neighbours' line."""
+        n = self.speeds.size
+        v, phi_deg = np.broadcast_arrays(np.asarray(v, dtype=float), np.asarray(phi_deg, dtype=float))
+        if n == 1:
             return self._at_phi(np.zeros(v.shape, dtype=int), phi_deg)
-        j = np.clip(np.searchsorted(self.speeds, v, side="right") - 1, 0, self.speeds.size - 2)
-        f = np.clip((v - self.speeds[j]) / (self.speeds[j + 1] - self.speeds[j]), -0.5, 1.5)[..., None, None]
+        xs = 1.0 / self.speeds ** 2  # decreasing
+        x = np.clip(1.0 / np.maximum(np.abs(v), 1e-3) ** 2, xs[-1] - (xs[-2] - xs[-1]), xs[0] + (xs[0] - xs[1]))
+        j = np.clip(np.searchsorted(-xs, -x, side="right") - 1, 0, n - 2)
+        f = ((x - xs[j]) / (xs[j + 1] - xs[j]))[..., None, None]
         a, b = self._at_phi(j, phi_deg), self._at_phi(j + 1, phi_deg)
-        return a + f * (b - a)
+        out = a + f * (b - a)
+        if n >= 3:
+            for outside, nodes in ((x > xs[0], (0, 1, 2)), (x < xs[-1], (n - 3, n - 2, n - 1))):
+                if not np.any(outside):
+                    continue
+                xo, po = x[outside], phi_deg[outside]
+                quad = 0.0
+                for p in nodes:
+                    weight = np.ones_like(xo)
+                    for q in nodes:
+                        if q != p:
+                            weight = weight * (xo - xs[q]) / (xs[p] - xs[q])
+                    quad = quad + weight[:, None, None] * self._at_phi(np.full(xo.shape, p), po)
+                out[outside] = quad
+        return out
 
     def targets(self, theta: np.ndarray, *, phi_rad: np.ndarray, phidot_rad_s: np.ndarray, speed_mps: np.ndarray,
                 loop_length_m: np.ndarray) -> np.ndarray:
@@ -116,58 +142,62 @@ class LoopShapeModel:
         theta = np.atleast_2d(theta)
         B = theta.shape[0]
         col = lambda c: theta[:, c][:, None]  # noqa: E731
-        rope = self.rope
         v = np.broadcast_to(speed_mps[None, :], (B, speed_mps.size))
-        w = col(TH_WIND_MPS)
-        f_w = WIND_NORMAL_SHARE * 0.5 * STANDARD_AIR_DENSITY_KG_PER_M3 * rope.normal_drag_coeff * rope.diameter_m * w * np.abs(w)
-        delta = np.arctan2(f_w, rope.linear_density_kg_per_m * GRAVITY_MPS2)  # (B, 1)
         phi_eff = (phi_rad[None, :] - col(TH_ROT_LAG_S) * phidot_rad_s[None, :]
-                   - col(TH_GYRO_S2_PER_M) * v * phidot_rad_s[None, :] - delta)
+                   - col(TH_GYRO_S2_PER_M) * v * phidot_rad_s[None, :])
         phi_deg = np.rad2deg(phi_eff)
         shape = self._steady_unit(theta, phi_deg, v)
         b0 = self.rope.bending_stiffness_n_m2
         length_m = np.broadcast_to(loop_length_m[None, :] * col(TH_LEN_SCALE), phi_deg.shape)
         for b in np.flatnonzero(np.abs(theta[:, TH_BEND_N_M2] - b0) > 1e-9 * b0):
             shape[b] += self._bend_unit(theta[b], phi_deg[b], v[b], length_m[b])
+        for b in np.flatnonzero(theta[:, TH_WIND_MPS] != 0.0):
+            shape[b] += self._wind_unit(theta[b], phi_deg[b], v[b], length_m[b])
         scale = (loop_length_m[None, :] * col(TH_LEN_SCALE))[..., None, None]
         return shape * scale
 
     def _steady_unit(self, theta: np.ndarray, phi_deg: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Unit-length steady contours (B, M, K, 2) for rows theta (B, N_THETA) at effective inclinations phi_deg and
-        rope speeds v (B, M): the table with the speed, C_f and wind laws (not the bending)."""
+        rope speeds v (B, M): the table with the speed and C_f laws (not the bending, not the wind)."""
         col = lambda c: theta[:, c][:, None]  # noqa: E731
-        rope = self.rope
-        w = col(TH_WIND_MPS)
-        f_w = WIND_NORMAL_SHARE * 0.5 * STANDARD_AIR_DENSITY_KG_PER_M3 * rope.normal_drag_coeff * rope.diameter_m * w * np.abs(w)
-        delta = np.arctan2(f_w, rope.linear_density_kg_per_m * GRAVITY_MPS2)  # (B, 1)
-        c_w = np.sqrt(np.cos(delta))
         snap = self._snap(v, phi_deg)
         lin_v = self._lin(v, phi_deg)
         shape = snap + col(TH_SPEED_GAIN)[..., None, None] * (lin_v - snap)
-        ratio = np.sqrt(col(TH_CF) / rope.skin_friction_coeff)
-        moved = (np.abs(ratio - 1.0) > 1e-12) | (np.abs(c_w - 1.0) > 1e-12)
-        v_w = v * c_w
-        if np.any(moved):
-            shape = shape + self._lin(v_w * ratio, phi_deg) - lin_v
-        if np.any(w != 0.0):
-            # the lift comes from the outgoing (upper) branch's skin friction at the relative air speed v - w: the loop
-            # flies as at that speed
-            shape = shape + self._lin(v_w * ratio - w * WIND_AXIAL_SHARE, phi_deg) - self._lin(v_w * ratio, phi_deg)
-        if np.any(delta != 0.0):
-            cd, sd = np.cos(delta)[..., None], np.sin(delta)[..., None]  # (B, 1, 1)
-            x, z = shape[..., 0], shape[..., 1]
-            shape = np.stack([cd * x - sd * z, sd * x + cd * z], axis=-1)
+        ratio = np.sqrt(col(TH_CF) / self.rope.skin_friction_coeff)
+        if np.any(np.abs(ratio - 1.0) > 1e-12):
+            shape = shape + self._lin(v * ratio, phi_deg) - lin_v
         return shape
 
     def _bend_unit(self, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray, length_m: np.ndarray) -> np.ndarray:
         """The running rope's bending (diagnose/loop/moving_elastica.py) for one row at its stiffness B (TH_BEND_N_M2):
-        the displacement (F, K, 2) of the unit contours, solved on a grid of BEND_PHI_STEP_DEG x BEND_SPEED_STEP_MPS
-        (loop length to BEND_LENGTH_STEP_M) and interpolated bilinearly in phi and speed; grid solves are kept across
-        calls (the fit re-evaluates the same rows) and batched, on one BLAS thread (threaded BLAS on a loaded
-        machine is 50x slower for these small systems)."""
+        the displacement (F, K, 2) of the unit contours (_grid_response)."""
         bend = float(theta_row[TH_BEND_N_M2])
         rope = dataclasses.replace(self.rope, skin_friction_coeff=float(theta_row[TH_CF]))
-        sig = (bend, float(theta_row[TH_CF]), float(theta_row[TH_SPEED_GAIN]), float(theta_row[TH_WIND_MPS]))
+
+        def solve(contours_m, speeds):
+            return bending_displacement_m(contours_m, speed_mps=speeds, bending_stiffness_n_m2=bend, rope=rope)
+
+        return self._grid_response(("bend", bend), theta_row, phi_deg, v, length_m, solve)
+
+    def _wind_unit(self, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray, length_m: np.ndarray) -> np.ndarray:
+        """A uniform wind's load on the running rope (diagnose/loop/wind_load.py) for one row at its wind TH_WIND_MPS:
+        the displacement (F, K, 2) of the unit contours (_grid_response)."""
+        wind = float(theta_row[TH_WIND_MPS])
+        rope = dataclasses.replace(self.rope, skin_friction_coeff=float(theta_row[TH_CF]))
+
+        def solve(contours_m, speeds):
+            return wind_displacement_m(contours_m, speed_mps=speeds, wind_mps=wind, rope=rope)
+
+        return self._grid_response(("wind", wind), theta_row, phi_deg, v, length_m, solve)
+
+    def _grid_response(self, law: tuple, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray,
+                       length_m: np.ndarray, solve) -> np.ndarray:
+        """A law's displacement (F, K, 2) of the unit steady contours (the table with the speed and C_f laws), solved
+        on a grid of BEND_PHI_STEP_DEG x BEND_SPEED_STEP_MPS (loop length to BEND_LENGTH_STEP_M) and interpolated
+        bilinearly in phi and speed; grid solves are kept across calls (the fit re-evaluates the same rows) and
+        batched, on one BLAS thread (threaded BLAS on a loaded machine is 50x slower for these small systems).
+        solve(contours_m (G, K, 2), speeds (G,)) -> displacement (G, K, 2), metres."""
+        sig = (*law, float(theta_row[TH_CF]), float(theta_row[TH_SPEED_GAIN]))
         pn, vn = phi_deg / BEND_PHI_STEP_DEG, v / BEND_SPEED_STEP_MPS
         p0, q0 = np.floor(pn).astype(np.int64), np.floor(vn).astype(np.int64)
         wp, wq = (pn - p0)[:, None, None], (vn - q0)[:, None, None]
@@ -182,8 +212,7 @@ class LoopShapeModel:
             lengths = np.maximum(km[:, 2] * BEND_LENGTH_STEP_M, BEND_LENGTH_STEP_M)
             unit = self._steady_unit(theta_row[None, :], phis[None, :], speeds[None, :])[0]
             with threadpool_limits(limits=1, user_api="blas"):
-                disp = bending_displacement_m(unit * lengths[:, None, None], speed_mps=speeds,
-                                              bending_stiffness_n_m2=bend, rope=rope) / lengths[:, None, None]
+                disp = solve(unit * lengths[:, None, None], speeds) / lengths[:, None, None]
             if len(self._bend_cache) + len(missing) > BEND_CACHE_SIZE:
                 self._bend_cache.clear()
             for j, k in enumerate(missing):

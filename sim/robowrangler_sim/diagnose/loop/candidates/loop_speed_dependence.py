@@ -1,6 +1,6 @@
 """loop_speed_dependence: the loop's shape changes continuously with rope speed; the chain snaps to the tabulated
-speed at or below the present one. Law: S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)] (S_lin linear in speed
-between the table's speeds; g_v = 1: linear interpolation)."""
+speed at or below the present one. Law: S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)] (S_lin: the table continued in
+the loop's weight-to-drag ratio (v* / v)^2, linear in 1 / v^2 between the table's speeds; g_v = 1: that continuation)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from robowrangler_sim.diagnose.parameters import ParamSpec
 
 class LoopSpeedDependence(LoopCandidate):
     effect_id = "loop_speed_dependence"
-    law = "S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)]: the shape between the table's speeds (g_v = 1: linear)"
+    law = "S(v) = S_snap(v) + g_v [S_lin(v) - S_snap(v)]: the shape between the table's speeds (g_v = 1: linear in 1/v^2)"
     regime = "rope speeds between the shape table's speeds"
     params = (ParamSpec("speed_shape_gain", sm.TH_SPEED_GAIN, "1", 0.0, 2.0, 1.0),)
     neutral = {sm.TH_SPEED_GAIN: 0.0}

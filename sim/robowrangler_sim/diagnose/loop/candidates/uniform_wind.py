@@ -1,6 +1,9 @@
-"""uniform_wind: a uniform horizontal wind w along the launch direction. Its normal drag 0.5 rho C_n d w |w| per
-metre adds to the weight lambda g: the loop hangs as under a gravity tilted by delta = atan(0.5 rho C_n d w|w| /
-(lambda g)) and stronger by 1/cos(delta). Law: shape = R(delta) S(phi - delta, v sqrt(cos delta))."""
+"""uniform_wind: a uniform horizontal wind w along the launch direction. The air's velocity relative to the running
+rope is w e_x - v t: its axial part changes the skin friction along the rope (a tail wind w > 0 lightens the outgoing
+branch's drag and loads the returning one's, a head wind the reverse) and its normal part -w sin(theta) adds a
+pressure drag across the rope, largest at the tip. Law: the string's response to that extra load about the table's
+shape (diagnose/loop/wind_load.py, the linear system of moving_elastica.py applied in steps). At one speed and phi a
+C_f change lifts both branches alike; the wind's is uneven, which is what tells them apart."""
 
 from __future__ import annotations
 
@@ -13,8 +16,9 @@ from robowrangler_sim.diagnose.parameters import ParamSpec
 
 class UniformWind(LoopCandidate):
     effect_id = "uniform_wind"
-    law = "shape = R(delta) S(phi - delta), tan delta = 0.5 rho C_n d w|w| / (lambda g): gravity tilted by the wind"
-    regime = "every phi and speed (a rotation of the whole loop)"
+    law = ("the string's response to the load 0.5 rho C_f pi d (|u_t| u_t + v^2) t + 0.5 rho C_n d |u_n| u_n n, "
+           "u_t = w t_x - v, u_n = -w sin(theta): the wind's skin friction and normal drag on the running rope")
+    regime = "every phi and speed (uneven on the two branches)"
     params = (ParamSpec("wind_speed_mps", sm.TH_WIND_MPS, "m/s", -6.0, 6.0, 1.0),)
     separating_measurement = "the same phi at two headings of the module (wind turns with the world, the table with the module)"
     confused_with = ("phi offset of the inclination sensor",)
