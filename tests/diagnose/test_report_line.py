@@ -26,3 +26,38 @@ def test_a_time_of_the_recording_starting_at_zero_stays_in_seconds():
 def test_other_units_are_kept():
     line = _fmt_param("deadband_us", {"value": 44.8, "unit": "us", "ci95": [43.1, 46.5]})
     assert line == "deadband_us 44.8 us (43.1-46.5)"
+
+
+def _drive_result(after_mps: float, noise_mps: float = 0.002):
+    from types import SimpleNamespace
+
+    from robowrangler_sim.diagnose.findings import EffectFinding
+    e = EffectFinding("external_rope_load", {"external_load_n": {"value": 0.4, "unit": "N", "ci95": [0.3, 0.5]}},
+                      ["rope_speed_mps"], [[3.0, 5.0]], {}, {"rope_speed_mps": 0.030}, {"rope_speed_mps": after_mps},
+                      {}, "F")
+    return SimpleNamespace(verdict="missing_physics", effects=[e], noise_rms={"rope_speed_mps": noise_mps})
+
+
+def test_a_named_law_that_leaves_much_more_than_the_noise_says_so():
+    from robowrangler_sim.diagnose.report import first_line
+    left = first_line(_drive_result(after_mps=0.015))
+    assert left.startswith("left out: external rope load") and "30 -> 15 mm/s" in left
+    assert left.endswith("still 15 mm/s against a noise of 2 mm/s: the closest law of the library, not all of the physics")
+    explained = first_line(_drive_result(after_mps=0.0045))
+    assert explained.endswith("30 -> 4 mm/s") and "still" not in explained
+
+
+def test_the_loop_line_says_what_a_named_law_leaves_beyond_the_camera_noise():
+    from types import SimpleNamespace
+
+    from robowrangler_sim.diagnose.loop.api import LoopFinding
+    from robowrangler_sim.diagnose.loop.report import loop_first_line
+
+    def line(after_mm: float) -> str:
+        e = LoopFinding("uniform_wind", {"wind_mps": {"value": 0.5, "unit": "m/s", "ci95": [0.4, 0.6]}}, "w",
+                        "upper_branch", [], 5.8, after_mm, {})
+        return loop_first_line(SimpleNamespace(verdict="missing_physics", effects=[e], noise_mm=2.0,
+                                               candidates=[{"heldout_rms_mm": 5.8}]))
+    assert line(5.4).endswith("still 5.4 mm against 2.0 mm camera noise: the closest law of the library, "
+                              "not all of the physics")
+    assert line(2.1).endswith("5.8 -> 2.1 mm")
