@@ -12,8 +12,8 @@ The spindle's effects (screw_backlash: backlash_mm; servo_deadband: deadband_raw
 "effects" and carried by "spindle_params" (screw_backlash_mm, servo_deadband_raw, servo_deadband_hysteresis_raw),
 which the spindle plant applies; a file without "spindle_params" is the nominal spindle.
 
-"esc_input_delay_s" (0-3 ms, optional, default 0) is the refit's ESC input delay, a unit property DriveParams has no
-field for; the SIL applies it on its actuator seam. An esc_latency effect acting everywhere carries the whole delay
+"esc_input_delay_s" (optional, default 0; the refit finds 0-3 ms, a file may hold up to MAX_INPUT_DELAY_S) is the
+refit's ESC input delay, a unit property DriveParams has no field for; the SIL applies it on its actuator seam. An esc_latency effect acting everywhere carries the whole delay
 (the same term), one confined to a speed range acts inside it and this delay outside.
 
 ``load_model(path)`` reads it back (ModelMismatchError naming the field when it is malformed);
