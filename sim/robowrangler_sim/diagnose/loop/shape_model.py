@@ -52,6 +52,9 @@ BEND_SPEED_STEP_MPS = 0.1
 BEND_LENGTH_STEP_M = 0.01
 """The bending law's solve grid (interpolated in phi and speed, nearest in loop length)."""
 BEND_CACHE_SIZE = 50000
+_LOAD_LAWS = {"bend": (TH_BEND_N_M2, bending_displacement_m, "bending_stiffness_n_m2"),
+              "wind": (TH_WIND_MPS, wind_displacement_m, "wind_mps")}
+"""The load laws solved on the grid (LoopShapeModel._load_unit): theta column, displacement function, its keyword."""
 
 
 class LoopShapeModel:
@@ -150,9 +153,9 @@ class LoopShapeModel:
         b0 = self.rope.bending_stiffness_n_m2
         length_m = np.broadcast_to(loop_length_m[None, :] * col(TH_LEN_SCALE), phi_deg.shape)
         for b in np.flatnonzero(np.abs(theta[:, TH_BEND_N_M2] - b0) > 1e-9 * b0):
-            shape[b] += self._bend_unit(theta[b], phi_deg[b], v[b], length_m[b])
+            shape[b] += self._load_unit("bend", theta[b], phi_deg[b], v[b], length_m[b])
         for b in np.flatnonzero(theta[:, TH_WIND_MPS] != 0.0):
-            shape[b] += self._wind_unit(theta[b], phi_deg[b], v[b], length_m[b])
+            shape[b] += self._load_unit("wind", theta[b], phi_deg[b], v[b], length_m[b])
         scale = (loop_length_m[None, :] * col(TH_LEN_SCALE))[..., None, None]
         return shape * scale
 
@@ -168,27 +171,19 @@ class LoopShapeModel:
             shape = shape + self._lin(v * ratio, phi_deg) - lin_v
         return shape
 
-    def _bend_unit(self, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray, length_m: np.ndarray) -> np.ndarray:
-        """The running rope's bending (diagnose/loop/moving_elastica.py) for one row at its stiffness B (TH_BEND_N_M2):
-        the displacement (F, K, 2) of the unit contours (_grid_response)."""
-        bend = float(theta_row[TH_BEND_N_M2])
+    def _load_unit(self, law: str, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray,
+                   length_m: np.ndarray) -> np.ndarray:
+        """A load law's displacement (F, K, 2) of the unit contours (_grid_response) for one row: "bend", the running
+        rope's bending (diagnose/loop/moving_elastica.py) at its stiffness B (TH_BEND_N_M2), or "wind", a uniform
+        wind's load on the running rope (diagnose/loop/wind_load.py) at TH_WIND_MPS."""
+        column, displacement_m, keyword = _LOAD_LAWS[law]
+        value = float(theta_row[column])
         rope = dataclasses.replace(self.rope, skin_friction_coeff=float(theta_row[TH_CF]))
 
         def solve(contours_m, speeds):
-            return bending_displacement_m(contours_m, speed_mps=speeds, bending_stiffness_n_m2=bend, rope=rope)
+            return displacement_m(contours_m, speed_mps=speeds, rope=rope, **{keyword: value})
 
-        return self._grid_response(("bend", bend), theta_row, phi_deg, v, length_m, solve)
-
-    def _wind_unit(self, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray, length_m: np.ndarray) -> np.ndarray:
-        """A uniform wind's load on the running rope (diagnose/loop/wind_load.py) for one row at its wind TH_WIND_MPS:
-        the displacement (F, K, 2) of the unit contours (_grid_response)."""
-        wind = float(theta_row[TH_WIND_MPS])
-        rope = dataclasses.replace(self.rope, skin_friction_coeff=float(theta_row[TH_CF]))
-
-        def solve(contours_m, speeds):
-            return wind_displacement_m(contours_m, speed_mps=speeds, wind_mps=wind, rope=rope)
-
-        return self._grid_response(("wind", wind), theta_row, phi_deg, v, length_m, solve)
+        return self._grid_response((law, value), theta_row, phi_deg, v, length_m, solve)
 
     def _grid_response(self, law: tuple, theta_row: np.ndarray, phi_deg: np.ndarray, v: np.ndarray,
                        length_m: np.ndarray, solve) -> np.ndarray:
