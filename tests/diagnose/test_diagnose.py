@@ -176,6 +176,43 @@ def test_a_load_on_one_stretch_is_located_there(tmp_path):
     assert iou_s([tuple(x) for x in found.spans_s], list(spans)) >= 0.5
 
 
+def test_a_gated_load_acts_only_on_its_ticks():
+    """An external load confined to a regime (TickGate on its force column) acts within its window only where the
+    gate is on: equal to the unloaded model before the gate opens, slower than it after."""
+    p = DriveParams()
+    pulse = np.full(3000, 1000.0)
+    pulse[500:] = 1300.0  # after the ESC's arming hold at the minimum pulse
+    off = db.theta_from_params(p)
+    on = off.copy()
+    on[[db.TH_EXT_LOAD, db.TH_EXT_T0, db.TH_EXT_T1]] = 0.5, 1.0, 2.9
+    consts, ticks = db.consts_from_params(p), np.arange(pulse.size + 1)
+    free, loaded = db.simulate_drive_batch(np.stack([off, on]), consts, pulse, ticks)["rope_speed_mps"]
+    late = np.arange(pulse.size) >= 1800
+    gate = db.TickGate(late, (db.TH_EXT_LOAD,), off)
+    gated = db.simulate_drive_batch(on, consts, pulse, ticks, gate=gate)["rope_speed_mps"][0]
+    assert np.max(np.abs(loaded[1100:1800] - free[1100:1800])) > 0.05  # the load slows the rope in its window
+    np.testing.assert_array_equal(gated[:1801], free[:1801])  # confined: not before the gate opens
+    assert np.max(free[1900:2900] - gated[1900:2900]) > 0.05
+
+
+def test_a_load_only_at_high_speed_is_found_confined(tmp_path):
+    """A load that acts only above 5 m/s within its stretch, which the refit half absorbs into friction (a case of
+    round 5's held-out seeds, looked at since): found as a load confined to the fast range, where it acts. Before the
+    load could be confined and its start rows judged with the nominal parameters re-adjusted, this came back
+    "none beyond noise" with a 33 mm/s held-out error against 2 mm/s of noise."""
+    case = next(c for c in proof_cases(seeds=[37376], clean_seeds=[]) if c.name == "external_rope_load/one_regime/37376")
+    truth, spans = case.truth_effect()
+    rec = tmp_path / "load_fast.mcap"
+    generate_recording(rec, effect=truth, seed=case.seed, duration_s=case.duration_s)
+    res = diagnose(rec, effects=["external_rope_load", "rope_drag_law"])
+    assert res.verdict == "missing_physics", res.first_line
+    found = res.effects[0]
+    assert found.effect_id == "external_rope_load"
+    assert "m/s and above" in found.regime["acts"]
+    assert iou_s([tuple(x) for x in found.spans_s], list(spans)) >= 0.5
+    assert found.heldout_rms_after["rope_speed_mps"] < 0.5 * found.heldout_rms_before["rope_speed_mps"]
+
+
 def test_a_latency_only_at_high_speed_is_named_with_its_regime(tmp_path):
     # the ESC late only above 5 m/s: everywhere, the law fails
     res, _ = _diagnose_dev_case("esc_latency/one_regime/1", tmp_path, ["esc_latency", "rope_drag_law"])
@@ -209,6 +246,20 @@ def test_sil_applies_a_gated_effect_only_in_its_regime(tmp_path):
                                                          "gate_speed_max_mps": 2.0}})
     with pytest.raises(ModelMismatchError, match="gate_speed_min_mps"):
         load_model(bad.save(tmp_path / "bad.json"))
+
+
+def test_sil_applies_a_gated_load_only_in_its_regime(tmp_path):
+    from robowrangler_sim.sil import SilSession
+
+    def load_at_rest(gate: dict) -> float:
+        model = DiagnosedModel(DriveParams(), {"external_rope_load": {"external_load_n": 0.4, **gate}},
+                               external_load_spans_s=[(0.0, 100.0)])
+        sil = SilSession(model=load_model(model.save(tmp_path / "load.json")), speedup=None)
+        sil.tick_hooks[-1](sil)
+        return sil.loads.external_rope_load_n
+    assert load_at_rest({"gate_speed_min_mps": 5.0}) == 0.0  # the rope at rest: out of the regime
+    assert load_at_rest({"gate_speed_max_mps": 2.0}) == pytest.approx(0.4)
+    assert load_at_rest({}) == pytest.approx(0.4)
 
 
 def test_the_escs_own_input_delay_reaches_the_sil(tmp_path):

@@ -61,3 +61,21 @@ def test_the_loop_line_says_what_a_named_law_leaves_beyond_the_camera_noise():
     assert line(5.4).endswith("still 5.4 mm against 2.0 mm camera noise: the closest law of the library, "
                               "not all of the physics")
     assert line(2.1).endswith("5.8 -> 2.1 mm")
+
+
+def test_none_with_a_miss_far_beyond_the_noise_is_never_called_explained():
+    """A refit that misses by 33 mm/s against 2 mm/s of noise, with no span standing out of its residual (the miss is
+    spread over the run), used to read "the refitted nominal model explains the recording"."""
+    from types import SimpleNamespace
+
+    from robowrangler_sim.diagnose.report import first_line
+
+    def line(held_mps: float, located: list) -> str:
+        return first_line(SimpleNamespace(verdict="none", candidates=[{"heldout_rms": {"rope_speed_mps": held_mps}}],
+                                          noise_rms={"rope_speed_mps": 0.002}, located=located))
+    spread = line(0.033, [])
+    assert spread.startswith("none of the library:") and "misses by 33 mm/s against a noise of 2 mm/s" in spread
+    assert "(spread over the run)" in spread and "explains" not in spread
+    at = line(0.033, [{"span_s": [4.0, 6.5], "significance": 3.0}, {"span_s": [8.0, 9.0], "significance": 7.0}])
+    assert "(most at 8.0-9.0 s)" in at
+    assert line(0.004, []).startswith("none beyond noise: the refitted nominal model explains the recording")

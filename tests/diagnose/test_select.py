@@ -77,3 +77,26 @@ def test_a_candidate_that_only_fits_noise_is_refused_and_two_alike_are_equivalen
     assert not ok and ev["heldout_lr"] < 0 and ev["delta_bic"] < -10  # the fit set alone would have taken it
     other = _score("same", 10, r_cand + 1e-6 * SIGMA, block_id, held, fit_mask, n_eff)
     assert equivalent(cand, other) and not equivalent(cand, base)
+
+
+def test_a_start_grid_is_judged_with_the_rest_of_the_model_readjusted():
+    """best_start(project=True): a step of 2 at t = 5 s on a slope of 1, where the slope was fitted with the step
+    put at the end (it absorbed the step, as a refit absorbs a load into friction). With that slope held, no start
+    of the grid beats the start itself; judged with the slope re-adjusted to each start, the true step time wins and
+    comes with the true slope."""
+    from robowrangler_sim.diagnose.fit import best_start
+
+    t = np.linspace(0.0, 10.0, 201)
+    y = 1.0 * t + 2.0 * (t >= 5.0)
+
+    def simulate(xs: np.ndarray) -> np.ndarray:
+        return np.stack([y - (a * t + 2.0 * (t >= t0)) for a, t0 in xs])
+
+    a_absorbed = float(np.linalg.lstsq(t[:, None], y - 2.0 * (t >= 9.5), rcond=None)[0][0])
+    x0 = np.array([a_absorbed, 9.5])
+    lo, hi, scales = np.array([0.5, 0.0]), np.array([2.0, 10.0]), np.ones(2)
+    starts = np.arange(1.0, 10.0, 1.0)[:, None]
+    held = best_start(simulate, x0, starts, [1], scales, lo, hi, 3.0)
+    np.testing.assert_array_equal(held, x0)
+    np.testing.assert_allclose(best_start(simulate, x0, starts, [1], scales, lo, hi, 3.0, project=True), [1.0, 5.0],
+                               atol=1e-6)

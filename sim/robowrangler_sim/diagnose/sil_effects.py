@@ -88,7 +88,7 @@ def install_effects(session, model) -> None:
                 f += k * V_REF_MPS ** 2 * (v / V_REF_MPS) ** drag_n
         if strib and is_on("low_speed_friction"):
             f += strib["stribeck_force_n"] * math.exp(-(v / strib["stribeck_speed_mps"]) ** 2)
-        if ext and any(a <= s.time_s <= b for a, b in model.external_load_spans_s):
+        if ext and is_on("external_rope_load") and any(a <= s.time_s <= b for a, b in model.external_load_spans_s):
             f += ext
         s.loads.external_rope_load_n = max(0.0, f)
         if sag:

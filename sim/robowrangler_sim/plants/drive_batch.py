@@ -244,6 +244,7 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, gate_mask, gate_off, gate
                 pol_tau = _gated(theta, gate_off, gate_cols, bi, TH_POL_TAU, gate_on)
                 strib_n = _gated(theta, gate_off, gate_cols, bi, TH_STRIBECK_N, gate_on)
                 strib_v = _gated(theta, gate_off, gate_cols, bi, TH_STRIBECK_V, gate_on)
+                ext_n = _gated(theta, gate_off, gate_cols, bi, TH_EXT_LOAD, gate_on)
                 zero_top = p_min + dead
                 span = p_max - zero_top
                 pol_decay = math.exp(-h / pol_tau) if pol_tau > 0.0 else 0.0

@@ -2,7 +2,9 @@
 
 The stretch is fitted with the force: a window t0..t1 with logistic edges (drive_batch EXT_EDGE_S), started from a
 coarse grid of windows over the recording, so a load is found where it acts even when the residual alone does
-not flag it (a speed loop that pushes against the load hides most of the speed dip).
+not flag it (a speed loop that pushes against the load hides most of the speed dip). Confined to a speed range
+(gates.py), the load acts only within its stretch while the rope runs in that range (a snag that holds only a fast
+rope, an object dragged only above its breakaway speed).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ class ExternalRopeLoad(Candidate):
     neutral = {db.TH_EXT_LOAD: 0.0, db.TH_EXT_T0: 0.0, db.TH_EXT_T1: 0.0}
     separating_measurement = "rope tension at the guide (spindle load) or a camera on the rope during the span"
     confused_with = ("coulomb_friction_n",)
+    gateable = True
     time_params = ("load_start_s", "load_end_s")
     """Parameters on the replay's time grid (the report shifts them onto the recording's clock)."""
 

@@ -1,7 +1,7 @@
 """The identifiability oracle of the diagnose proof: can the effect be named from this recording at all?
 
 The truth is put to the engine's own acceptance rule (select.accepted: BIC on the fit samples and the held-out
-test), on the diagnosis's own observations, weights, fit samples and held-out blocks (NominalBasis), against the
+test; api.reduces_own_channel: its channel's held-out error goes down), on the diagnosis's own observations, weights, fit samples and held-out blocks (NominalBasis), against the
 nominal model refitted the engine's way (ModelFitter over NOMINAL_REFIT), counted with the parameters the
 library's candidate for the effect has (though none of the effect's own is fitted). Both sides live in the truth
 plant's world: the truth plant (true base parameters, seed) is run on the recording's pulses as the engine
@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robowrangler_sim.diagnose.api import reduces_own_channel
 from robowrangler_sim.diagnose.candidates import LIBRARY
 from robowrangler_sim.diagnose.fit import ModelFitter
 from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
@@ -198,6 +199,8 @@ def judge(case: TruthCase, result) -> OracleVerdict:
     truth = null if case.effect is None else refit(with_effect)
     sc, _, _, r_truth = basis.score_prediction(f"truth:{case.effect_id or 'none'}", truth.prediction_, n_params)
     ok, ev = accepted(sc, sc_null)
+    if case.effect_id in LIBRARY:  # and, as the engine asks of every law, it lowers its own channel's held-out error
+        ok = ok and reduces_own_channel(LIBRARY[case.effect_id], sc, sc_null)
     r_exact = Residuals().fit(basis.data, exact_prediction(case, replay)).residuals_
     r_null = Residuals().fit(basis.data, null.prediction_).residuals_
 
