@@ -163,8 +163,9 @@ def run_proof(seeds: list[int], out_dir: Path, *, cases: list[str] | None = None
             try:
                 res = diagnose_loop(path)
             except DiagnoseError as err:  # the truth left the model's domain (e.g. a loop shorter than the guide's)
-                print(f"{name:22s} seed {seed:4d}: refused: {err}", flush=True)
-                rows.append(dict(name=name, seed=seed, truth=ident, verdict="refused", named=None, perr=None, first=None,
+                print(f"{name:22s} seed {seed:4d}: refused ({type(err).__name__}): {err}", flush=True)
+                rows.append(dict(name=name, seed=seed, truth=ident, verdict="refused", refused=type(err).__name__,
+                                 named=None, perr=None, first=None,
                                  before=math.nan, after=math.nan, sindy=math.nan, table=math.nan, part=None,
                                  true_part=case.true_part,
                                  noise=math.nan, wall=time.perf_counter() - t1))
@@ -226,6 +227,9 @@ def run_proof(seeds: list[int], out_dir: Path, *, cases: list[str] | None = None
           f"band {np.nanmedian([r['table'] for r in eff]):.1f}, PySINDy on the contour residuals "
           f"{np.nanmedian([r['sindy'] for r in eff]):.1f}, diagnose {np.nanmedian([r['after'] for r in eff]):.1f}")
     print(f"  located part right for one-branch effects: {sum(r['part'] == r['true_part'] for r in bumps)}/{len(bumps)}")
+    refused = [r for r in rows if r["verdict"] == "refused"]
+    print(f"  refused: {len(refused)} (" + ", ".join(f"{r['name']} seed {r['seed']}: {r['refused']}" for r in refused)
+          + "; LoopFlutterError: a shorter loop that folds and flutters, outside the steady laws)")
     print(f"  wall: string shooter {t_gen:.0f} s, diagnosis {t_diag:.0f} s for {len(rows)} recordings")
 
 

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
 import pytest
 
 from robowrangler.recorder import RecordingWriter, read_recording
@@ -54,3 +56,41 @@ def test_a_steady_shorter_loop_is_a_rope_length_mismatch_and_a_steady_loop_does_
     with pytest.raises(ModelMismatchError, match="another rope length.*the contour is steady") as err:
         diagnose_loop(short)
     assert not isinstance(err.value, LoopFlutterError)
+
+
+def test_the_scatter_tells_a_fold_on_part_of_the_loop_from_camera_noise():
+    from robowrangler_sim.diagnose.loop.flutter import contour_scatter
+    from robowrangler_sim.diagnose.loop.replay import outward_normals
+
+    rng = np.random.default_rng(3)
+    s = np.linspace(0.0, 2.0 * np.pi, 40)
+    loop = np.stack([0.4 * (1.0 - np.cos(s)), 0.15 * np.sin(-s)], axis=-1)  # exit at the origin, out along +x
+    frames = np.repeat(loop[None], 90, axis=0)
+    normals = outward_normals(frames)
+    camera = frames + rng.normal(0.0, 0.002, frames.shape)  # the camera's 2 mm on every point
+    steady = contour_scatter(camera, normals, np.zeros(90, dtype=int))
+    assert not steady.flutters and steady.unevenness < 1.6
+    assert 0.0015 < steady.lower_quartile_m < 0.0025
+    folded = camera.copy()  # a stretch of the outgoing branch folding: 15 mm along its normals, frame to frame
+    folded[:, 10:20] += rng.normal(0.0, 0.015, (90, 10, 1)) * normals[:, 10:20]
+    fold = contour_scatter(folded, normals, np.zeros(90, dtype=int))
+    assert fold.flutters and fold.p90_m > 0.01 and 0.2 < fold.worst_fraction < 0.55
+    assert fold.report()["flutters"] is True and fold.report()["threshold"] == 2.0
+
+
+def test_a_named_law_on_a_fluttering_loop_says_the_fold_is_left_out():
+    from types import SimpleNamespace
+
+    from robowrangler_sim.diagnose.loop.api import LoopFinding
+    from robowrangler_sim.diagnose.loop.report import loop_first_line
+
+    e = LoopFinding("uniform_wind", {"wind_speed_mps": {"value": -1.6, "unit": "m/s", "ci95": [-1.8, -1.4]}}, "w",
+                    "lower_branch", [], 122.0, 68.0, {})
+
+    def line(flutter: dict) -> str:
+        return loop_first_line(SimpleNamespace(verdict="missing_physics", effects=[e], noise_mm=7.0, flutter=flutter,
+                                               candidates=[{"heldout_rms_mm": 122.0}]))
+    folded = line({"flutters": True, "p90_mm": 14.8, "lower_quartile_mm": 4.8})
+    assert folded.endswith("the contour flutters unevenly (14.8 against 4.8 mm): the rope folds on part of the loop, "
+                           "which the steady laws leave out")
+    assert "flutters" not in line({"flutters": False, "p90_mm": 2.3, "lower_quartile_mm": 1.8})

@@ -6,8 +6,9 @@ those points much more: per point, the frame-to-frame scatter of its normal offs
 so the loop's own smooth motion at 30 Hz drops out); the loop flutters when the 90th percentile of the points is at
 least FLUTTER_UNEVENNESS x their lower quartile. On the string shooter's dev recordings (bench/bench_diagnose_loop.py
 seeds 1-3, all cases, and head winds of 0.5-2 m/s at 4-6 m/s drawn apart): 1.2-1.4 on steady loops (the camera's 2 or
-4 mm, fast turns included), 1.85 on C_f x 1.25 at 5 m/s (a loop that flutters 5-7 mm), 2.3-5.7 on every head wind
-whose contour is more than 10 % short.
+4 mm, fast turns included), 1.85 on C_f x 1.25 at 5 m/s (a loop that flutters 5-7 mm), 2.2 on a 0.5 m/s head wind
+at 5 m/s (named right: the report notes the flutter), 2.3-5.7 on every head wind whose contour is more than 10 %
+short.
 
 What such a loop is (the string shooter, head wind w < 0 along the launch heading): the outgoing branch meets the
 air at v + |w|, its skin friction rises by (1 + |w| / v)^2 and the nip's push must carry it; the rope there goes into
@@ -17,8 +18,9 @@ material compression (T = T_e + lambda v^2: -2.2 mN at the exit in still air at 
 -1.83 m/s, 0.78 -> 0.45 m at 4 m/s, w = -1.48 m/s) and the contour flutters 10-50 mm. The library's laws are steady
 shapes about the table's (uniform_wind: the first-order response of a rope in tension, with the end point and the
 end tangents held and the exit's reaction free, which barely moves the reach: 0.93-0.94 m for w = 0 to -5 m/s at
-5 m/s and phi 0.1 rad), so they leave it out; a light head wind that keeps the loop steady is named (0.5 m/s at 5 m/s:
--0.504 m/s, with C_f 13 % low beside it).
+5 m/s and phi 0.1 rad; a continuation that carries the applied wind load into each step's balance reaches 0.88 m in
+16 steps, against the truth's 0.45 m), so they leave it out; a light head wind is named (0.5 m/s at 5 m/s: -0.504
+m/s, with C_f 13 % low beside it).
 """
 
 from __future__ import annotations
