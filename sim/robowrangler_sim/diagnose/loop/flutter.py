@@ -5,15 +5,14 @@ The camera's noise scatters every contour point alike. A rope that folds and flu
 those points much more: per point, the frame-to-frame scatter of its normal offset (noise_sigma: second differences,
 so the loop's own smooth motion at 30 Hz drops out); the loop flutters when the 90th percentile of the points is at
 least FLUTTER_UNEVENNESS x their lower quartile. On the string shooter's dev recordings (bench/bench_diagnose_loop.py
-seeds 1-3, all cases, and head winds of 0.5-2 m/s at 4-6 m/s drawn apart): 1.2-1.4 on steady loops (the camera's 2 or
-4 mm, fast turns included), 1.85 on C_f x 1.25 at 5 m/s (a loop that flutters 5-7 mm), 2.2 on a 0.5 m/s head wind
-at 5 m/s (named right: the report notes the flutter), 2.3-5.7 on every head wind whose contour is more than 10 %
-short.
+seeds 1-3, all cases, and `--only headwind`, winds on seeds 11-18): 1.2-1.4 on steady loops (the camera's 2 or 4 mm,
+fast turns included), 1.85 on C_f x 1.25 at 5 m/s (a loop that flutters 5-7 mm), 2.0 on a 0.5 m/s head wind at
+5 m/s (named right; the report notes the flutter), 2.2-4.8 on every head wind whose contour is more than 10 % short.
 
 What such a loop is (the string shooter, head wind w < 0 along the launch heading): the outgoing branch meets the
 air at v + |w|, its skin friction rises by (1 + |w| / v)^2 and the nip's push must carry it; the rope there goes into
-material compression (T = T_e + lambda v^2: -2.2 mN at the exit in still air at 5 m/s, -3.5 mN at w = -1 m/s, with
-44-62 % of the loop's segments compressed against 15 %), buckles and folds in a few centimetres, below the contour's
+material compression (T = T_e + lambda v^2 at the exit: -2.2 mN in still air at 5 m/s, -3.3 to -3.8 mN at w = -0.5
+to -1.8 m/s, with 52-53 % of the rope's segments compressed from -0.8 m/s against 15 % in still air), buckles and folds in a few centimetres, below the contour's
 5 cm point spacing; the folded stretch is shorter on the contour, the loop's reach halves (0.94 -> 0.49 m at w =
 -1.83 m/s, 0.78 -> 0.45 m at 4 m/s, w = -1.48 m/s) and the contour flutters 10-50 mm. The library's laws are steady
 shapes about the table's (uniform_wind: the first-order response of a rope in tension, with the end point and the
