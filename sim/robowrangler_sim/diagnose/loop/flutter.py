@@ -9,17 +9,17 @@ seeds 1-3, all cases, and `--only headwind`, winds on seeds 11-18): 1.2-1.4 on s
 fast turns included), 1.85 on C_f x 1.25 at 5 m/s (a loop that flutters 5-7 mm), 2.0 on a 0.5 m/s head wind at
 5 m/s (named right; the report notes the flutter), 2.2-4.8 on every head wind whose contour is more than 10 % short.
 
-What such a loop is (the string shooter, head wind w < 0 along the launch heading): the outgoing branch meets the
-air at v + |w|, its skin friction rises by (1 + |w| / v)^2 and the nip's push must carry it; the rope there goes into
-material compression (T = T_e + lambda v^2 at the exit: -2.2 mN in still air at 5 m/s, -3.3 to -3.8 mN at w = -0.5
-to -1.8 m/s, with 52-53 % of the rope's segments compressed from -0.8 m/s against 15 % in still air), buckles and folds in a few centimetres, below the contour's
-5 cm point spacing; the folded stretch is shorter on the contour, the loop's reach halves (0.94 -> 0.49 m at w =
--1.83 m/s, 0.78 -> 0.45 m at 4 m/s, w = -1.48 m/s) and the contour flutters 10-50 mm. The library's laws are steady
-shapes about the table's (uniform_wind: the first-order response of a rope in tension, with the end point and the
-end tangents held and the exit's reaction free, which barely moves the reach: 0.93-0.94 m for w = 0 to -5 m/s at
-5 m/s and phi 0.1 rad; a continuation that carries the applied wind load into each step's balance reaches 0.88 m in
-16 steps, against the truth's 0.45 m), so they leave it out; a light head wind is named (0.5 m/s at 5 m/s: -0.504
-m/s, with C_f 13 % low beside it).
+What such a loop is (the string shooter, head wind w < 0 along the launch heading): the outgoing branch meets the air
+at v + |w|, its skin friction rises by (1 + |w| / v)^2 and the nip's push must carry it; the rope there goes into
+material compression (T = T_e + lambda v^2 at the exit: -2.2 mN in still air at 5 m/s, -3.3 to -3.8 mN at w = -0.5 to
+-1.8 m/s, with 52-53 % of the rope's segments compressed from -0.8 m/s against 15 % in still air), buckles and folds
+in a few centimetres, below the contour's 5 cm point spacing; the folded stretch is shorter on the contour, the
+loop's reach halves (0.94 -> 0.49 m at w = -1.83 m/s, 0.78 -> 0.45 m at 4 m/s, w = -1.48 m/s) and the contour
+flutters 10-50 mm. The library's laws are steady shapes about the table's (uniform_wind: the first-order response of
+a rope in tension, with the end point and the end tangents held and the exit's reaction free, which barely moves the
+reach: 0.93-0.94 m for w = 0 to -5 m/s at 5 m/s and phi 0.1 rad; a continuation that carries the applied wind load
+into each step's balance reaches 0.88 m in 16 steps, against the truth's 0.45 m), so they leave it out; a light head
+wind is named (0.5 m/s at 5 m/s: -0.504 m/s, with C_f 13 % low beside it).
 """
 
 from __future__ import annotations
