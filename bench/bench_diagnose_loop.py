@@ -8,6 +8,7 @@ confounded with the shape table at a single speed) and effect-free ones, diagnos
     uv run --locked python bench/bench_diagnose_loop.py --only speed    # a 60 s recording: diagnosis wall time
     uv run --locked python bench/bench_diagnose_loop.py --only chain    # the fast form vs MuJoCo's chain plant
     uv run --locked python bench/bench_diagnose_loop.py --only interp   # the table in speed vs the truth; v^2 C_f
+    uv run --locked python bench/bench_diagnose_loop.py --only headwind # head winds: compression, reach, flutter
     uv run --locked python bench/bench_diagnose_loop.py --seeds 1 2 3 --cases cf_table_confounded --candidates
 
 Prints per case: truth, verdict, named effect, parameter error, held-out contour error before -> after, the located
@@ -16,7 +17,8 @@ baselines side by side (the chain's own parameters refitted, with and without it
 regression on the contour residuals). --only chain: the judged fast form against MuJoCo's chain plant. --only
 interp: the laws' speed dependence (the table continued in 1 / v^2) and the interpolation in v it replaced, against
 effect-free steady truths between and below the table's speeds; and whether the truth obeys the v^2 C_f similarity
-the C_f law rests on. --cases restricts the proof to named cases, --candidates prints each candidate table.
+the C_f law rests on. --only headwind: what a head wind does to the truth's loop (compression, reach, flutter) and
+to the wind law, and what the diagnosis answers. --cases restricts the proof to named cases, --candidates prints each candidate table.
 """
 
 from __future__ import annotations
@@ -163,8 +165,9 @@ def run_proof(seeds: list[int], out_dir: Path, *, cases: list[str] | None = None
             try:
                 res = diagnose_loop(path)
             except DiagnoseError as err:  # the truth left the model's domain (e.g. a loop shorter than the guide's)
-                print(f"{name:22s} seed {seed:4d}: refused: {err}", flush=True)
-                rows.append(dict(name=name, seed=seed, truth=ident, verdict="refused", named=None, perr=None, first=None,
+                print(f"{name:22s} seed {seed:4d}: refused ({type(err).__name__}): {err}", flush=True)
+                rows.append(dict(name=name, seed=seed, truth=ident, verdict="refused", refused=type(err).__name__,
+                                 named=None, perr=None, first=None,
                                  before=math.nan, after=math.nan, sindy=math.nan, table=math.nan, part=None,
                                  true_part=case.true_part,
                                  noise=math.nan, wall=time.perf_counter() - t1))
@@ -226,6 +229,9 @@ def run_proof(seeds: list[int], out_dir: Path, *, cases: list[str] | None = None
           f"band {np.nanmedian([r['table'] for r in eff]):.1f}, PySINDy on the contour residuals "
           f"{np.nanmedian([r['sindy'] for r in eff]):.1f}, diagnose {np.nanmedian([r['after'] for r in eff]):.1f}")
     print(f"  located part right for one-branch effects: {sum(r['part'] == r['true_part'] for r in bumps)}/{len(bumps)}")
+    refused = [r for r in rows if r["verdict"] == "refused"]
+    print(f"  refused: {len(refused)} (" + ", ".join(f"{r['name']} seed {r['seed']}: {r['refused']}" for r in refused)
+          + "; LoopFlutterError: a shorter loop that folds and flutters, outside the steady laws)")
     print(f"  wall: string shooter {t_gen:.0f} s, diagnosis {t_diag:.0f} s for {len(rows)} recordings")
 
 
@@ -426,10 +432,60 @@ def run_speed(out_dir: Path) -> None:
     print("  stage timings: " + ", ".join(f"{k} {v:.1f}" for k, v in res.timings_s.items()))
 
 
+def run_headwind(out_dir: Path) -> None:
+    """Head and tail winds on the string shooter (development seeds 11-18, never the held-out ones): per wind, the
+    truth's exit tension T and share of compressed rope segments, its reach against the still-air loop's and the wind
+    law's at the true wind, the contour's length ratio and flutter unevenness (diagnose/loop/flutter.py), and what
+    the diagnosis answers."""
+    from robowrangler_sim.diagnose.loop.data import load_loop_data
+    from robowrangler_sim.diagnose.loop.flutter import contour_scatter
+    from robowrangler_sim.diagnose.loop.model_file import LoopModel
+    from robowrangler_sim.diagnose.loop.proof import SETTLE_S
+    from robowrangler_sim.diagnose.loop.replay import LoopReplay
+    from robowrangler_sim.diagnose.loop.wind_load import wind_displacement_m
+    from robowrangler_sim.string_shooter.model import StringShooter
+    from robowrangler_sim.string_shooter.motion import ModuleMotion
+
+    base = LoopModel.nominal()
+    shape = base.shape_model()
+    rope = base.chain.rope
+    print("v m/s, phi rad, wind m/s: truth T_exit mN, compressed share | reach m: still air, truth, wind law | contour "
+          "length ratio, flutter unevenness (flutters at >= 2) | diagnosis")
+    conds = ((11, 5.0, 0.1, 1.8), (12, 5.0, 0.1, -0.5), (13, 5.0, 0.1, -0.8), (14, 5.0, 0.1, -1.0),
+             (15, 5.0, 0.1, -1.8), (16, 4.0, -0.1, -1.5), (17, 4.5, -0.1, -1.2), (18, 6.0, 0.0, -1.5))
+    for seed, v, phi, w in conds:
+        script = LoopScript(5.0, ((0.0, v),), ((0.0, phi),))
+        truth = LoopTruth("uniform_wind", wind_mps=w)
+        sh = StringShooter(truth.params(), loop_length_m=2.0, initial_shape="circle",
+                           motion=ModuleMotion(wheel_speed_mps=script.speed, phi_rad=script.phi))
+        sh.step_for(SETTLE_S)
+        t_exit, compressed = [], []
+        for _ in range(10):
+            sh.step_for(0.1)
+            t_exit.append(sh.frame().exit_tension_n)
+            compressed.append(float(np.mean(sh.segment_tensions_n() < 0.0)))
+        case = generate_loop_recording(out_dir / f"headwind_{seed}.mcap", truth=truth, script=script, seed=seed)
+        data = load_loop_data(case.path, takeoff_speed_mps=base.takeoff_speed_mps(),
+                              loop_length_of_guide=base.loop_length_m, defer_short_loop=True)
+        rp = LoopReplay(data, shape, np.array([base.loop_length_m(g) for g in data.guide_m]))
+        sc = contour_scatter(data.points_m, rp.normals, data.segment)
+        still = shape._steady_unit(shape.theta0()[None], np.array([[math.degrees(phi)]]), np.array([[v]]))[0] * 2.0
+        law = still + wind_displacement_m(still, speed_mps=[v], wind_mps=w, rope=rope)
+        try:
+            res = diagnose_loop(case.path)
+            said = f"{res.verdict}: " + ", ".join(f"{e.effect_id} " + " ".join(f"{k} {p['value']:.3g}" for k, p in
+                                                                               e.params.items()) for e in res.effects)
+        except DiagnoseError as err:
+            said = f"refused: {type(err).__name__}"
+        print(f"  {v:.1f}, {phi:+.1f}, {w:+.1f}: {np.mean(t_exit) * 1e3:+5.1f} mN, {np.mean(compressed):4.0%} | "
+              f"{still[0, :, 0].max():.2f}, {np.median(data.points_m[:, :, 0].max(axis=1)):.2f}, "
+              f"{law[0, :, 0].max():.2f} | {data.length_ratio:.3f}, {sc.unevenness:.2f} | {said}", flush=True)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--heldout", action="store_true", help="run the held-out seeds (once, at the end)")
-    ap.add_argument("--only", choices=("proof", "fig6a", "speed", "chain", "interp"), default="proof")
+    ap.add_argument("--only", choices=("proof", "fig6a", "speed", "chain", "interp", "headwind"), default="proof")
     ap.add_argument("--seeds", type=int, nargs="*", default=None)
     ap.add_argument("--cases", nargs="*", default=None, help="proof case names to run (default: all), e.g. "
                     "cf_table_confounded cf_under_noise cf_between_speeds none none_slow_tilt")
@@ -446,6 +502,8 @@ def main() -> int:
             run_chain(out)
         elif args.only == "interp":
             run_interp(out)
+        elif args.only == "headwind":
+            run_headwind(out)
         else:
             seeds = args.seeds or (HELDOUT_SEEDS if args.heldout else DEV_SEEDS)
             print(f"seeds {seeds} ({'held-out' if args.heldout else 'development'})")

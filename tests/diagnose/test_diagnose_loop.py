@@ -270,7 +270,7 @@ def test_too_few_points_no_phi_and_a_wrong_loop_length_are_named(recs, tmp_path)
     # is not explained by any, and is refused with what was tried
     shorter = _rewrite(recs["none"].path, tmp_path / "shorter.mcap",
                        lambda d: {**d, "points_m": [[0.8 * x, 0.8 * z] for x, z in d["points_m"]]})
-    with pytest.raises(ModelMismatchError, match="loop is .* long.*not the flutter or fold of a loop effect"):
+    with pytest.raises(ModelMismatchError, match="loop is .* long.*another rope length.*the contour is steady"):
         diagnose_loop(shorter)
     short = _rewrite(recs["none"].path, tmp_path / "short.mcap", lambda d: d if d["time_s"] < 0.9 else None)
     with pytest.raises(NoUsableSpanError, match="airborne camera frames"):

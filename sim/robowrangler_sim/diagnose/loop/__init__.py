@@ -3,12 +3,14 @@ the Candidate base) on the camera contours of /loop/observation against the chai
 
 data (contours + rope speed + guide + phi, checked against the shape table's frame), shape_model (the chain's fast
 steady-shape form with the effect laws, batched), replay, residuals (signed normal distance, noise from the data),
-locate (loop part, phi / speed band, steady / transient, spans), candidates/ (one law per file), model_file (the
+locate (loop part, phi / speed band, steady / transient, spans), flutter (a shorter loop that folds and flutters:
+refused as outside the steady laws), candidates/ (one law per file), model_file (the
 extended chain model), report, proof (truth recordings from the first-principles string shooter). Entry point:
 api.diagnose_loop.
 """
 
 from robowrangler_sim.diagnose.loop.api import LoopDiagnosis, diagnose_loop
 from robowrangler_sim.diagnose.loop.data import ContourFrameError, has_loop_observations
+from robowrangler_sim.diagnose.loop.flutter import LoopFlutterError
 
-__all__ = ["ContourFrameError", "LoopDiagnosis", "diagnose_loop", "has_loop_observations"]
+__all__ = ["ContourFrameError", "LoopDiagnosis", "LoopFlutterError", "diagnose_loop", "has_loop_observations"]

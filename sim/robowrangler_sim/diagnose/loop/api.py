@@ -23,6 +23,8 @@ from robowrangler_sim.diagnose.loop import shape_model as sm
 from robowrangler_sim.diagnose.loop.candidates import LOOP_LIBRARY, LoopCandidate
 from robowrangler_sim.diagnose.loop.data import (LOOP_LENGTH_TOLERANCE, LoopData, length_mismatch_message,
                                                  load_loop_data)
+from robowrangler_sim.diagnose.loop.flutter import (ContourScatter, LoopFlutterError, contour_scatter, flutter_message,
+                                                    flutter_note)
 from robowrangler_sim.diagnose.loop.locate import LoopLocator, frame_regimes, part_labels
 from robowrangler_sim.diagnose.loop.model_file import LoopModel
 from robowrangler_sim.diagnose.loop.replay import CHANNEL, LoopReplay
@@ -83,6 +85,7 @@ class LoopDiagnosis:
     notes: list[str]
     frames: int
     series: dict = field(repr=False, default_factory=dict)
+    flutter: dict = field(default_factory=dict)
 
     @property
     def first_line(self) -> str:
@@ -141,6 +144,10 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
     pred0 = replay.predict(theta_base)[CHANNEL][0]
     res0 = LoopResiduals().fit(replay, pred0)
     noise = res0.noise_m_
+    scatter = contour_scatter(data.points_m, replay.normals, data.segment)
+    notes = list(data.notes)
+    if scatter.flutters:
+        notes.append(flutter_note(scatter))
     timings["replay_s"] = time.perf_counter() - t1
 
     t1 = time.perf_counter()
@@ -266,7 +273,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                 verdict = "missing_physics"
     timings["select_s"] = time.perf_counter() - t1
     if abs(data.length_ratio - 1.0) > LOOP_LENGTH_TOLERANCE:
-        _check_short_loop_explained(data, base, verdict, chosen, sc_nom, chosen_sc)
+        _check_short_loop_explained(data, base, replay, theta_base, scatter, verdict, chosen, sc_nom, chosen_sc)
 
     effects_out: list[LoopFinding] = []
     if verdict == "missing_physics":
@@ -301,7 +308,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
     return LoopDiagnosis(
         recording=data.path, verdict=verdict, effects=effects_out, not_identifiable=not_ident,
         nominal_refit=nominal_refit, noise_mm=round(noise * 1e3, 3), located=located, candidates=rows,
-        model=model_out, timings_s=timings, notes=list(data.notes), frames=F,
+        model=model_out, timings_s=timings, notes=notes, frames=F, flutter=scatter.report(),
         series={"time_s": data.time_s, "heldout": ~fit_mask.reshape(F, K)[:, 0],
                 "rms_before_mm": np.sqrt(np.mean(r_nom.reshape(F, K) ** 2, axis=1)) * 1e3,
                 "rms_after_mm": np.sqrt(np.mean((replay.measured()[CHANNEL]
@@ -340,20 +347,29 @@ def _sensitivity_cosine(replay: LoopReplay, theta: np.ndarray, c1: LoopCandidate
     return float(a @ b) / den if den > 0 else 1.0
 
 
-def _check_short_loop_explained(data: LoopData, base: LoopModel, verdict: str, chosen: list[str], sc_nom: ModelScore,
+def _check_short_loop_explained(data: LoopData, base: LoopModel, replay: LoopReplay, theta_base: np.ndarray,
+                                scatter: ContourScatter, verdict: str, chosen: list[str], sc_nom: ModelScore,
                                 chosen_sc: ModelScore) -> None:
     """A loop shorter than the model's (kept by the loader) stands only when a loop effect explains the contours:
     named or not identifiable among candidates, and held-out contour error at most SHORT_LOOP_EXPLAINED x the
-    refitted chain's. Else it is the rope length or guide calibration: ModelMismatchError, as the loader would."""
+    refitted chain's. Else: LoopFlutterError when the contour flutters unevenly (flutter.py: the rope folds on part of
+    the loop, e.g. in a head wind; outside the library's steady laws), ModelMismatchError (the rope length or guide
+    calibration) when it is steady, as the loader would."""
     before, after = _mm(sc_nom), _mm(chosen_sc)
     if verdict != "none" and after <= SHORT_LOOP_EXPLAINED * before:
         return
     what = (f"the best loop effect, {chosen[0]}, takes the held-out contour error only from {before:.1f} to "
             f"{after:.1f} mm" if chosen else f"no loop effect explains the contours (held-out contour error "
                                               f"{before:.1f} mm)")
+    head = length_mismatch_message(data, base.loop_length_m, data.length_ratio, calibration=False)
+    if scatter.flutters:
+        reach_model = float(np.median(replay.contours(theta_base[None, :])[0][:, :, 0].max(axis=1)))
+        raise LoopFlutterError(head + flutter_message(scatter, reach_observed_m=float(np.median(
+            data.points_m[:, :, 0].max(axis=1))), reach_model_m=reach_model) + f"; {what}")
     raise ModelMismatchError(length_mismatch_message(data, base.loop_length_m, data.length_ratio)
-                             + f"; {what}, so a shorter loop is not the flutter or fold of a loop effect in the "
-                               "library (if the rope is right, it is physics outside it: a head wind crumples the tip)")
+                             + f"; {what}, and the contour is steady (it scatters evenly along the loop, "
+                               f"{scatter.lower_quartile_m * 1e3:.1f}-{scatter.p90_m * 1e3:.1f} mm from frame to "
+                               "frame), not a loop that folds and flutters")
 
 
 def _mm(sc: ModelScore) -> float:

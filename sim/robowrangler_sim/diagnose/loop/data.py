@@ -188,13 +188,16 @@ def load_loop_data(path: str | Path, *, takeoff_speed_mps: float, loop_length_of
     return dataclasses.replace(data, length_ratio=ratio)
 
 
-def length_mismatch_message(data: LoopData, loop_length_of_guide, ratio: float) -> str:
-    """What a loop-length mismatch says: observed and model lengths, the ratio, the tolerance, what to pass."""
+def length_mismatch_message(data: LoopData, loop_length_of_guide, ratio: float, *, calibration: bool = True) -> str:
+    """What a loop-length mismatch says: observed and model lengths, the ratio, the tolerance; with calibration, the
+    reading (another rope length or guide calibration) and what to pass."""
     model_len = np.array([loop_length_of_guide(g) for g in data.guide_m])
-    return (f"{data.path}: the observed loop is {np.median(data.observed_length_m):.3f} m long (median), the model's "
-            f"{np.median(model_len):.3f} m at the recorded guide position (ratio {ratio:.3f}, tolerance "
-            f"+-{LOOP_LENGTH_TOLERANCE:.0%}): another rope length or guide calibration; pass a chain model with the "
-            "right rope_length_m")
+    figures = (f"{data.path}: the observed loop is {np.median(data.observed_length_m):.3f} m long (median), the "
+               f"model's {np.median(model_len):.3f} m at the recorded guide position (ratio {ratio:.3f}, tolerance "
+               f"+-{LOOP_LENGTH_TOLERANCE:.0%})")
+    if not calibration:
+        return figures
+    return figures + ": another rope length or guide calibration; pass a chain model with the right rope_length_m"
 
 
 def _check_frame(data: LoopData, loop_length_of_guide) -> float:

@@ -40,6 +40,11 @@ def loop_first_line(res) -> str:
     if e.heldout_rms_mm_after > LEFT_OVER_NOISE * res.noise_mm:
         line += (f", still {e.heldout_rms_mm_after:.1f} mm against {res.noise_mm:.1f} mm camera noise: the closest "
                  "law of the library, not all of the physics")
+        flutter = getattr(res, "flutter", None) or {}  # LoopDiagnosis.flutter (ContourScatter.report)
+        if flutter.get("flutters"):
+            line += (f"; the contour flutters unevenly ({flutter['p90_mm']:.1f} against "
+                     f"{flutter['lower_quartile_mm']:.1f} mm): the rope folds on part of the loop, which the "
+                     "steady laws leave out")
     return line
 
 
@@ -52,7 +57,7 @@ def loop_report_json(res) -> dict:
         "not_identifiable": res.not_identifiable, "nominal_refit": res.nominal_refit, "noise_mm": res.noise_mm,
         "beyond_noise": bool(res.candidates[0]["heldout_rms_mm"] > LEFT_OVER_NOISE * res.noise_mm),
         "frames": res.frames, "located": res.located, "candidates": res.candidates, "notes": res.notes,
-        "timings_s": res.timings_s,
+        "flutter": res.flutter, "timings_s": res.timings_s,
     })
 
 
