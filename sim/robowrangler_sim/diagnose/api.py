@@ -243,8 +243,10 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
         """Fit a law (own parameters and every nominal one free, from theta_c and the law's start grid), score it
         against the refit (one parameter more when confined to a range), keep it in fits and the candidate table."""
         cols, grid = cand.start_grid(theta_c)
+        if tick_gate is not None:
+            grid = cand.starts_in_gate(grid, tick_gate.mask_on)
         fitter = ModelFitter(list(NOMINAL_REFIT) + list(own), weights=weights, max_nfev=max_nfev,
-                             project_starts=True).fit(
+                             project_starts=cand.project_starts).fit(
             replay, theta_c, fit_mask=fit_mask, load_mask=load_mask, gate=tick_gate, starts=grid,
             start_columns=cols, bounds_ref=theta_base)
         sc = score_model(fid, len(NOMINAL_REFIT) + len(own) + (gate is not None),

@@ -365,7 +365,9 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, gate_mask, gate_off, gate
             else:
                 # drag F = k v_ref^2 (|v|/v_ref)^n, linearised about v0 (Newton), as the plant does for n = 2
                 if abs_v0 > 0.0:
-                    f_drag = drag_scale * (abs_v0 / V_REF_MPS) ** n_exp
+                    q = abs_v0 / V_REF_MPS
+                    # the square law (every row but a drag law's) without the general power's exp and log
+                    f_drag = drag_scale * (q * q if n_exp == 2.0 else q ** n_exp)
                     df_dv = n_exp * f_drag / abs_v0
                 else:
                     f_drag = 0.0

@@ -90,6 +90,14 @@ class Candidate(ABC):
         own parameters at start_points. A candidate whose look-alike is a nominal parameter searches both."""
         return [s.column for s in self.params], self.start_points(theta)
 
+    project_starts: bool = False
+    """Whether the start grid's rows are judged with the other free parameters re-adjusted to each (ModelFitter's
+    project_starts): for a law whose grid places it in time, where the refit has absorbed part of it elsewhere."""
+
+    def starts_in_gate(self, grid: np.ndarray, mask_on: np.ndarray) -> np.ndarray:
+        """The rows of start_grid worth trying when the law is confined to the ticks mask_on; default: all."""
+        return grid
+
     def apply_neutral(self, theta: np.ndarray) -> np.ndarray:
         out = theta.copy()
         for col, value in self.neutral.items():

@@ -18,6 +18,10 @@ from robowrangler_sim.diagnose.parameters import ParamSpec
 from robowrangler_sim.plants import drive_batch as db
 
 
+START_LOAD_N = 0.3
+"""The force of every start window (the proof's loads are 0.3-0.6 N, 0.03-0.06 N under the noise)."""
+
+
 class ExternalRopeLoad(Candidate):
     effect_id = "external_rope_load"
     law = "F_ext over t0..t1 (logistic edges of 30 ms), 0 elsewhere"
@@ -30,6 +34,7 @@ class ExternalRopeLoad(Candidate):
     separating_measurement = "rope tension at the guide (spindle load) or a camera on the rope during the span"
     confused_with = ("coulomb_friction_n",)
     gateable = True
+    project_starts = True
     time_params = ("load_start_s", "load_end_s")
     """Parameters on the replay's time grid (the report shifts them onto the recording's clock)."""
 
@@ -44,6 +49,17 @@ class ExternalRopeLoad(Candidate):
 
     def start_grid(self, theta: np.ndarray) -> tuple[list[int], np.ndarray]:
         lo, hi = self.params[1].lo, self.params[1].hi
-        rows = [[f, t0, min(hi, t0 + length)] for f, t0, length in
-                itertools.product((0.15, 0.4), np.arange(lo + 0.5, hi - 0.5, 1.0), (1.0, 2.0, 3.5))]
+        # one force: the windows are ranked with the nominal parameters re-adjusted to each (ModelFitter's projected
+        # starts), which matters more than the force's level, and the solver sets the force
+        rows = [[START_LOAD_N, t0, min(hi, t0 + length)] for t0, length in
+                itertools.product(np.arange(lo + 0.5, hi - 0.5, 1.0), (1.0, 2.0, 3.5))]
         return [db.TH_EXT_LOAD, db.TH_EXT_T0, db.TH_EXT_T1], np.asarray(rows)
+
+    def starts_in_gate(self, grid: np.ndarray, mask_on: np.ndarray) -> np.ndarray:
+        """Confined to a regime, the windows where the gate is open on at least half the ticks (elsewhere the
+        window is mostly no load at all, and a window that holds the open part better is in the grid)."""
+        on = np.concatenate(([0.0], np.cumsum(np.asarray(mask_on, dtype=float))))
+        i0 = np.clip(np.round(grid[:, 1] * 1e3).astype(int), 0, on.size - 1)
+        i1 = np.clip(np.round(grid[:, 2] * 1e3).astype(int), 0, on.size - 1)
+        share = (on[i1] - on[i0]) / np.maximum(i1 - i0, 1)
+        return grid[share >= 0.5]
