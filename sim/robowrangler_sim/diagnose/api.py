@@ -23,7 +23,8 @@ from robowrangler_sim.diagnose.recording_data import DriveData, load_drive_data
 from robowrangler_sim.diagnose.regimes import coverage, dominant_regime, regime_labels
 from robowrangler_sim.diagnose.replay import DriveReplay
 from robowrangler_sim.diagnose.residuals import CHANNELS, Residuals, channel_noise, channel_weights, observed
-from robowrangler_sim.diagnose.select import ModelScore, accepted, effective_counts, equivalent, score_model
+from robowrangler_sim.diagnose.select import (ModelScore, accepted, effective_counts, equivalent, reduces_own_channel,
+                                             score_model)
 from robowrangler_sim.plants import DriveParams
 from robowrangler_sim.plants import drive_batch as db
 
@@ -447,15 +448,6 @@ def _gates_to_try(data: DriveData, r_nom: dict[str, np.ndarray], v_nom: np.ndarr
     w = np.broadcast_to(weights["rope_speed_mps"], r_nom["rope_speed_mps"].shape)[fit_tel]
     sides = uneven_split(v_tick[at], (r_nom["rope_speed_mps"][fit_tel] * w) ** 2, model_speed_mps=v_nom[fit_tel])
     return [] if sides is None else [(g, g.on(v_tick)) for g in sides]
-
-
-def reduces_own_channel(cand: Candidate, score: ModelScore, base: ModelScore) -> bool:
-    """Whether a law lowers the held-out RMS of the channel it shows in first (its channels[0]: the rope speed for
-    all but the battery's sag), the error the report's first line quotes. The acceptance rule weighs each sample by
-    its noise and timing uncertainty, so a law can win there on a few samples while the error users read rises
-    (a latency "found" at 140 -> 142 mm/s where a dead band acts only in the spin-down): that is not a finding."""
-    c = cand.channels[0]
-    return c not in base.heldout_rms or score.heldout_rms[c] < base.heldout_rms[c]
 
 
 def _look_alikes(cand: Candidate) -> list:

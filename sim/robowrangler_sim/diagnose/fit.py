@@ -74,7 +74,8 @@ def best_start(simulate, x0: np.ndarray, starts: np.ndarray, idx: list[int], sca
     grid = np.repeat(x0[None, :], len(starts), axis=0)
     grid[:, idx] = np.clip(np.asarray(starts, dtype=float) / scales[idx], lo[idx], hi[idx])
     grid = np.vstack([x0[None, :], grid])
-    others = [j for j in range(x0.size) if j not in set(idx)]
+    in_grid = set(idx)
+    others = [j for j in range(x0.size) if j not in in_grid]
     if not project or not others:
         costs = np.sum(huber(simulate(grid), huber_scale), axis=1)
         return grid[int(np.argmin(costs))]

@@ -133,3 +133,13 @@ def accepted(candidate: ModelScore, base: ModelScore) -> tuple[bool, dict[str, f
     p = heldout_p(candidate, base)
     return (bool(d_bic < -BIC_STRONG and lr > HELDOUT_STRONG),
             {"delta_bic": float(d_bic), "heldout_lr": float(lr), "heldout_p": float(p)})
+
+
+def reduces_own_channel(cand, score: ModelScore, base: ModelScore) -> bool:
+    """Whether a law (a Candidate, or its class) lowers the held-out RMS of the channel it shows in first (its
+    channels[0]: the rope speed for all but the battery's sag), the error the report's first line quotes. The
+    acceptance rule weighs each sample by its noise and timing uncertainty, so a law can win there on a few samples
+    while the error users read rises (a latency "found" at 140 -> 142 mm/s where a dead band acts only in the
+    spin-down): that is not a finding."""
+    c = cand.channels[0]
+    return c not in base.heldout_rms or score.heldout_rms[c] < base.heldout_rms[c]

@@ -195,7 +195,6 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, gate_mask, gate_off, gate
         rb = theta[bi, TH_BATT_R]
         ocv0 = theta[bi, TH_BATT_OCV]
         lag = theta[bi, TH_ESC_LAG]
-        ext_n = theta[bi, TH_EXT_LOAD]
         ext_t0 = theta[bi, TH_EXT_T0]
         ext_t1 = theta[bi, TH_EXT_T1]
         windowed = ext_t1 > ext_t0
@@ -206,7 +205,7 @@ def _simulate(theta, consts, pulse_us, cum, load_mask, gate_mask, gate_off, gate
         # the effect terms, (re)read at the first tick and at every change of the gate: where gate_mask is 0, the
         # gated columns take gate_off's values (an effect acting in one regime only)
         gate_on = not (gate_mask[0] > 0.5)
-        dead = hyst = n_exp = k_drag = delay_us = pol_r = pol_tau = strib_n = strib_v = 0.0
+        dead = hyst = n_exp = k_drag = delay_us = pol_r = pol_tau = strib_n = strib_v = ext_n = 0.0
         zero_top = span = pol_decay = drag_scale = 0.0
         # state
         omega = 0.0

@@ -59,7 +59,8 @@ class ExternalRopeLoad(Candidate):
         """Confined to a regime, the windows where the gate is open on at least half the ticks (elsewhere the
         window is mostly no load at all, and a window that holds the open part better is in the grid)."""
         on = np.concatenate(([0.0], np.cumsum(np.asarray(mask_on, dtype=float))))
-        i0 = np.clip(np.round(grid[:, 1] * 1e3).astype(int), 0, on.size - 1)
-        i1 = np.clip(np.round(grid[:, 2] * 1e3).astype(int), 0, on.size - 1)
+        tick_s = db.TICK_US * 1e-6
+        i0 = np.clip(np.round(grid[:, 1] / tick_s).astype(int), 0, on.size - 1)
+        i1 = np.clip(np.round(grid[:, 2] / tick_s).astype(int), 0, on.size - 1)
         share = (on[i1] - on[i0]) / np.maximum(i1 - i0, 1)
         return grid[share >= 0.5]

@@ -1,7 +1,7 @@
 """The identifiability oracle of the diagnose proof: can the effect be named from this recording at all?
 
 The truth is put to the engine's own acceptance rule (select.accepted: BIC on the fit samples and the held-out
-test; api.reduces_own_channel: its channel's held-out error goes down), on the diagnosis's own observations, weights, fit samples and held-out blocks (NominalBasis), against the
+test; select.reduces_own_channel: its channel's held-out error goes down), on the diagnosis's own observations, weights, fit samples and held-out blocks (NominalBasis), against the
 nominal model refitted the engine's way (ModelFitter over NOMINAL_REFIT), counted with the parameters the
 library's candidate for the effect has (though none of the effect's own is fitted). Both sides live in the truth
 plant's world: the truth plant (true base parameters, seed) is run on the recording's pulses as the engine
@@ -28,13 +28,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robowrangler_sim.diagnose.api import reduces_own_channel
 from robowrangler_sim.diagnose.candidates import LIBRARY
 from robowrangler_sim.diagnose.fit import ModelFitter
 from robowrangler_sim.diagnose.parameters import NOMINAL_REFIT
 from robowrangler_sim.diagnose.proof.generator import TruthCase, run_truth
 from robowrangler_sim.diagnose.residuals import CHANNELS, Residuals, channel_noise
-from robowrangler_sim.diagnose.select import accepted
+from robowrangler_sim.diagnose.select import accepted, reduces_own_channel
 from robowrangler_sim.plants import drive_batch as db
 
 TICK_S = 1e-3
