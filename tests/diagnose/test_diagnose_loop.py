@@ -16,6 +16,7 @@ from robowrangler_sim.diagnose.loop import ContourFrameError, diagnose_loop
 from robowrangler_sim.diagnose.loop.model_file import LoopModel
 from robowrangler_sim.diagnose.loop.proof import LoopScript, LoopTruth, generate_loop_recording
 from robowrangler_sim.diagnose.loop.report import write_loop_report
+from robowrangler_sim.diagnose.select import HELDOUT_STRONG
 
 STEADY = LoopScript(4.0, ((0.0, 5.0),), ((0.0, 0.1),))
 CF0 = 0.08478874859262518
@@ -155,10 +156,19 @@ def test_a_lower_skin_friction_at_the_lowest_table_speed_is_named_with_its_value
 
 
 def test_transient_wave_dynamics_is_named_on_fast_module_turns(recs):
+    """The truth's turn travels from the exit and the tip settles last, faster than the chain's servos: the wave law
+    (delay s / c, then its own settling time) must beat the normal-drag lag (every point at once, through the servos)
+    on the held-out frames by the strong level, not by a tie (the law without the settling ended the transient when
+    the change had travelled and came within 1 mm of the normal-drag lag there, which was then named on some turns)."""
     res = diagnose_loop(recs["wave"].path)
     assert res.verdict == "missing_physics", res.first_line
     assert res.effects[0].effect_id == "transient_wave_dynamics"
     assert 1.0 < res.effects[0].params["wave_speed_mps"]["value"] < 20.0
+    rows = {r["id"]: r for r in res.candidates}
+    wave, drag = rows["transient_wave_dynamics"], rows["normal_drag_coefficient"]
+    assert wave["heldout_lr"] - drag["heldout_lr"] > HELDOUT_STRONG, (wave, drag)
+    assert wave["heldout_rms_mm"] < 0.85 * drag["heldout_rms_mm"], (wave, drag)
+    assert 0.03 < res.effects[0].params["settling_time_s"]["value"] < 0.25  # below the servos' 0.25-1 s
     motion = {c["label"]: c for c in res.located["cells"] if c["kind"] == "motion"}
     assert motion["transient"]["flagged"]
 

@@ -11,9 +11,10 @@ JSON, and how the chain plant and the SIL load it.
 ``LoopModel.chain_params()`` and ``LoopModel.shape_table()`` give what ChainPlant(table=..., params=...) takes: the
 steady effects (speed dependence, C_f, wind, tip bending) baked into a shape table over a dense speed grid (the
 chain snaps to the speed at or below, so a 0.25 m/s grid is nearly continuous); the servo time constant as kd;
-transient_wave_dynamics as the chain's best first-order stand-in (kd/kp = mean transport delay L / (2 c)). The
-rotation laws (normal_drag_coefficient, gyroscopic_base_rotation) have no place in the chain plant: they are kept
-in the file for the fast form and reported as such (`wrangler sil --scenario ... --model FILE` says so).
+transient_wave_dynamics as the chain's best first-order stand-in (kd/kp = mean transport delay L / (2 c) plus the
+settling time). The rotation laws (normal_drag_coefficient, gyroscopic_base_rotation) have no place in the chain
+plant: they are kept in the file for the fast form and reported as such (`wrangler sil --scenario ... --model FILE`
+says so).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ EFFECT_COLUMNS = {
     "axial_drag_coefficient": {"skin_friction_coeff": sm.TH_CF},
     "normal_drag_coefficient": {"normal_drag_lag_s": sm.TH_ROT_LAG_S},
     "tip_bending_stiffness": {"bending_stiffness_n_m2": sm.TH_BEND_N_M2},
-    "transient_wave_dynamics": {"wave_speed_mps": sm.TH_WAVE_MPS},
+    "transient_wave_dynamics": {"wave_speed_mps": sm.TH_WAVE_MPS, "settling_time_s": sm.TH_TAU_S},
     "uniform_wind": {"wind_speed_mps": sm.TH_WIND_MPS},
     "gyroscopic_base_rotation": {"coriolis_gain_s2_per_m": sm.TH_GYRO_S2_PER_M},
 }
@@ -105,12 +106,12 @@ class LoopModel:
 
     # --- what the chain plant and the SIL load ---------------------------------------------------------------------
     def chain_params(self) -> ChainParams:
-        """ChainParams with the refitted servo time constant (or the wave dynamics' first-order stand-in) and the
-        loop length scale folded into the rope length."""
+        """ChainParams with the refitted servo time constant (or the wave dynamics' first-order stand-in: the mean
+        transport delay plus the settling time, kept in kd) and the loop length scale folded into the rope length."""
         kd = self.chain.kd_upper_nms_per_rad
         wave = self.effects.get("transient_wave_dynamics", {}).get("wave_speed_mps", 0.0)
         if wave > 0:
-            kd = self.chain.kp_upper_nm_per_rad * self.chain.home_loop_length_m / (2.0 * wave)
+            kd += self.chain.kp_upper_nm_per_rad * self.chain.home_loop_length_m / (2.0 * wave)
         inside = self.chain.rope_inside_at_home_m
         rope_len = inside + self.chain.home_loop_length_m * self.loop_length_scale
         return dataclasses.replace(self.chain, kd_upper_nms_per_rad=kd, rope_length_m=rope_len)

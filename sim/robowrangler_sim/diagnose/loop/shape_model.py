@@ -20,7 +20,8 @@ neutral value leaves the nominal chain unchanged. Effect laws (all in the table'
     bending:    the running rope's Euler-Bernoulli balance B theta'' = t x F about the table's (string) shape, at
                 the rope's stiffness B instead of the table rope's B0 (moving_elastica.py)
     dynamics:   wave speed c = 0: first-order lag tau (the chain); c > 0: each point follows the target with the
-                transport delay s / c, s its arc distance from the exit (a disturbance carried along the rope)
+                transport delay s / c, s its arc distance from the exit (a disturbance carried along the rope), then
+                through the first-order lag tau (the rope's settling once the change has arrived)
 """
 
 from __future__ import annotations
@@ -218,29 +219,20 @@ class LoopShapeModel:
 
     def follow(self, theta: np.ndarray, targets: np.ndarray, *, time_s: np.ndarray, segment: np.ndarray,
                loop_length_m: np.ndarray) -> np.ndarray:
-        """The loop following its targets (B, F, K, 2): first-order lag tau (wave speed 0), or each point the
-        target delayed by its arc distance over the wave speed."""
+        """The loop following its targets (B, F, K, 2) through a first-order lag tau; with a wave speed c > 0 each
+        point follows the target delayed by its arc distance over c, then settles through the lag."""
         theta = np.atleast_2d(theta)
         B, F = targets.shape[:2]
-        out = np.empty_like(targets)
         tau = np.maximum(theta[:, TH_TAU_S], 1e-3)
         c = theta[:, TH_WAVE_MPS]
         starts = np.flatnonzero(np.r_[True, segment[1:] != segment[:-1]])
         ends = np.r_[starts[1:], F]
-        lag_rows = c <= 0
-        if np.any(lag_rows):
-            tr = targets[lag_rows]
-            y = np.empty_like(tr)
-            tl = tau[lag_rows][:, None, None]
-            for a, b in zip(starts, ends):
-                y[:, a] = tr[:, a]
-                for f in range(a + 1, b):
-                    k = 1.0 - np.exp(-(time_s[f] - time_s[f - 1]) / tl)
-                    y[:, f] = y[:, f - 1] + k * (tr[:, f] - y[:, f - 1])
-            out[lag_rows] = y
-        if np.any(~lag_rows):
+        src = targets
+        if np.any(c > 0):
+            src = targets.copy()
             s_frac = np.linspace(0.0, 1.0, self.n_points)
-            for b in np.flatnonzero(~lag_rows):
+            kk = np.arange(self.n_points)[None, :]
+            for b in np.flatnonzero(c > 0):
                 delay = s_frac[None, :] * loop_length_m[:, None] / c[b]  # (F, K)
                 for a, e in zip(starts, ends):
                     t = time_s[a:e]
@@ -249,9 +241,15 @@ class LoopShapeModel:
                     nxt = np.minimum(idx + 1, t.size - 1)
                     dt = np.maximum(t[nxt] - t[idx], 1e-12)
                     wq = np.where(nxt > idx, (tq - t[idx]) / dt, 0.0)[..., None]
-                    kk = np.arange(self.n_points)[None, :]
                     tg = targets[b, a:e]
-                    out[b, a:e] = (1.0 - wq) * tg[idx, kk] + wq * tg[nxt, kk]
+                    src[b, a:e] = (1.0 - wq) * tg[idx, kk] + wq * tg[nxt, kk]
+        out = np.empty_like(targets)
+        tl = tau[:, None, None]
+        for a, b in zip(starts, ends):
+            out[:, a] = src[:, a]
+            for f in range(a + 1, b):
+                k = 1.0 - np.exp(-(time_s[f] - time_s[f - 1]) / tl)
+                out[:, f] = out[:, f - 1] + k * (src[:, f] - out[:, f - 1])
         return out
 
 
