@@ -241,10 +241,13 @@ def _print_candidates(res, truth, par) -> None:
     print(f"    truth: {truth.effect_id} {par[0] + ' = ' + format(par[1], '.5g') if par else ''}; not identifiable: "
           f"{[n['candidates'] for n in res.not_identifiable if 'candidates' in n]}")
     for r in res.candidates:
+        if r["status"] == "base":
+            print(f"    refitted chain: held-out {r['heldout_rms_mm']:6.2f} mm, {r['heldout_excess_z']:.1f} sd above the "
+                  f"camera noise's {res.noise_mm:.2f} mm")
         if r["status"] in ("base", "not_identifiable"):
             continue
         cos = f" cos {r['sensitivity_cosine']:+.2f}" if "sensitivity_cosine" in r else ""
-        print(f"    {r['id']:50s} {r['status']:8s} dBIC {r['delta_bic']:8.1f} LR {r['heldout_lr']:8.1f} held-out "
+        print(f"    {r['id']:50s} {r['status']:12s} dBIC {r['delta_bic']:8.1f} LR {r['heldout_lr']:8.1f} held-out "
               f"{r['heldout_rms_mm']:6.2f} mm{cos} {r.get('params', '')}")
 
 

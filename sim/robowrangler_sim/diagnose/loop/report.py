@@ -25,8 +25,11 @@ def loop_first_line(res) -> str:
         return (f"loop: none of the loop candidates explains it, but the contours differ from the refitted chain by "
                 f"{base:.1f} mm held out against {res.noise_mm:.1f} mm camera noise{where}: physics outside the library")
     if res.verdict == "none":
+        held = [r["id"] for r in res.candidates if r["status"] == "within_noise"]
+        within = (f"; {', '.join(i.replace('_', ' ') for i in held)} would lower it a little, but nothing beyond "
+                  "the noise is left to explain" if held else "")
         return (f"loop: none beyond noise: the refitted chain explains the contours (held-out contour error "
-                f"{base:.1f} mm, camera noise {res.noise_mm:.1f} mm)")
+                f"{base:.2f} mm, camera noise {res.noise_mm:.2f} mm{within})")
     if res.verdict == "not_identifiable":
         d = res.not_identifiable[0]
         return f"loop: not identifiable from these contours: {d['id']}; would separate them: {d['separating_measurement']}"
@@ -56,6 +59,7 @@ def loop_report_json(res) -> dict:
                      "evidence": e.evidence} for e in res.effects],
         "not_identifiable": res.not_identifiable, "nominal_refit": res.nominal_refit, "noise_mm": res.noise_mm,
         "beyond_noise": bool(res.candidates[0]["heldout_rms_mm"] > LEFT_OVER_NOISE * res.noise_mm),
+        "heldout_excess_z": res.candidates[0]["heldout_excess_z"],
         "frames": res.frames, "located": res.located, "candidates": res.candidates, "notes": res.notes,
         "flutter": res.flutter, "timings_s": res.timings_s,
     })
