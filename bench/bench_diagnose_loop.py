@@ -333,6 +333,7 @@ def run_fig6a(out_dir: Path, png: Path) -> None:
                                    script=scripts["fast"], seed=61)
     res_fast = diagnose_loop(fast.path)
     print(f"fast turns: {res_fast.first_line}")
+    _print_candidates(res_fast, LoopTruth("transient_wave_dynamics"), None)
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     for i, (name, script) in enumerate(scripts.items()):
         path = fast.path if name == "fast" else generate_loop_recording(
