@@ -213,6 +213,19 @@ def test_a_load_only_at_high_speed_is_found_confined(tmp_path):
     assert found.heldout_rms_after["rope_speed_mps"] < 0.5 * found.heldout_rms_before["rope_speed_mps"]
 
 
+def test_a_load_window_shorter_than_the_gap_between_held_out_blocks_is_not_a_finding():
+    # a window that can lie wholly in fit samples is never tested on held-out data (with the windows' edges refined
+    # on a finer grid, 0-0.2 s "loads" fitted to transients of effect-free runs passed the held-out test that way)
+    from robowrangler_sim.diagnose.api import HELDOUT_GAP_S
+    from robowrangler_sim.diagnose.candidates.external_rope_load import ExternalRopeLoad
+
+    load = ExternalRopeLoad()
+    short = load.untested_reason({"load_start_s": 6.49, "load_end_s": 6.67}, heldout_gap_s=HELDOUT_GAP_S)
+    assert short is not None and "held-out" in short
+    assert load.untested_reason({"load_start_s": 3.0, "load_end_s": 3.0 + 1.5 * HELDOUT_GAP_S},
+                                heldout_gap_s=HELDOUT_GAP_S) is None
+
+
 def test_a_latency_only_at_high_speed_is_named_with_its_regime(tmp_path):
     # the ESC late only above 5 m/s: everywhere, the law fails
     res, _ = _diagnose_dev_case("esc_latency/one_regime/1", tmp_path, ["esc_latency", "rope_drag_law"])

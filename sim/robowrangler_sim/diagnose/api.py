@@ -29,7 +29,10 @@ from robowrangler_sim.plants import DriveParams
 from robowrangler_sim.plants import drive_batch as db
 
 BLOCK_S = 0.5
-HELDOUT_EVERY = 3  # every third 1 s block is held out of every fit
+HELDOUT_EVERY = 3  # every third block is held out of every fit
+HELDOUT_GAP_S = (HELDOUT_EVERY - 1) * BLOCK_S
+"""The longest stretch of fit samples between two held-out blocks: an effect confined to a shorter time window
+can lie wholly in fit samples, where the held-out test never sees it act (Candidate.untested_reason)."""
 ALPHA = 0.01
 GATED_NFEV = 12  # solver steps of a law's fit confined to a speed range (it starts from the law's fit everywhere)
 
@@ -255,6 +258,9 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                          valid=valid)
         ok, ev = accepted(sc, score_nom)
         ok = ok and reduces_own_channel(cand, sc, score_nom)
+        untested = cand.untested_reason(_values(fitter), heldout_gap_s=HELDOUT_GAP_S)
+        if untested:
+            ok, row = False, {**(row or {}), "reason": untested}
         fits[fid] = _Fit(cand, own, fitter, sc, load_mask, gate, tick_gate)
         cand_rows.append({"id": fid, **(row or {}), "status": "accepted" if ok else "rejected", **ev,
                           "heldout_rms": sc.heldout_rms,
@@ -351,6 +357,8 @@ def _diagnose(recording_path, *, model, effects, progress, pairs, closed_loop) -
                                      heldout_blocks, n_eff, valid=valid)
                     ok2, ev2 = accepted(sp, chosen_score)
                     ok2 = ok2 and reduces_own_channel(cand2, sp, chosen_score)
+                    ok2 = ok2 and not any(c.untested_reason(_values(pair), heldout_gap_s=HELDOUT_GAP_S)
+                                          for c in (fits[best].cand, cand2))
                     cand_rows.append({"id": f"{best}+{second}", "status": "accepted" if ok2 else "rejected", **ev2,
                                       "heldout_rms": sp.heldout_rms})
                     if ok2:
@@ -460,6 +468,10 @@ def _labels(data: DriveData) -> tuple[dict[str, np.ndarray], dict[str, np.ndarra
     tel = regime_labels(data.tel_time_s, data.tel_speed_mps)
     k = np.clip(np.searchsorted(data.tel_time_s, data.time_s), 0, data.tel_time_s.size - 1)
     return {kind: lab[k] for kind, lab in tel.items()}, tel
+
+
+def _values(fitter: ModelFitter) -> dict[str, float]:
+    return {p.name: p.value for p in fitter.params_}
 
 
 def _tick_mask(data: DriveData, spans: list[tuple[float, float]]) -> np.ndarray:

@@ -94,6 +94,12 @@ class Candidate(ABC):
     """Whether the start grid's rows are judged with the other free parameters re-adjusted to each (ModelFitter's
     project_starts): for a law whose grid places it in time, where the refit has absorbed part of it elsewhere."""
 
+    def untested_reason(self, values: dict[str, float], *, heldout_gap_s: float) -> str | None:
+        """Why this law's fitted values cannot have been tested on held-out samples (values: the fit's parameter
+        name -> value; heldout_gap_s: the longest stretch of fit samples between held-out blocks), or None.
+        Default: None (a law that acts wherever its regime recurs)."""
+        return None
+
     def starts_in_gate(self, grid: np.ndarray, mask_on: np.ndarray) -> np.ndarray:
         """The rows of start_grid worth trying when the law is confined to the ticks mask_on; default: all."""
         return grid

@@ -55,6 +55,15 @@ class ExternalRopeLoad(Candidate):
                 itertools.product(np.arange(lo + 0.5, hi - 0.5, 1.0), (1.0, 2.0, 3.5))]
         return [db.TH_EXT_LOAD, db.TH_EXT_T0, db.TH_EXT_T1], np.asarray(rows)
 
+    def untested_reason(self, values: dict[str, float], *, heldout_gap_s: float) -> str | None:
+        """A window no longer than the gap between held-out blocks can sit wholly in fit samples: a force there is
+        a correction of one transient, never tested on held-out data."""
+        length_s = values["load_end_s"] - values["load_start_s"]
+        if length_s <= heldout_gap_s:
+            return (f"the load's window ({length_s:.2f} s) is no longer than the {heldout_gap_s:g} s between held-out "
+                    "blocks: never tested on held-out samples")
+        return None
+
     def starts_in_gate(self, grid: np.ndarray, mask_on: np.ndarray) -> np.ndarray:
         """Confined to a regime, the windows where the gate is open on at least half the ticks (elsewhere the
         window is mostly no load at all, and a window that holds the open part better is in the grid)."""
