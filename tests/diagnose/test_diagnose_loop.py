@@ -74,6 +74,19 @@ def test_a_law_that_passes_the_held_out_test_within_the_camera_noise_is_not_a_fi
     assert res.report["heldout_excess_z"] == base["heldout_excess_z"]
 
 
+def test_held_out_blocks_include_a_turn_when_the_recording_has_two():
+    from robowrangler_sim.diagnose.loop.api import heldout_blocks
+
+    block_f = np.repeat(np.arange(8), 30)  # 8 one-second blocks of 30 frames
+    steady = np.zeros(block_f.size, dtype=bool)
+    np.testing.assert_array_equal(heldout_blocks(block_f, steady), [2, 5])  # every third, as without turns
+    turns = (block_f == 1) | (block_f == 4)  # the module turns in blocks 1 and 4 (the Fig. 6a fast recording)
+    held = heldout_blocks(block_f, turns)
+    assert 4 in held and 1 not in held  # fitted on the first turn, tested on the second
+    assert set(held) - {4}  # and steady blocks held out too
+    assert set(held).issubset(set(range(8))) and len(held) >= 2
+
+
 def test_speed_dependence_is_named_between_the_table_speeds(recs):
     res = diagnose_loop(recs["speed"].path)
     assert res.verdict in ("missing_physics", "not_identifiable"), res.first_line

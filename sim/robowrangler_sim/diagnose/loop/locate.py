@@ -39,6 +39,16 @@ def part_labels(points_m: np.ndarray) -> np.ndarray:
     return lab
 
 
+def inputs_changing(data, phidot_rad_s: np.ndarray) -> np.ndarray:
+    """Per frame: whether the module turns or the rope speed changes (the chain's inputs moving)."""
+    dv = np.zeros_like(data.speed_mps)
+    for s in np.unique(data.segment):
+        m = np.flatnonzero(data.segment == s)
+        if m.size >= 2:
+            dv[m] = np.gradient(data.speed_mps[m], data.time_s[m])
+    return (np.abs(phidot_rad_s) > PHIDOT_TRANSIENT_RAD_S) | (np.abs(dv) > SPEED_RATE_TRANSIENT_MPS2)
+
+
 def frame_regimes(data, phidot_rad_s: np.ndarray, speeds_table: np.ndarray) -> dict[str, np.ndarray]:
     """Per frame: phi band, speed band (the shape table's speed intervals), motion (steady / transient)."""
     lo = np.floor(np.rad2deg(data.phi_rad) / PHI_BAND_DEG) * PHI_BAND_DEG
@@ -53,12 +63,7 @@ def frame_regimes(data, phidot_rad_s: np.ndarray, speeds_table: np.ndarray) -> d
             names.append(f">= {edges[-1]:g} m/s")
         else:
             names.append(f"{edges[j - 1]:g}-{edges[j]:g} m/s")
-    dv = np.zeros_like(data.speed_mps)
-    for s in np.unique(data.segment):
-        m = np.flatnonzero(data.segment == s)
-        if m.size >= 2:
-            dv[m] = np.gradient(data.speed_mps[m], data.time_s[m])
-    moving = (np.abs(phidot_rad_s) > PHIDOT_TRANSIENT_RAD_S) | (np.abs(dv) > SPEED_RATE_TRANSIENT_MPS2)
+    moving = inputs_changing(data, phidot_rad_s)
     # a transient lasts as long as the chain takes to follow (about 3 tau = 1.5 s after the input stops)
     after = np.zeros_like(moving)
     last = -np.inf
