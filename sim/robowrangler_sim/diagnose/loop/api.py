@@ -26,7 +26,7 @@ from robowrangler_sim.diagnose.loop.data import (LOOP_LENGTH_TOLERANCE, LoopData
                                                  load_loop_data)
 from robowrangler_sim.diagnose.loop.flutter import (ContourScatter, LoopFlutterError, contour_scatter, flutter_message,
                                                     flutter_note)
-from robowrangler_sim.diagnose.loop.locate import PHIDOT_TRANSIENT_RAD_S, LoopLocator, frame_regimes, part_labels
+from robowrangler_sim.diagnose.loop.locate import LoopLocator, frame_regimes, module_turning, part_labels
 from robowrangler_sim.diagnose.loop.model_file import LoopModel
 from robowrangler_sim.diagnose.loop.replay import CHANNEL, LoopReplay
 from robowrangler_sim.diagnose.loop.residuals import LoopResiduals
@@ -137,7 +137,7 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
     replay.set_normals(theta_base)
     F, K = data.points_m.shape[:2]
     block_f = ((data.time_s - data.time_s[0]) // BLOCK_S).astype(int)
-    held_blocks = heldout_blocks(block_f, np.abs(replay.phidot_rad_s) > PHIDOT_TRANSIENT_RAD_S)
+    held_blocks = heldout_blocks(block_f, module_turning(replay.phidot_rad_s))
     block_id = np.repeat(block_f, K)
     fit_mask = ~np.isin(block_id, held_blocks)
     timings["load_s"] = time.perf_counter() - t0
@@ -323,8 +323,8 @@ def diagnose_loop(recording_path: str | Path, *, model: str | Path | LoopModel |
                 "replay": replay})
 
 
-def heldout_blocks(block_f: np.ndarray, changing_f: np.ndarray) -> np.ndarray:
-    """The held-out blocks: every HELDOUT_EVERY-th block among those where the module turns (changing_f: per
+def heldout_blocks(block_f: np.ndarray, turning_f: np.ndarray) -> np.ndarray:
+    """The held-out blocks: every HELDOUT_EVERY-th block among those where the module turns (turning_f: per
     frame) and, apart, among the others; of two blocks of a kind, the second. A law for what happens in a turn is
     then tested on a turn it was not fitted to: with every third block of the whole run, the held-out blocks of a
     recording with two short turns held only their settled ends, where a wave law and a normal drag law, or a wave
@@ -333,10 +333,10 @@ def heldout_blocks(block_f: np.ndarray, changing_f: np.ndarray) -> np.ndarray:
     and no law passed; a speed step's law is a steady shape, tested by the steady blocks at other speeds.) Fewer
     than two blocks held out: every other one."""
     n_blocks = int(block_f.max()) + 1
-    changing_b = np.zeros(n_blocks, dtype=bool)
-    changing_b[block_f[changing_f]] = True
+    turning_b = np.zeros(n_blocks, dtype=bool)
+    turning_b[block_f[turning_f]] = True
     held: list[int] = []
-    for kind in (changing_b, ~changing_b):
+    for kind in (turning_b, ~turning_b):
         ids = np.flatnonzero(kind)
         pick = ids[HELDOUT_EVERY - 1::HELDOUT_EVERY]
         held += list(pick if pick.size or ids.size < 2 else ids[-1:])

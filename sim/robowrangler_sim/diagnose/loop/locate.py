@@ -39,6 +39,11 @@ def part_labels(points_m: np.ndarray) -> np.ndarray:
     return lab
 
 
+def module_turning(phidot_rad_s: np.ndarray) -> np.ndarray:
+    """Per frame: whether the module turns fast enough to count as a transient."""
+    return np.abs(phidot_rad_s) > PHIDOT_TRANSIENT_RAD_S
+
+
 def inputs_changing(data, phidot_rad_s: np.ndarray) -> np.ndarray:
     """Per frame: whether the module turns or the rope speed changes (the chain's inputs moving)."""
     dv = np.zeros_like(data.speed_mps)
@@ -46,7 +51,7 @@ def inputs_changing(data, phidot_rad_s: np.ndarray) -> np.ndarray:
         m = np.flatnonzero(data.segment == s)
         if m.size >= 2:
             dv[m] = np.gradient(data.speed_mps[m], data.time_s[m])
-    return (np.abs(phidot_rad_s) > PHIDOT_TRANSIENT_RAD_S) | (np.abs(dv) > SPEED_RATE_TRANSIENT_MPS2)
+    return module_turning(phidot_rad_s) | (np.abs(dv) > SPEED_RATE_TRANSIENT_MPS2)
 
 
 def frame_regimes(data, phidot_rad_s: np.ndarray, speeds_table: np.ndarray) -> dict[str, np.ndarray]:
